@@ -14,6 +14,7 @@ Examples
 from __future__ import annotations
 
 import importlib.util
+from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -49,7 +50,7 @@ class SolveOptions:
     extra: dict[str, Any] = field(default_factory=dict)
 
 
-class Backend:
+class Backend(ABC):
     """Base class of every backend plugin."""
 
     name: ClassVar[str] = ""
@@ -73,9 +74,9 @@ class Backend:
         """Whether this backend can take ``problem``; with ``explain``, also why not."""
         return (True, "") if explain else True
 
+    @abstractmethod
     def solve(self, problem: Problem, options: SolveOptions | None = None) -> Solution:
         """Solve ``problem``; map every outcome (crashes included) into a :class:`Solution`."""
-        raise NotImplementedError  # abstract: every backend overrides it
 
     def map_status(self, native: str) -> str:
         """Map a native status into the shared vocabulary (unknown -> ``error``)."""
