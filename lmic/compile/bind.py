@@ -1,0 +1,535 @@
+"""Bind a system's numbers to a :class:`~lmic.compile.plan.Plan`: pure numerics -> IR.
+
+Each term ``coef * L V R`` contributes ``coef * (R^T kron L) B_V`` to the column-major
+vectorisation of its block, with ``B_V`` the variable's sparse basis (``vec(V) = B_V x_V``).
+Nothing is expanded entry by entry into scalar sympy expressions; identical products (the same
+``L V R`` in several blocks) are computed once per bind.
+
+Examples
+--------
+>>> from lmic.template import theorem, block
+>>> from lmic.compile.plan import analyse
+>>> @theorem(id="demo.lyap", title="t", citation="c")
+... def demo(t):
+...     n, = t.dims("n")
+...     A = t.data("A", n, n)
+...     P = t.symmetric("P", n)
+...     t.lmi("stability", block(A.T * P + P * A) < 0)
+>>> prob = bind(analyse(demo), {"data": {"A": [[-1.0, 0.0], [0.0, -2.0]]}})
+>>> prob.n, prob.lmis[0].dim
+(3, 2)
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+import sympy
+from sympy.matrices.expressions import Identity, MatrixSymbol, Transpose
+
+from lmic import __version__
+from lmic.compile.plan import LinearForm, LmiPlan, Plan, Term
+from lmic.errors import DataError, LmicError, TemplateError
+from lmic.ir.expr import evaluate
+from lmic.ir.problem import (
+    LMI,
+    Check,
+    LinearConstraints,
+    NamedExpr,
+    Objective,
+    Problem,
+    Variable,
+)
+from lmic.ir.svec import tril_index, tril_size
+from lmic.system import System, load_system
+from lmic.template.builder import normalise_option
+from lmic.template.totree import to_tree
+
+__all__ = ["bind", "resolve_inputs", "Inputs"]
+
+_SYM_TOL = 1e-9
+
+
+class Inputs:
+    """Numbers resolved for one bind: dimensions, data, parameters and constants."""
+
+    def __init__(self) -> None:
+        self.dims: dict[sympy.Symbol, int] = {}
+        self.values: dict[str, Any] = {}  # data, params, consts (numbers / arrays)
+        self.params: dict[str, Any] = {}  # every parameter and option value used
+
+
+def _dim_value(expr: Any, dims: Mapping[sympy.Symbol, int]) -> int | None:
+    if isinstance(expr, int):
+        return expr
+    v = sympy.sympify(sympy.sympify(expr).xreplace(dict(dims)))
+    return int(v) if v.is_Integer else None
+
+
+def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | None = None) -> Inputs:
+    """Validate data and parameters against the template and compute the constants.
+
+    Raises :class:`DataError` naming the theorem, the key and the rule broken.
+    """
+    t = plan.template
+    tid = t.theorem_id
+    where = f"theorem {tid}, {system.label}"
+    out = Inputs()
+    params = dict(system.params)
+    params.update(overrides or {})
+
+    # parameters and options
+    known = {p.name for p in t.params} | {o.name for o in t.options}
+    for key in params:
+        if key not in known:
+            expected = ", ".join(sorted(known)) or "none"
+            raise DataError(f"{where}: unknown parameter '{key}' (the theorem takes: {expected})")
+    for o in t.options:
+        value = normalise_option(params.get(o.name, o.default))
+        if value != o.value:
+            raise DataError(f"{where}: option {o.name} = {value!r} does not match the analysed plan")
+        out.params[o.name] = o.value
+    for p in t.params:
+        if p.name in params:
+            value = params[p.name]
+            if isinstance(value, str):
+                try:
+                    value = float(value)
+                except ValueError:
+                    raise DataError(f"{where}: parameter '{p.name}' = {value!r} is not a number") from None
+        elif p.default is not None:
+            value = p.default
+        else:
+            raise DataError(f"{where}: missing parameter '{p.name}'" + (f" ({p.doc})" if p.doc else ""))
+        value = float(value)
+        if not np.isfinite(value):
+            raise DataError(f"{where}: parameter '{p.name}' is {value}")
+        if not p.domain.contains(sympy.Float(value)):
+            raise DataError(f"{where}: parameter {p.name} = {value:g} is outside its domain {p.domain}")
+        out.params[p.name] = value
+        out.values[p.name] = value
+
+    # data and dimensions
+    declared = {d.name for d in t.data_decls}
+    for key in system.data:
+        if key not in declared:
+            raise DataError(
+                f"{where}: unknown data key '{key}' (the theorem takes: {', '.join(sorted(declared))})"
+            )
+    origin: dict[sympy.Symbol, str] = {}
+    arrays: dict[str, np.ndarray] = {}
+    for d in t.data_decls:
+        if d.name in system.data:
+            arrays[d.name] = system.data[d.name]
+    # first pass: bind plain dimension symbols from the data present
+    for d in t.data_decls:
+        if d.name not in arrays:
+            continue
+        for axis, s in enumerate(d.shape):
+            s = sympy.sympify(s)
+            if isinstance(s, sympy.Symbol) and s not in out.dims:
+                out.dims[s] = int(arrays[d.name].shape[axis])
+                origin[s] = f"{'rows' if axis == 0 else 'columns'} of {d.name}"
+    # defaults for missing data
+    for d in t.data_decls:
+        if d.name in arrays:
+            continue
+        if d.default is None:
+            shape = " x ".join(str(s) for s in d.shape)
+            raise DataError(f"{where}: missing data '{d.name}' ({shape})" + (f": {d.doc}" if d.doc else ""))
+        r, c = (_dim_value(s, out.dims) for s in d.shape)
+        if r is None or c is None:
+            raise DataError(f"{where}: cannot size the default of data '{d.name}' (dimensions unknown)")
+        if callable(d.default):
+            arr = np.atleast_2d(np.asarray(d.default({**out.values, **arrays}, r, c), dtype=float))
+        else:
+            arr = float(d.default) * np.eye(r, c)
+        arrays[d.name] = arr
+    for d in t.data_decls:
+        arr = arrays[d.name]
+        expected = []
+        for axis, s in enumerate(d.shape):
+            val = _dim_value(s, out.dims)
+            if val is None:
+                raise DataError(f"{where}: dimension {s} of data '{d.name}' cannot be determined")
+            expected.append(val)
+        if tuple(expected) != arr.shape:
+            shape_sym = " x ".join(str(s) for s in d.shape)
+            bound = ", ".join(f"{s} = {out.dims[s]} from {origin.get(s, 'defaults')}" for s in sorted(
+                (s for s in sympy.Matrix(list(d.shape)).free_symbols if s in out.dims), key=str))
+            raise DataError(
+                f"{where}: data '{d.name}' has shape {arr.shape[0]}x{arr.shape[1]}, expected "
+                f"{shape_sym} = {expected[0]}x{expected[1]}" + (f" ({bound})" if bound else "")
+            )
+        if d.symmetric:
+            scale = max(1.0, float(np.max(np.abs(arr))))
+            if arr.shape[0] != arr.shape[1] or np.max(np.abs(arr - arr.T)) > 1e-9 * scale:
+                raise DataError(f"{where}: data '{d.name}' must be symmetric")
+        if d.positive_definite and np.linalg.eigvalsh(0.5 * (arr + arr.T))[0] <= 0:
+            raise DataError(f"{where}: data '{d.name}' must be positive definite")
+        out.values[d.name] = arr
+
+    # data-derived constants, in order
+    for c in t.consts:
+        try:
+            value = c.fn(dict(out.values))
+        except LmicError:
+            raise
+        except Exception as err:
+            raise DataError(f"{where}: constant '{c.name}' cannot be computed: {type(err).__name__}: {err}") from None
+        if c.shape is None:
+            arr = np.asarray(value, dtype=float)
+            if arr.size != 1:
+                raise TemplateError(f"{tid}: constant '{c.name}' is declared scalar but has shape {arr.shape}")
+            value = float(arr.reshape(-1)[0])
+            if not np.isfinite(value):
+                raise DataError(f"{where}: constant '{c.name}' is {value} for this data")
+        else:
+            value = np.atleast_2d(np.asarray(value, dtype=float))
+            exp = tuple(_dim_value(s, out.dims) for s in c.shape)
+            if value.shape != exp:
+                raise TemplateError(f"{tid}: constant '{c.name}' has shape {value.shape}, declared {exp}")
+            if not np.all(np.isfinite(value)):
+                raise DataError(f"{where}: constant '{c.name}' is not finite for this data")
+        out.values[c.name] = value
+    return out
+
+
+class _Binder:
+    def __init__(self, plan: Plan, inputs: Inputs) -> None:
+        self.plan = plan
+        self.inp = inputs
+        self.tid = plan.id
+        self.env = inputs.values
+        self.dims = inputs.dims
+        # variables and their layout
+        self.vars: dict[str, Variable] = {}
+        offset = 0
+        for v in plan.template.variables:
+            r, c = (self._size(s, f"variable '{v.name}'") for s in v.shape)
+            blocks = tuple(self._size(b, f"variable '{v.name}'") for b in v.blocks)
+            var = Variable(v.name, v.kind, (r, c), offset, blocks, v.sign)
+            self.vars[v.name] = var
+            offset += var.size
+        self.n = offset
+        self._bases: dict[tuple[str, bool], sp.csr_matrix] = {}
+        self._products: dict[tuple, sp.csr_matrix] = {}
+        self._coef_fns: dict[sympy.Expr, Any] = {}
+        self._factor_cache: dict[Any, np.ndarray] = {}
+        self._param_args = [self._coef_arg(s) for s in plan.coef_symbols]
+
+    def _coef_arg(self, s: sympy.Symbol) -> float:
+        return float(self.env[s.name])
+
+    def _size(self, expr: Any, what: str) -> int:
+        v = _dim_value(expr, self.dims)
+        if v is None or v < 0:
+            raise DataError(f"theorem {self.tid}: cannot size {what} ({expr}) from the data")
+        return v
+
+    # -- numeric pieces -------------------------------------------------------------------
+    def coef(self, expr: sympy.Expr) -> float:
+        if expr.is_number:
+            return float(expr)
+        fn = self._coef_fns.get(expr)
+        if fn is None:
+            fn = sympy.lambdify(self.plan.coef_symbols, expr, modules="math", dummify=True)
+            self._coef_fns[expr] = fn
+        try:
+            value = float(fn(*self._param_args))
+        except (ValueError, ZeroDivisionError, OverflowError) as err:
+            raise DataError(f"theorem {self.tid}: coefficient '{expr}' cannot be evaluated: {err}") from None
+        if not np.isfinite(value):
+            raise DataError(f"theorem {self.tid}: coefficient '{expr}' is {value} for these parameters")
+        return value
+
+    def factor(self, f: Any) -> np.ndarray | None:
+        """Numeric value of a constant factor (``None`` for an identity)."""
+        if isinstance(f, Identity):
+            return None
+        cached = self._factor_cache.get(f)
+        if cached is not None:
+            return cached
+        if isinstance(f, MatrixSymbol):
+            val = self.env[f.name]
+        elif isinstance(f, Transpose) and isinstance(f.arg, MatrixSymbol):
+            val = self.env[f.arg.name].T
+        else:
+            val = evaluate(to_tree(f, self.dims), self.env)
+        val = np.atleast_2d(np.asarray(val, dtype=float))
+        self._factor_cache[f] = val
+        return val
+
+    def product(self, factors: tuple[Any, ...]) -> np.ndarray | None:
+        out = None
+        for f in factors:
+            v = self.factor(f)
+            if v is None:
+                continue
+            if out is None:
+                out = v
+            else:
+                if out.shape[1] != v.shape[0]:
+                    raise TemplateError(f"theorem {self.tid}: factor '{f}' has a shape that does not fit")
+                out = out @ v
+        return out
+
+    def basis(self, name: str, transposed: bool) -> sp.csr_matrix:
+        key = (name, transposed)
+        B = self._bases.get(key)
+        if B is None:
+            var = self.vars[name]
+            B = var.basis().tocsr()
+            if transposed and var.kind not in ("symmetric", "diagonal", "blockdiag", "scalar"):
+                r, c = var.shape
+                # vec(V^T)[j*c + i] = vec(V)[i*r + j]  for V^T[i, j] = V[j, i]
+                i, j = np.meshgrid(np.arange(c), np.arange(r), indexing="ij")
+                perm = np.empty(r * c, dtype=int)
+                perm[(j * c + i).ravel()] = (i * r + j).ravel()
+                B = B[perm]
+            self._bases[key] = B
+        return B
+
+    def term_matrix(self, term: Term, rows: int, cols: int) -> tuple[sp.spmatrix | np.ndarray, int]:
+        """(contribution to vec(block), column offset); unscaled by the coefficient."""
+        if term.var is None or self.vars[term.var].kind == "scalar":
+            M = self.product(term.left)
+            if M is None:
+                if rows != cols:
+                    raise TemplateError(f"theorem {self.tid}: identity term '{term.text}' in a non-square block")
+                M = np.eye(rows)
+            if M.shape != (rows, cols):
+                raise TemplateError(
+                    f"theorem {self.tid}: term '{term.text}' has shape {M.shape}, its block is {rows}x{cols}"
+                )
+            col = 0 if term.var is None else 1 + self.vars[term.var].offset
+            return M.reshape(-1, order="F"), col
+        key = (term.left, term.var, term.transposed, term.right)
+        S = self._products.get(key)
+        if S is None:
+            var = self.vars[term.var]
+            B = self.basis(term.var, term.transposed)
+            vr, vc = (var.shape[1], var.shape[0]) if term.transposed else var.shape
+            L = self.product(term.left)
+            R = self.product(term.right)
+            if L is not None and L.shape[1] != vr or R is not None and R.shape[0] != vc:
+                raise TemplateError(f"theorem {self.tid}: term '{term.text}' has inconsistent shapes")
+            if L is None and R is None:
+                S = B
+            else:
+                Ls = sp.identity(vr, format="csr") if L is None else sp.csr_matrix(L)
+                Rt = sp.identity(vc, format="csr") if R is None else sp.csr_matrix(R.T)
+                S = sp.kron(Rt, Ls, format="csr") @ B
+            out_r = vr if L is None else L.shape[0]
+            out_c = vc if R is None else R.shape[1]
+            if (out_r, out_c) != (rows, cols):
+                raise TemplateError(
+                    f"theorem {self.tid}: term '{term.text}' is {out_r}x{out_c}, its block is {rows}x{cols}"
+                )
+            S = sp.csr_matrix(S)
+            self._products[key] = S
+        return S, 1 + self.vars[term.var].offset
+
+    def entry_coo(self, terms: list[Term], rows: int, cols: int) -> sp.csr_matrix:
+        """Coefficients of vec(entry): sparse (rows*cols, 1 + n)."""
+        parts_r, parts_c, parts_v = [], [], []
+        for term in terms:
+            c = self.coef(term.coef)
+            if c == 0:
+                continue
+            M, col = self.term_matrix(term, rows, cols)
+            if isinstance(M, np.ndarray):
+                nz = np.flatnonzero(M)
+                parts_r.append(nz)
+                parts_c.append(np.full(len(nz), col))
+                parts_v.append(c * M[nz])
+            else:
+                coo = M.tocoo()
+                parts_r.append(coo.row)
+                parts_c.append(coo.col + col)
+                parts_v.append(c * coo.data)
+        if not parts_r:
+            return sp.csr_matrix((rows * cols, 1 + self.n))
+        return sp.csr_matrix(
+            (np.concatenate(parts_v), (np.concatenate(parts_r), np.concatenate(parts_c))),
+            shape=(rows * cols, 1 + self.n),
+        )
+
+    # -- LMIs ----------------------------------------------------------------------------
+    def lmi(self, lp: LmiPlan) -> LMI:
+        sizes = [self._size(s, f"block row of LMI '{lp.name}'") for s in lp.sizes]
+        starts = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
+        d = int(starts[-1])
+        rows_all, cols_all, vals_all = [], [], []
+
+        def where(i: int, j: int) -> str:
+            return f"theorem {self.tid}: LMI '{lp.name}' block ({i + 1},{j + 1})"
+
+        def entry(i: int, j: int) -> sp.csr_matrix | None:
+            if (i, j) in lp.entries:
+                try:
+                    return self.entry_coo(lp.entries[(i, j)].terms, sizes[i], sizes[j])
+                except TemplateError as err:
+                    raise TemplateError(f"{where(i, j)}: {err}") from None
+            return None  # zero
+
+        for j in range(lp.k):
+            for i in range(j, lp.k):
+                ri, cj = sizes[i], sizes[j]
+                lower_star = (i, j) in lp.stars
+                upper_star = (j, i) in lp.stars
+                if lower_star:
+                    U = entry(j, i)  # (cj x ri) block; its transpose sits at (i, j)
+                    if U is None:
+                        continue
+                    coo = U.tocoo()
+                    a_up, b_up = coo.row % cj, coo.row // cj
+                    gi, gj = starts[i] + b_up, starts[j] + a_up
+                    vals, cols = coo.data, coo.col
+                else:
+                    Lw = entry(i, j)
+                    if i != j and not upper_star:
+                        U = entry(j, i)
+                        self._check_mirror(Lw, U, ri, cj, where(j, i), i, j)
+                    if Lw is None:
+                        continue
+                    if i == j:
+                        self._check_symmetric(Lw, ri, where(i, i))
+                    coo = Lw.tocoo()
+                    a, b = coo.row % ri, coo.row // ri
+                    gi, gj = starts[i] + a, starts[j] + b
+                    vals, cols = coo.data, coo.col
+                if i == j:
+                    keep = gi >= gj
+                    gi, gj, vals, cols = gi[keep], gj[keep], vals[keep], cols[keep]
+                rows_all.append(tril_index(gi, gj, d))
+                cols_all.append(cols)
+                vals_all.append(vals)
+        if rows_all:
+            r = np.concatenate(rows_all)
+            c = np.concatenate(cols_all)
+            v = np.concatenate(vals_all)
+        else:
+            r = c = np.zeros(0, dtype=int)
+            v = np.zeros(0)
+        if lp.negated:
+            v = -v
+        coeffs = sp.csc_matrix((v, (r, c)), shape=(tril_size(d), 1 + self.n))
+        coeffs.sum_duplicates()
+        coeffs.eliminate_zeros()
+        return LMI(lp.name, d, coeffs, lp.strict, lp.relation, tuple(sizes))
+
+    def _check_symmetric(self, M: sp.csr_matrix, r: int, where: str) -> None:
+        if M.nnz == 0:
+            return
+        a, b = np.meshgrid(np.arange(r), np.arange(r), indexing="ij")
+        perm = np.empty(r * r, dtype=int)
+        perm[(a + b * r).ravel()] = (b + a * r).ravel()
+        diff = M - M[perm]
+        scale = float(np.max(np.abs(M.data)))
+        if diff.nnz and float(np.max(np.abs(diff.data))) > _SYM_TOL * max(scale, 1.0):
+            raise TemplateError(f"{where} is not symmetric (a diagonal block must equal its transpose)")
+
+    def _check_mirror(self, Lw, U, ri: int, cj: int, where_upper: str, i: int, j: int) -> None:
+        """An explicit upper block must be the transpose of the explicit lower one."""
+        if Lw is None and U is None:
+            return
+        shape = (ri * cj, 1 + self.n)
+        Lm = Lw if Lw is not None else sp.csr_matrix(shape)
+        if U is None:
+            Um = sp.csr_matrix(shape)
+        else:
+            a_up, b_up = np.meshgrid(np.arange(cj), np.arange(ri), indexing="ij")  # upper (cj x ri)
+            perm = np.empty(ri * cj, dtype=int)
+            # lower position (b_up, a_up) has vec index b_up + a_up * ri; upper index a_up + b_up * cj
+            perm[(b_up + a_up * ri).ravel()] = (a_up + b_up * cj).ravel()
+            Um = U[perm]
+        diff = Lm - Um
+        scale = max([1.0] + [float(np.max(np.abs(X.data))) for X in (Lm, Um) if X.nnz])
+        if diff.nnz and float(np.max(np.abs(diff.data))) > _SYM_TOL * scale:
+            raise TemplateError(
+                f"{where_upper} is not the transpose of block ({i + 1},{j + 1}): write '*' (STAR) "
+                "for one of them, or make them agree"
+            )
+
+    # -- linear forms ----------------------------------------------------------------------
+    def linear_row(self, form: LinearForm) -> np.ndarray:
+        row = np.zeros(1 + self.n)
+        row[0] = self.coef(form.const) if form.const != 0 else 0.0
+        for coef, (name, kind, i, j) in form.terms:
+            c = self.coef(coef)
+            var = self.vars[name]
+            if kind == "scalar":
+                row[1 + var.offset] += c
+                continue
+            B = var.basis().tocsr()
+            r = var.shape[0]
+            if kind == "entry":
+                if not (0 <= i < var.shape[0] and 0 <= j < var.shape[1]):
+                    raise TemplateError(f"theorem {self.tid}: entry ({i},{j}) outside variable '{name}'")
+                sel = B[j * r + i]
+            else:
+                sel = sum(B[k * r + k] for k in range(r))
+            sel = sp.csr_matrix(sel)
+            row[1 + var.offset + sel.indices] += c * sel.data
+        return row
+
+    def problem(self, system: System) -> Problem:
+        plan = self.plan
+        lmis = [self.lmi(lp) for lp in plan.lmis]
+        rows, kinds, strict, names = [], [], [], []
+        for name, kind, is_strict, form in plan.constraints:
+            rows.append(self.linear_row(form))
+            kinds.append(kind)
+            strict.append(is_strict)
+            names.append(name)
+        A = sp.csr_matrix(np.array(rows)) if rows else sp.csr_matrix((0, 1 + self.n))
+        linear = LinearConstraints(A, kinds, strict, names)
+        sense, form = plan.objective
+        objective = Objective(sense, self.linear_row(form) if sense != "feasibility" else np.zeros(1 + self.n))
+        t = plan.template
+        derived = [NamedExpr(d.name, to_tree(d.expr, self.dims), d.doc) for d in t.derived]
+        checks = [
+            Check(c.name, c.spec.kind, to_tree(c.spec.expr, self.dims), c.spec.bound, c.doc) for c in t.checks
+        ]
+        data = {
+            k: (v.copy() if isinstance(v, np.ndarray) else float(v))
+            for k, v in self.env.items()
+        }
+        meta = {
+            "theorem": plan.id,
+            "title": plan.theorem.title,
+            "citation": plan.theorem.citation,
+            "params": dict(self.inp.params),
+            "options": dict(plan.options),
+            "dims": {str(k): v for k, v in self.dims.items()},
+            "system": system.name,
+            "system_path": system.path,
+            "data_hash": system.data_hash(),
+            "lmic_version": __version__,
+        }
+        return Problem(list(self.vars.values()), lmis, linear, objective, data, derived, checks, meta)
+
+
+def bind(plan: Plan, system: Any, params: Mapping[str, Any] | None = None) -> Problem:
+    """Compile ``plan`` with the numbers of ``system`` (path, dict or System) into an IR Problem.
+
+    Parameters
+    ----------
+    plan : Plan
+    system : str, path, dict or System
+    params : mapping, optional
+        Parameter overrides (``-p k=v``).
+    """
+    t0 = time.perf_counter()
+    sysobj = load_system(system)
+    inputs = resolve_inputs(plan, sysobj, params)
+    binder = _Binder(plan, inputs)
+    prob = binder.problem(sysobj)
+    prob.meta["bind_s"] = time.perf_counter() - t0
+    return prob
+
