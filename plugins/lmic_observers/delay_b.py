@@ -1,0 +1,3 @@
+"""Theorem plugins of the delay_b family (being written)."""
+
+THEOREMS: list = []

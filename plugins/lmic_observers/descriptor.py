@@ -1,0 +1,3 @@
+"""Theorem plugins of the descriptor family (being written)."""
+
+THEOREMS: list = []

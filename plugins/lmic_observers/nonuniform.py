@@ -1,0 +1,3 @@
+"""Theorem plugins of the nonuniform family (being written)."""
+
+THEOREMS: list = []

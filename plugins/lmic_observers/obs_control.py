@@ -1,0 +1,3 @@
+"""Theorem plugins of the obs_control family (being written)."""
+
+THEOREMS: list = []

@@ -1,0 +1,3 @@
+"""Theorem plugins of the sampled_euler family (being written)."""
+
+THEOREMS: list = []

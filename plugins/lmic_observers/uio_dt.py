@@ -1,0 +1,3 @@
+"""Theorem plugins of the uio_dt family (being written)."""
+
+THEOREMS: list = []

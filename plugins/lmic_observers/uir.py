@@ -1,0 +1,3 @@
+"""Theorem plugins of the uir family (being written)."""
+
+THEOREMS: list = []

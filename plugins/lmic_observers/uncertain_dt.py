@@ -1,0 +1,3 @@
+"""Theorem plugins of the uncertain_dt family (being written)."""
+
+THEOREMS: list = []
