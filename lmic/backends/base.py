@@ -1,9 +1,19 @@
 """The backend interface every solver plugin implements.
 
-A backend is a class with class attributes ``name``, ``requires`` (importable module names),
-``STATUS_MAP`` (native status -> :data:`lmic.solution.STATUSES`), and the methods
-:meth:`Backend.is_available`, :meth:`Backend.supports` and :meth:`Backend.solve`. Native solver
-modules are imported inside methods, never at import time.
+A backend is a class with class attributes ``name``, ``requires`` (importable module name ->
+pip package), ``STATUS_MAP`` (native status -> :data:`lmic.solution.STATUSES`) and
+``capabilities``, and the methods :meth:`Backend.is_available`, :meth:`Backend.supports` and
+:meth:`Backend.solve`. Native solver modules are imported inside methods, never at import time.
+
+:meth:`Backend.solve` is the same for every backend: it validates the problem, applies the
+strict-inequality reduction (:mod:`lmic.backends.strict`), calls the backend's
+:meth:`Backend._solve` on the resulting *closed* problem (no strict constraints), maps the answer
+back, and turns any exception or time-out into a ``status="error"`` :class:`Solution` carrying
+the message. Backends only implement ``_solve``.
+
+Conic data (:func:`conic_data`) is the stacked form ``A x + s = b``, ``s`` in
+``{0}^eq x R+^ge x PSD_1 x ... x PSD_L`` shared by the ``s``-form solvers (Clarabel, SCS,
+CVXOPT); each backend passes its own PSD vectorisation (one conversion place per backend).
 
 Examples
 --------
@@ -13,15 +23,34 @@ Examples
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
+import multiprocessing
+import os
+import sys
+import time
+import traceback
 from abc import ABC, abstractmethod
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+import numpy as np
+import scipy.sparse as sp
+
 from lmic.ir.problem import Problem
+from lmic.ir.svec import tril_rows_cols, tril_size
 from lmic.solution import Solution
 
-__all__ = ["SolveOptions", "Backend"]
+__all__ = [
+    "SolveOptions",
+    "Backend",
+    "ConicData",
+    "conic_data",
+    "problem_kinds",
+    "full_vec_map",
+    "quiet_native",
+]
 
 
 @dataclass
@@ -34,12 +63,18 @@ class SolveOptions:
         Relative accuracy (gap and feasibility) asked of the solver.
     max_iter : int or None
     time_limit : float or None
-        Seconds.
+        Seconds. Solvers without a native time limit run in a child process that is stopped
+        when the limit is reached (status ``error``, message ``time limit ... exceeded``).
     verbose : bool
     margin : float
         Margin imposed on strict inequalities of optimisation problems (``F(x) >= margin I``).
     extra : dict
         Solver-specific settings passed through unchanged.
+
+    Examples
+    --------
+    >>> SolveOptions(max_iter=50).max_iter
+    50
     """
 
     tol: float = 1e-8
@@ -50,8 +85,187 @@ class SolveOptions:
     extra: dict[str, Any] = field(default_factory=dict)
 
 
+def problem_kinds(problem: Problem) -> set[str]:
+    """The constraint kinds a problem uses: a subset of ``{"lmi", "eq", "ge"}``.
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t>0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> sorted(problem_kinds(p))
+    ['lmi']
+    """
+    kinds = {"lmi"} if problem.lmis else set()
+    kinds.update(problem.linear.kinds)
+    return kinds
+
+
+@dataclass
+class ConicData:
+    """``min c . x`` (plus ``c0``) subject to ``A x + s = b``, ``s`` in the cone ``dims``.
+
+    Attributes
+    ----------
+    A : scipy.sparse.csc_matrix
+    b, c : numpy.ndarray
+    c0 : float
+        Constant of the objective (in the minimisation sense).
+    sign : float
+        ``+1`` when the IR minimises (or is a feasibility problem), ``-1`` when it maximises.
+    n_eq, n_ge : int
+        Numbers of equality and inequality rows (first ``n_eq`` rows, then ``n_ge``).
+    psd : list of int
+        LMI dimensions, in IR order.
+    eq_rows, ge_rows : numpy.ndarray
+        Indices of the IR's linear rows placed in each block.
+    """
+
+    A: sp.csc_matrix
+    b: np.ndarray
+    c: np.ndarray
+    c0: float
+    sign: float
+    n_eq: int
+    n_ge: int
+    psd: list[int]
+    eq_rows: np.ndarray
+    ge_rows: np.ndarray
+
+    @property
+    def psd_offsets(self) -> list[int]:
+        """Row where each PSD block starts."""
+        off, out = self.n_eq + self.n_ge, []
+        for d in self.psd:
+            out.append(off)
+            off += tril_size(d)
+        return out
+
+
+def conic_data(
+    problem: Problem,
+    psd_vec: Callable[[int], tuple[np.ndarray, np.ndarray]],
+) -> ConicData:
+    """Stack a closed problem as ``A x + s = b`` with ``s`` in ``{0} x R+ x PSD...``.
+
+    Parameters
+    ----------
+    problem : Problem
+        A problem without strict constraints (strictness is ignored here).
+    psd_vec : callable
+        ``psd_vec(d) -> (perm, scale)``: the solver's vectorisation of a ``d x d`` block,
+        ``native = scale * tril_storage[perm]`` (from :mod:`lmic.ir.svec`).
+
+    Each LMI ``F0 + sum x_k F_k >= 0`` becomes ``s = F(x)``: ``b = vec(F0)``, ``A = -vec(F_k)``.
+    Everything is sparse and vectorised (no loop over entries).
+
+    Examples
+    --------
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t>=1", 1, sp.csc_matrix([[-1., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("min", [0, 1]))
+    >>> data = conic_data(p, lambda d: (np.arange(d * (d + 1) // 2), np.ones(d * (d + 1) // 2)))
+    >>> data.A.toarray(), data.b
+    (array([[-1.]]), array([-1.]))
+    """
+    lin = problem.linear
+    kinds = np.asarray(lin.kinds, dtype=object)
+    eq_rows = np.flatnonzero(kinds == "eq") if len(lin) else np.zeros(0, dtype=int)
+    ge_rows = np.flatnonzero(kinds == "ge") if len(lin) else np.zeros(0, dtype=int)
+    blocks = [lin.A[eq_rows], lin.A[ge_rows]]
+    for lmi in problem.lmis:
+        perm, scale = psd_vec(lmi.dim)
+        blocks.append(sp.diags(scale) @ lmi.coeffs[perm])
+    M = sp.vstack(blocks, format="csc") if blocks else sp.csc_matrix((0, 1 + problem.n))
+    b = np.asarray(M[:, 0].toarray()).ravel()
+    A = (-M[:, 1:]).tocsc()
+    obj = problem.objective
+    sign = -1.0 if obj.sense == "max" else 1.0
+    if obj.sense == "feasibility":
+        c, c0 = np.zeros(problem.n), 0.0
+    else:
+        c, c0 = sign * obj.c[1:], sign * float(obj.c[0])
+    return ConicData(
+        A=A,
+        b=b,
+        c=np.asarray(c, dtype=float),
+        c0=c0,
+        sign=sign,
+        n_eq=len(eq_rows),
+        n_ge=len(ge_rows),
+        psd=[lmi.dim for lmi in problem.lmis],
+        eq_rows=eq_rows,
+        ge_rows=ge_rows,
+    )
+
+
+def full_vec_map(d: int) -> sp.csr_matrix:
+    """Sparse ``E`` (``d*d x tril_size(d)``) with ``vec(M) = E @ tril_storage(M)`` (column-major).
+
+    >>> full_vec_map(2).toarray()
+    array([[1., 0., 0.],
+           [0., 1., 0.],
+           [0., 1., 0.],
+           [0., 0., 1.]])
+    """
+    i, j = tril_rows_cols(d)
+    k = np.arange(len(i))
+    off = i != j
+    rows = np.concatenate([i + j * d, (j + i * d)[off]])
+    cols = np.concatenate([k, k[off]])
+    return sp.csr_matrix((np.ones(len(rows)), (rows, cols)), shape=(d * d, len(i)))
+
+
+@contextlib.contextmanager
+def quiet_native(active: bool = True) -> Iterator[None]:
+    """Silence a native library's own prints (file descriptors 1 and 2) while ``active``.
+
+    >>> with quiet_native():
+    ...     pass
+    """
+    if not active:
+        yield
+        return
+    try:
+        saved = [os.dup(1), os.dup(2)]
+    except OSError:  # no real file descriptors (embedded interpreters)
+        yield
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os.dup2(devnull, 1)
+        os.dup2(devnull, 2)
+        yield
+    finally:
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for fd in (*saved, devnull):
+            os.close(fd)
+
+
+def _child(conn: Any, backend: Backend, problem: Problem, options: SolveOptions) -> None:
+    try:
+        conn.send(backend._solve(problem, options))
+    except BaseException as err:  # noqa: BLE001 - reported to the parent as a status
+        conn.send(Solution(status="error", backend=backend.label, message=_describe(err)))
+    finally:
+        conn.close()
+
+
+def _describe(err: BaseException) -> str:
+    msg = " ".join(str(err).split()) or "no message"
+    return f"{type(err).__name__}: {msg}"
+
+
 class Backend(ABC):
-    """Base class of every backend plugin."""
+    """Base class of every backend plugin.
+
+    Subclasses set the class attributes and implement :meth:`_solve` for a *closed* problem
+    (every LMI ``F(x) >= 0``, every row ``== 0`` or ``>= 0``), returning a :class:`Solution` in
+    the same problem's variable space with ``solve_s`` set to the time spent inside the solver.
+    """
 
     name: ClassVar[str] = ""
     #: importable module names the backend needs, and the pip package that provides each
@@ -59,25 +273,156 @@ class Backend(ABC):
     STATUS_MAP: ClassVar[dict[str, str]] = {}
     #: constraint kinds the backend takes: subset of {"lmi", "eq", "ge"}
     capabilities: ClassVar[frozenset[str]] = frozenset({"lmi", "eq", "ge"})
+    #: whether the solver enforces ``SolveOptions.time_limit`` itself
+    native_time_limit: ClassVar[bool] = False
+    #: interior-point (True) or first-order (False) method, for documentation and ``auto``
+    interior_point: ClassVar[bool] = True
+    #: one line shown by ``lmic backends``
+    description: ClassVar[str] = ""
+    #: accepted ``name:VARIANT`` suffixes (e.g. the sub-solvers of ``cvxpy``); empty: none
+    variants: ClassVar[tuple[str, ...]] = ()
 
-    @classmethod
-    def missing_packages(cls) -> list[str]:
+    def __init__(self, variant: str | None = None) -> None:
+        if variant is not None and variant.upper() not in self.variants:
+            from lmic.errors import BackendUnavailable
+
+            raise BackendUnavailable(f"backend '{self.name}' has no variant '{variant}'")
+        self.variant = variant
+
+    @property
+    def label(self) -> str:
+        """The name shown in results (e.g. ``"cvxpy:SCS"`` for a configured backend)."""
+        return self.name
+
+    def missing_packages(self) -> list[str]:
         """The pip packages whose modules cannot be imported here."""
-        return [pkg for mod, pkg in cls.requires.items() if importlib.util.find_spec(mod) is None]
+        missing = []
+        for mod, pkg in self.requires.items():
+            try:
+                found = importlib.util.find_spec(mod) is not None
+            except (ImportError, ValueError):
+                found = False
+            if not found:
+                missing.append(pkg)
+        return missing
 
-    @classmethod
-    def is_available(cls) -> bool:
+    def is_available(self) -> bool:
         """True when every required module is importable."""
-        return not cls.missing_packages()
+        return not self.missing_packages()
 
     def supports(self, problem: Problem, explain: bool = False) -> bool | tuple[bool, str]:
-        """Whether this backend can take ``problem``; with ``explain``, also why not."""
-        return (True, "") if explain else True
+        """Whether this backend can take ``problem``; with ``explain``, also why not.
+
+        The default compares the problem's constraint kinds with :attr:`capabilities` and
+        requires at least one decision variable.
+        """
+        reason = ""
+        extra = problem_kinds(problem) - set(self.capabilities)
+        if extra:
+            reason = (
+                f"backend '{self.label}' cannot take {', '.join(sorted(extra))} constraints "
+                f"(it takes {', '.join(sorted(self.capabilities))})"
+            )
+        elif problem.n == 0:
+            reason = "the problem has no decision variables"
+        ok = not reason
+        return (ok, reason) if explain else ok
+
+    def solve(self, problem: Problem, options: SolveOptions | None = None) -> Solution:
+        """Solve ``problem``; map every outcome (crashes included) into a :class:`Solution`.
+
+        Strict constraints are handled by :func:`lmic.backends.strict.reduce` (recorded in
+        ``Solution.strategy`` and ``Solution.margin``); ``lower_s`` is lmic's own time
+        (reduction, lowering and result mapping), ``solve_s`` the solver's.
+        """
+        from lmic.backends import strict
+
+        options = options or SolveOptions()
+        t0 = time.perf_counter()
+        try:
+            reduced, inverse = strict.reduce(problem, options)
+            t1 = time.perf_counter()
+            raw = self._run(reduced, options)
+            t2 = time.perf_counter()
+            sol = strict.invert(raw, inverse, options)
+            t3 = time.perf_counter()
+        except Exception as err:  # noqa: BLE001 - a crash is a status, never a traceback
+            detail = traceback.extract_tb(err.__traceback__)
+            where = f" (at {detail[-1].name})" if detail else ""
+            return Solution(
+                status="error",
+                backend=self.label,
+                message=_describe(err) + where,
+                solve_s=time.perf_counter() - t0,
+            )
+        sol.backend = sol.backend or self.label
+        run_overhead = max(0.0, (t2 - t1) - raw.solve_s)
+        sol.lower_s = (t1 - t0) + run_overhead + (t3 - t2)
+        return sol
+
+    def _run(self, problem: Problem, options: SolveOptions) -> Solution:
+        """Call :meth:`_solve`, in a child process when a time limit must be enforced here."""
+        if options.time_limit is None or self.native_time_limit:
+            try:
+                return self._solve(problem, options)
+            except Exception as err:  # noqa: BLE001
+                return Solution(status="error", backend=self.label, message=_describe(err))
+        ctx = multiprocessing.get_context("fork")
+        recv, send = ctx.Pipe(duplex=False)
+        proc = ctx.Process(target=_child, args=(send, self, problem, options), daemon=True)
+        t0 = time.perf_counter()
+        proc.start()
+        send.close()
+        try:
+            if recv.poll(options.time_limit):
+                sol = recv.recv()
+            else:
+                sol = Solution(
+                    status="error",
+                    backend=self.label,
+                    native_status="time_limit",
+                    message=f"time limit of {options.time_limit:g} s exceeded",
+                    solve_s=time.perf_counter() - t0,
+                )
+        except EOFError:
+            sol = Solution(
+                status="error",
+                backend=self.label,
+                message=f"solver process died (exit code {proc.exitcode})",
+            )
+        finally:
+            if proc.is_alive():
+                proc.terminate()
+            proc.join(1.0)
+            recv.close()
+        return sol
 
     @abstractmethod
-    def solve(self, problem: Problem, options: SolveOptions | None = None) -> Solution:
-        """Solve ``problem``; map every outcome (crashes included) into a :class:`Solution`."""
+    def _solve(self, problem: Problem, options: SolveOptions) -> Solution:
+        """Solve a closed ``problem`` (no strict constraints) with the native solver."""
 
     def map_status(self, native: str) -> str:
         """Map a native status into the shared vocabulary (unknown -> ``error``)."""
         return self.STATUS_MAP.get(str(native), "error")
+
+    # -- helpers shared by the s-form backends ---------------------------------------------
+
+    @staticmethod
+    def split_duals(
+        data: ConicData,
+        z: np.ndarray,
+        unvec: Callable[[np.ndarray, int], np.ndarray],
+        n_rows: int,
+    ) -> dict[str, Any]:
+        """IR-shaped ``{"lmis": [Z_i], "linear": y}`` from a stacked dual vector ``z``.
+
+        ``unvec(v, d)`` turns one native PSD block back into a dense symmetric matrix.
+        """
+        z = np.asarray(z, dtype=float).ravel()
+        y = np.zeros(n_rows)
+        y[data.eq_rows] = z[: data.n_eq]
+        y[data.ge_rows] = z[data.n_eq : data.n_eq + data.n_ge]
+        mats = []
+        for off, d in zip(data.psd_offsets, data.psd, strict=True):
+            mats.append(unvec(z[off : off + tril_size(d)], d))
+        return {"lmis": mats, "linear": y}

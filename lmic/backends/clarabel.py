@@ -1,0 +1,138 @@
+"""Clarabel (native Python API): the embedded default backend.
+
+Clarabel solves ``min 1/2 x'Px + q'x`` s.t. ``A x + s = b``, ``s`` in a product of cones. Each
+LMI ``F(x) >= 0`` is one ``PSDTriangleConeT(d)`` block with ``s = svec(F(x))`` in Clarabel's
+vectorisation: the *upper* triangle, column by column, off-diagonal entries times ``sqrt(2)``
+(:func:`lmic.ir.svec.tril_to_triu_colmajor_perm`). Equalities go to ``ZeroConeT``, inequalities
+to ``NonnegativeConeT``. The dual ``z`` gives ``Z_i`` and ``y`` in the IR's convention
+(``c_k = sum_i <F_i^(k), Z_i> + a_k . y``); on ``PrimalInfeasible`` it is the Farkas ray
+(``A'z = 0``, ``b'z < 0``).
+
+Examples
+--------
+>>> ClarabelBackend.name
+'clarabel'
+"""
+
+from __future__ import annotations
+
+import time
+from typing import ClassVar
+
+import numpy as np
+import scipy.sparse as sp
+
+from lmic.backends.base import Backend, SolveOptions, conic_data
+from lmic.ir.problem import Problem
+from lmic.ir.svec import svec_scale, tril_to_triu_colmajor_perm, tril_unvec
+from lmic.solution import Solution
+
+__all__ = ["ClarabelBackend", "clarabel_vec", "clarabel_unvec"]
+
+
+def clarabel_vec(d: int) -> tuple[np.ndarray, np.ndarray]:
+    """Clarabel's PSD vectorisation as ``(perm, scale)``: ``native = scale * storage[perm]``.
+
+    >>> clarabel_vec(2)[0]
+    array([0, 1, 2])
+    """
+    perm = tril_to_triu_colmajor_perm(d)
+    return perm, svec_scale(d)[perm]
+
+
+def clarabel_unvec(v: np.ndarray, d: int) -> np.ndarray:
+    """Dense symmetric matrix from one Clarabel PSD block (inverse of :func:`clarabel_vec`).
+
+    >>> clarabel_unvec(np.array([1.0, np.sqrt(2) * 2, 3.0]), 2)
+    array([[1., 2.],
+           [2., 3.]])
+    """
+    perm, scale = clarabel_vec(d)
+    storage = np.empty(len(perm))
+    storage[perm] = np.asarray(v, dtype=float) / scale
+    return tril_unvec(storage, d)
+
+
+class ClarabelBackend(Backend):
+    """Clarabel interior-point solver through its native API."""
+
+    name: ClassVar[str] = "clarabel"
+    requires: ClassVar[dict[str, str]] = {"clarabel": "clarabel"}
+    native_time_limit: ClassVar[bool] = True
+    description: ClassVar[str] = "Clarabel interior point, native API (default)"
+    STATUS_MAP: ClassVar[dict[str, str]] = {
+        "Solved": "optimal",
+        "AlmostSolved": "inaccurate",
+        "PrimalInfeasible": "infeasible",
+        "AlmostPrimalInfeasible": "infeasible",
+        "DualInfeasible": "unbounded",
+        "AlmostDualInfeasible": "unbounded",
+        "MaxIterations": "inaccurate",
+        "MaxTime": "error",
+        "NumericalError": "error",
+        "InsufficientProgress": "inaccurate",
+        "CallbackTerminated": "error",
+        "Unsolved": "error",
+    }
+
+    def _settings(self, options: SolveOptions):
+        import clarabel
+
+        s = clarabel.DefaultSettings()
+        s.verbose = bool(options.verbose)
+        s.tol_gap_abs = s.tol_gap_rel = s.tol_feas = options.tol
+        s.tol_infeas_abs = s.tol_infeas_rel = options.tol
+        s.tol_ktratio = min(s.tol_ktratio, max(options.tol, 1e-12) * 1e2)
+        if options.max_iter is not None:
+            s.max_iter = int(options.max_iter)
+        if options.time_limit is not None:
+            s.time_limit = float(options.time_limit)
+        for key, value in options.extra.items():
+            setattr(s, key, value)
+        return s
+
+    def _solve(self, problem: Problem, options: SolveOptions) -> Solution:
+        import clarabel
+
+        data = conic_data(problem, clarabel_vec)
+        cones = []
+        if data.n_eq:
+            cones.append(clarabel.ZeroConeT(data.n_eq))
+        if data.n_ge:
+            cones.append(clarabel.NonnegativeConeT(data.n_ge))
+        cones += [clarabel.PSDTriangleConeT(d) for d in data.psd]
+        n = problem.n
+        P = sp.csc_matrix((n, n))
+        settings = self._settings(options)
+        t0 = time.perf_counter()
+        solver = clarabel.DefaultSolver(P, data.c, data.A, data.b, cones, settings)
+        result = solver.solve()
+        solve_s = time.perf_counter() - t0
+        native = str(result.status).split(".")[-1]
+        status = self.map_status(native)
+        sol = Solution(
+            status=status,
+            backend=self.label,
+            native_status=native,
+            solve_s=solve_s,
+            iterations=int(result.iterations),
+            info={"solver_time_s": float(result.solve_time)},
+        )
+        z = np.asarray(result.z, dtype=float)
+        if status in ("optimal", "inaccurate"):
+            sol.x = np.asarray(result.x, dtype=float)
+            sol.objective = data.sign * (float(data.c @ sol.x) + data.c0)
+            sol.duals = self.split_duals(data, z, clarabel_unvec, len(problem.linear))
+        elif status == "infeasible":
+            sol.farkas = self.split_duals(data, z, clarabel_unvec, len(problem.linear))
+            scale = -float(data.b @ z)
+            if scale > 0:
+                sol.farkas["lmis"] = [Z / scale for Z in sol.farkas["lmis"]]
+                sol.farkas["linear"] = sol.farkas["linear"] / scale
+        elif status == "unbounded":
+            sol.info["ray"] = np.asarray(result.x, dtype=float)
+        if native == "MaxTime":
+            sol.message = f"time limit of {options.time_limit:g} s exceeded"
+        elif status in ("error", "inaccurate"):
+            sol.message = f"Clarabel stopped with status {native}"
+        return sol

@@ -1,0 +1,156 @@
+"""CVXOPT ``solvers.sdp``: the LMI form solved natively.
+
+``cvxopt.solvers.sdp`` minimises ``c'x`` subject to ``Gl x + sl = hl`` (``sl >= 0``),
+``Gs[k] x + ss[k] = hs[k]`` (``ss[k]`` PSD) and ``A x = b``: exactly the IR's LMI form, with
+``hs[k] = F0`` and the columns of ``Gs[k]`` equal to ``-vec(F_j)`` as dense column-major
+``d*d`` vectors (:func:`lmic.backends.base.full_vec_map`, the one conversion place). Inequality
+rows go to ``Gl``/``hl``, equalities to ``A x = b`` (``A = a``, ``b = -a0``; their multipliers
+change sign to reach the IR's convention). CVXOPT has no time limit of its own: with
+``SolveOptions.time_limit`` the solve runs in a child process.
+
+Examples
+--------
+>>> CVXOPTBackend.name
+'cvxopt'
+"""
+
+from __future__ import annotations
+
+import time
+from typing import ClassVar
+
+import numpy as np
+import scipy.sparse as sp
+
+from lmic.backends.base import Backend, SolveOptions, full_vec_map
+from lmic.ir.problem import Problem
+from lmic.solution import Solution
+
+__all__ = ["CVXOPTBackend", "to_cvxopt_sparse"]
+
+
+def to_cvxopt_sparse(M: sp.spmatrix):
+    """A ``cvxopt.spmatrix`` from a scipy sparse matrix (vectorised, no Python loop).
+
+    >>> import scipy.sparse as sp
+    >>> to_cvxopt_sparse(sp.eye(2)).size
+    (2, 2)
+    """
+    import cvxopt
+
+    C = sp.coo_matrix(M)
+    return cvxopt.spmatrix(
+        cvxopt.matrix(C.data.astype(float)),
+        cvxopt.matrix(C.row.astype(np.int64)) if C.nnz else [],
+        cvxopt.matrix(C.col.astype(np.int64)) if C.nnz else [],
+        C.shape,
+    )
+
+
+def _lower_sym(M) -> np.ndarray:
+    """Symmetric matrix from CVXOPT's 'L'-stored PSD block (only the lower triangle is valid)."""
+    M = np.array(M, dtype=float)
+    L = np.tril(M)
+    return L + np.tril(M, -1).T
+
+
+class CVXOPTBackend(Backend):
+    """CVXOPT's primal-dual interior-point SDP solver (``solvers.sdp``), LMI form."""
+
+    name: ClassVar[str] = "cvxopt"
+    requires: ClassVar[dict[str, str]] = {"cvxopt": "cvxopt"}
+    description: ClassVar[str] = "CVXOPT interior point, native solvers.sdp (LMI form)"
+    STATUS_MAP: ClassVar[dict[str, str]] = {
+        "optimal": "optimal",
+        "primal infeasible": "infeasible",
+        "dual infeasible": "unbounded",
+        "unknown": "inaccurate",
+    }
+
+    def _options(self, options: SolveOptions) -> dict:
+        opts = {
+            "show_progress": bool(options.verbose),
+            "abstol": options.tol,
+            "reltol": options.tol,
+            "feastol": options.tol,
+        }
+        if options.max_iter is not None:
+            opts["maxiters"] = int(options.max_iter)
+        opts.update(options.extra)
+        return opts
+
+    def _solve(self, problem: Problem, options: SolveOptions) -> Solution:
+        import cvxopt
+        from cvxopt import solvers
+
+        n = problem.n
+        lin = problem.linear
+        kinds = np.asarray(lin.kinds, dtype=object)
+        eq = np.flatnonzero(kinds == "eq") if len(lin) else np.zeros(0, dtype=int)
+        ge = np.flatnonzero(kinds == "ge") if len(lin) else np.zeros(0, dtype=int)
+        sign = -1.0 if problem.objective.sense == "max" else 1.0
+        c = (
+            np.zeros(n)
+            if problem.objective.sense == "feasibility"
+            else sign * problem.objective.c[1:]
+        )
+        Gs, hs = [], []
+        for lmi in problem.lmis:
+            M = (full_vec_map(lmi.dim) @ lmi.coeffs).tocsc()
+            hs.append(cvxopt.matrix(M[:, 0].toarray().reshape(lmi.dim, lmi.dim, order="F")))
+            Gs.append(to_cvxopt_sparse(-M[:, 1:]))
+        kwargs: dict = {}
+        if len(ge):
+            Age = lin.A[ge]
+            kwargs["Gl"] = to_cvxopt_sparse(-Age[:, 1:])
+            kwargs["hl"] = cvxopt.matrix(Age[:, 0].toarray().ravel())
+        if len(eq):
+            Aeq = lin.A[eq]
+            kwargs["A"] = to_cvxopt_sparse(Aeq[:, 1:])
+            kwargs["b"] = cvxopt.matrix(-Aeq[:, 0].toarray().ravel())
+        if Gs:
+            kwargs["Gs"], kwargs["hs"] = Gs, hs
+        t0 = time.perf_counter()
+        result = solvers.sdp(
+            cvxopt.matrix(np.asarray(c, dtype=float)), options=self._options(options), **kwargs
+        )
+        solve_s = time.perf_counter() - t0
+        native = str(result["status"])
+        status = self.map_status(native)
+        sol = Solution(
+            status=status,
+            backend=self.label,
+            native_status=native,
+            solve_s=solve_s,
+            iterations=result.get("iterations"),
+        )
+
+        def duals() -> dict:
+            y = np.zeros(len(lin))
+            if len(ge) and result.get("zl") is not None:
+                y[ge] = np.array(result["zl"]).ravel()
+            if len(eq) and result.get("y") is not None:
+                y[eq] = -np.array(result["y"]).ravel()
+            return {"lmis": [_lower_sym(Z) for Z in (result.get("zs") or [])], "linear": y}
+
+        if status in ("optimal", "inaccurate") and result.get("x") is not None:
+            sol.x = np.array(result["x"]).ravel()
+            sol.objective = (
+                float(problem.objective.value(sol.x))
+                if problem.objective.sense != "feasibility"
+                else None
+            )
+            if result.get("zs") is not None or result.get("zl") is not None:
+                sol.duals = duals()
+            if status == "inaccurate":
+                sol.message = (
+                    "CVXOPT stopped with status 'unknown' (iteration limit or numerical trouble)"
+                )
+        elif status == "infeasible":
+            sol.farkas = duals()
+        elif status == "unbounded" and result.get("x") is not None:
+            sol.info["ray"] = np.array(result["x"]).ravel()
+        elif status == "inaccurate":
+            sol.status = "error"
+            sol.message = "CVXOPT stopped with status 'unknown' and no point"
+        return sol
