@@ -152,7 +152,7 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
     for d in t.data_decls:
         arr = arrays[d.name]
         expected = []
-        for axis, s in enumerate(d.shape):
+        for s in d.shape:
             val = _dim_value(s, out.dims)
             if val is None:
                 raise DataError(f"{where}: dimension {s} of data '{d.name}' cannot be determined")

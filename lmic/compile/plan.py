@@ -42,7 +42,6 @@ from sympy.matrices.expressions import (
     Transpose,
     ZeroMatrix,
 )
-
 from sympy.matrices.expressions.matexpr import MatrixElement
 
 from lmic.errors import TemplateError
@@ -251,9 +250,8 @@ class _Analyser:
                 if var_pos:
                     k = var_pos[0]
                     f = factors[k]
-                    out.append(
-                        Term(part, _atom_var(f), isinstance(f, Transpose), tuple(factors[:k]), tuple(factors[k + 1 :]), text)
-                    )
+                    left, right = tuple(factors[:k]), tuple(factors[k + 1 :])
+                    out.append(Term(part, _atom_var(f), isinstance(f, Transpose), left, right, text))
                 else:
                     out.append(Term(part, svar, False, tuple(factors), (), text))
         return out
@@ -308,6 +306,8 @@ class _Analyser:
                         "a scalar, 0 or STAR"
                     )
         for i in range(k):
+            if sizes[i] is None and (i, i) in entries and entries[(i, i)].scalar:
+                sizes[i] = sympy.Integer(1)  # a row holding only a scalar is a 1 x 1 block
             if sizes[i] is None:
                 raise TemplateError(
                     f"{self.t.theorem_id}: LMI '{name}': block row {i + 1} has no matrix entry to fix its size"
@@ -334,11 +334,15 @@ class _Analyser:
                 raise TemplateError(f"{self.t.theorem_id}: {where}: '{mono}' is not linear")
             if isinstance(target, MatrixElement):
                 if not isinstance(target.parent, MatrixSymbol):
-                    raise TemplateError(f"{self.t.theorem_id}: {where}: write entries of a variable, not of '{target.parent}'")
+                    raise TemplateError(
+                        f"{self.t.theorem_id}: {where}: write entries of a variable, not of '{target.parent}'"
+                    )
                 atom = (target.parent.name, "entry", int(target.i), int(target.j))
             elif isinstance(target, Trace):
                 if not isinstance(target.arg, MatrixSymbol):
-                    raise TemplateError(f"{self.t.theorem_id}: {where}: write the trace of a variable, not of '{target.arg}'")
+                    raise TemplateError(
+                        f"{self.t.theorem_id}: {where}: write the trace of a variable, not of '{target.arg}'"
+                    )
                 atom = (target.arg.name, "trace", 0, 0)
             else:
                 atom = (self.scalar_vars[target], "scalar", 0, 0)

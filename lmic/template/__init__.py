@@ -15,7 +15,7 @@ Examples
 'L'
 """
 
-from lmic.template.blocks import STAR, Block, LmiSpec, I, block
+from lmic.template.blocks import STAR, Block, I, LmiSpec, block
 from lmic.template.builder import Template
 from lmic.template.checks import (
     CheckSpec,

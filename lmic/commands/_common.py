@@ -1,0 +1,90 @@
+"""Helpers shared by the sub-commands: parameter overrides, JSON output, atomic writes.
+
+Examples
+--------
+>>> parse_params(["beta=0.5", "psi1=corrected"])
+{'beta': 0.5, 'psi1': 'corrected'}
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lmic.errors import DataError
+
+__all__ = ["parse_params", "print_json", "to_jsonable", "write_atomic", "add_param_option"]
+
+
+def parse_params(items: list[str] | None) -> dict[str, float | str]:
+    """``k=v`` strings -> dict; numbers become floats (parsed with ``float``, nothing evaluated)."""
+    out: dict[str, float | str] = {}
+    for item in items or []:
+        if "=" not in item:
+            raise DataError(f"-p {item!r}: write parameters as name=value")
+        key, value = item.split("=", 1)
+        key, value = key.strip(), value.strip()
+        if not key.isidentifier():
+            raise DataError(f"-p {item!r}: '{key}' is not a parameter name")
+        try:
+            num = float(value)
+        except ValueError:
+            out[key] = value
+            continue
+        if not math.isfinite(num):
+            raise DataError(f"-p {item!r}: {value} is not a finite number")
+        out[key] = num
+    return out
+
+
+def add_param_option(parser: Any) -> None:
+    """Add the ``-p k=v`` option (repeatable)."""
+    parser.add_argument(
+        "-p", "--param", action="append", default=[], metavar="K=V", help="override a parameter of the system file"
+    )
+
+
+def to_jsonable(obj: Any) -> Any:
+    """numpy arrays and scalars -> lists and floats, recursively (non-finite floats -> None)."""
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, float | np.floating):
+        f = float(obj)
+        return f if math.isfinite(f) else None
+    return obj
+
+
+def print_json(obj: Any) -> None:
+    """Print one JSON object on stdout."""
+    sys.stdout.write(json.dumps(to_jsonable(obj), indent=2, allow_nan=False) + "\n")
+
+
+def write_atomic(path: str | os.PathLike[str], write: Callable[[Any], None], mode: str = "w") -> None:
+    """Write through a temporary file in the same folder, then rename: nothing half-written."""
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    if not folder.is_dir():
+        raise DataError(f"{target}: folder {folder} does not exist")
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=folder)
+    try:
+        with os.fdopen(fd, mode) as fh:
+            write(fh)
+        os.replace(tmp, target)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise

@@ -1,0 +1,128 @@
+"""Render a theorem's template as the paper prints it: LaTeX and plain text.
+
+Examples
+--------
+>>> from lmic.registry import get_theorem
+>>> thm = get_theorem("thesis.lyapunov")
+>>> print(lmi_latex(thm.template().lmis[1]))
+A^{T} P + P A \\prec 0
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import sympy
+
+from lmic.template.blocks import STAR
+from lmic.template.builder import LmiDecl, Template
+from lmic.template.theorem import Theorem
+
+__all__ = ["lmi_latex", "lmi_text", "theorem_latex", "describe", "entry_latex", "entry_text"]
+
+_LATEX_REL = {"<": r"\prec", "<=": r"\preceq", ">": r"\succ", ">=": r"\succeq"}
+
+
+def entry_latex(e: Any) -> str:
+    """LaTeX of one block entry (``STAR`` is ``\\star``)."""
+    if e is STAR:
+        return r"\star"
+    if isinstance(e, int | float) and e == 0:
+        return "0"
+    return sympy.latex(e)
+
+
+def entry_text(e: Any) -> str:
+    """Plain text of one block entry (``STAR`` is ``*``)."""
+    if e is STAR:
+        return "*"
+    if isinstance(e, int | float) and e == 0:
+        return "0"
+    return sympy.sstr(e)
+
+
+def lmi_latex(decl: LmiDecl) -> str:
+    """The LMI as LaTeX: a ``bmatrix`` with ``\\star`` entries and the relation."""
+    b = decl.spec.block
+    rel = _LATEX_REL[decl.spec.relation]
+    if b.shape == (1, 1):
+        return f"{entry_latex(b.entry(0, 0))} {rel} 0"
+    rows = [" & ".join(entry_latex(e) for e in row) for row in b.rows]
+    body = r" \\ ".join(rows)
+    return rf"\begin{{bmatrix}} {body} \end{{bmatrix}} {rel} 0"
+
+
+def lmi_text(decl: LmiDecl) -> str:
+    """The LMI as plain text, one block row per line."""
+    b = decl.spec.block
+    rel = decl.spec.relation
+    if b.shape == (1, 1):
+        return f"{entry_text(b.entry(0, 0))} {rel} 0"
+    cells = [[entry_text(e) for e in row] for row in b.rows]
+    widths = [max(len(cells[i][j]) for i in range(len(cells))) for j in range(len(cells))]
+    lines = []
+    for i, row in enumerate(cells):
+        inner = " , ".join(c.ljust(widths[j]) for j, c in enumerate(row))
+        end = f" ]  {rel} 0" if i == len(cells) - 1 else " ;"
+        lines.append(("[ " if i == 0 else "  ") + inner + end)
+    return "\n".join(lines)
+
+
+def theorem_latex(thm: Theorem, t: Template) -> str:
+    """Every LMI and scalar constraint of a theorem as a LaTeX ``align*`` body."""
+    lines = [rf"\text{{{d.name}}}:\quad & {lmi_latex(d)}" for d in t.lmis]
+    lines += [rf"\text{{{c.name}}}:\quad & {sympy.latex(c.relation)}" for c in t.constraints]
+    sense, expr = t.objective
+    if sense != "feasibility":
+        lines.append(rf"\text{{{'minimise' if sense == 'min' else 'maximise'}}}:\quad & {sympy.latex(expr)}")
+    for d in t.derived:
+        lines.append(rf"{d.name} &= {sympy.latex(d.expr)}")
+    return "\\begin{align*}\n" + " \\\\\n".join(lines) + "\n\\end{align*}"
+
+
+def _shape(shape: Any) -> str:
+    return " x ".join(str(s) for s in shape)
+
+
+def describe(thm: Theorem, t: Template) -> dict[str, Any]:
+    """A JSON-able description of a theorem (``lmic show --json``)."""
+    return {
+        "id": thm.id,
+        "title": thm.title,
+        "citation": thm.citation,
+        "kind": thm.kind,
+        "objective": thm.objective,
+        "system_class": thm.system_class,
+        "notes": thm.notes,
+        "doc": thm.doc,
+        "dimensions": [str(s) for s in t.dimensions],
+        "data": [
+            {
+                "name": d.name,
+                "shape": _shape(d.shape),
+                "symmetric": d.symmetric,
+                "positive_definite": d.positive_definite,
+                "optional": d.default is not None,
+                "doc": d.doc,
+            }
+            for d in t.data_decls
+        ],
+        "params": [
+            {"name": p.name, "default": p.default, "domain": str(p.domain), "doc": p.doc} for p in t.params
+        ],
+        "options": [
+            {"name": o.name, "choices": list(o.choices), "default": o.default, "doc": o.doc} for o in t.options
+        ],
+        "constants": [{"name": c.name, "doc": c.doc} for c in t.consts],
+        "variables": [
+            {"name": v.name, "kind": v.kind, "shape": _shape(v.shape), "sign": v.sign} for v in t.variables
+        ],
+        "lmis": [
+            {"name": d.name, "relation": d.spec.relation, "text": lmi_text(d), "latex": lmi_latex(d)}
+            for d in t.lmis
+        ],
+        "constraints": [{"name": c.name, "text": sympy.sstr(c.relation)} for c in t.constraints],
+        "objective_expr": {"sense": t.objective[0], "expr": sympy.sstr(t.objective[1])},
+        "derived": [{"name": d.name, "expr": sympy.sstr(d.expr), "doc": d.doc} for d in t.derived],
+        "checks": [{"name": c.name, "kind": c.spec.kind} for c in t.checks],
+    }

@@ -1,0 +1,140 @@
+"""Templates that are not LMIs are TemplateErrors naming the LMI, the block and the term."""
+
+from __future__ import annotations
+
+import pytest
+
+from lmic.compile import analyse, bind
+from lmic.errors import TemplateError
+from lmic.template import STAR, I, block, theorem
+
+DATA = {"data": {"A": [[1.0, 2.0], [0.0, 3.0]], "C": [[1.0, 0.0]]}}
+
+
+def _thm(build):
+    return theorem(id="test.bad", title="bad", citation="tests")(build)
+
+
+def test_product_of_two_matrix_variables_names_block_and_term():
+    def build(t):
+        n, p = t.dims("n p")
+        A = t.data("A", n, n)
+        t.data("C", p, n)
+        P = t.symmetric("P", n)
+        Q = t.symmetric("Q", n)
+        t.lmi("bilinear", block([[A.T * P + P * A, P * Q], [STAR, -P]]) < 0)
+
+    msg = r"LMI 'bilinear' block \(1,2\).*product of decision variables P and Q.*P\*Q"
+    with pytest.raises(TemplateError, match=msg):
+        analyse(_thm(build))
+
+
+def test_scalar_variable_times_matrix_variable_is_rejected():
+    def build(t):
+        n, p = t.dims("n p")
+        t.data("A", n, n)
+        t.data("C", p, n)
+        P = t.symmetric("P", n)
+        w = t.scalar("w")
+        t.lmi("L", block([[w * P]]) < 0)
+
+    with pytest.raises(TemplateError, match=r"block \(1,1\).*product of decision variables w and P"):
+        analyse(_thm(build))
+
+
+def test_nonlinear_scalar_function_of_a_variable_is_rejected():
+    def build(t):
+        n, p = t.dims("n p")
+        t.data("A", n, n)
+        t.data("C", p, n)
+        w = t.scalar("w")
+        t.lmi("L", block([[w**2 * I(n)]]) < 0)
+
+    with pytest.raises(TemplateError, match="not linear in the decision variable w"):
+        analyse(_thm(build))
+
+
+def test_non_symmetric_diagonal_block_is_rejected_at_bind():
+    def build(t):
+        n, p = t.dims("n p")
+        A = t.data("A", n, n)
+        t.data("C", p, n)
+        P = t.symmetric("P", n)
+        t.lmi("skew", block([[A * P]]) < 0)
+
+    with pytest.raises(TemplateError, match=r"LMI 'skew' block \(1,1\) is not symmetric"):
+        bind(analyse(_thm(build)), DATA)
+
+
+def test_explicit_lower_block_that_disagrees_is_rejected():
+    def build(t):
+        n, p = t.dims("n p")
+        A = t.data("A", n, n)
+        t.data("C", p, n)
+        P = t.symmetric("P", n)
+        t.lmi("mirror", block([[-P, A * P], [A * P, -P]]) < 0)
+
+    with pytest.raises(TemplateError, match=r"block \(1,2\) is not the transpose of block \(2,1\)"):
+        bind(analyse(_thm(build)), DATA)
+
+
+def test_explicit_zero_lower_with_nonzero_upper_is_rejected():
+    def build(t):
+        n, p = t.dims("n p")
+        A = t.data("A", n, n)
+        t.data("C", p, n)
+        P = t.symmetric("P", n)
+        t.lmi("half", block([[-P, A.T * P], [0, -P]]) < 0)
+
+    with pytest.raises(TemplateError, match="not the transpose"):
+        bind(analyse(_thm(build)), DATA)
+
+
+def test_star_on_both_sides_is_rejected():
+    def build(t):
+        n, p = t.dims("n p")
+        t.data("A", n, n)
+        t.data("C", p, n)
+        P = t.symmetric("P", n)
+        t.lmi("stars", block([[-P, STAR], [STAR, -P]]) < 0)
+
+    with pytest.raises(TemplateError, match="both"):
+        analyse(_thm(build))
+
+
+def test_lmi_without_relation_and_with_nonzero_rhs_are_rejected():
+    def no_rel(t):
+        (n,) = t.dims("n")
+        P = t.symmetric("P", n)
+        t.lmi("x", block(P))
+
+    with pytest.raises(TemplateError, match="no relation"):
+        analyse(_thm(no_rel))
+
+    def rhs(t):
+        (n,) = t.dims("n")
+        P = t.symmetric("P", n)
+        t.lmi("x", block(P) < 1)
+
+    with pytest.raises(TemplateError, match="compared with 0"):
+        analyse(_thm(rhs))
+
+
+def test_derived_quantity_inside_an_lmi_is_rejected():
+    def build(t):
+        (n,) = t.dims("n")
+        A = t.data("A", n, n)
+        P = t.symmetric("P", n)
+        L = t.derive("L", P.inv())
+        t.lmi("x", block(A.T * L) < 0)
+
+    with pytest.raises(TemplateError, match="derived quantity 'L'"):
+        analyse(_thm(build))
+
+
+def test_a_buggy_build_function_is_reported_with_the_theorem_id():
+    def build(t):
+        raise KeyError("oops")
+
+    with pytest.raises(TemplateError, match="theorem test.bad: template failed to build: KeyError"):
+        analyse(_thm(build))
