@@ -1,0 +1,615 @@
+"""Certificate files: write them atomically, read them strictly, audit them from scratch.
+
+A certificate file (``schemas/certificate.schema.json``, version :data:`SCHEMA_VERSION`) is one
+JSON object::
+
+    {"lmic_certificate": 1, "lmic": "0.1.0", "created": "2026-01-01T00:00:00Z",
+     "theorem": {"id", "title", "citation"} | null,       # null for a raw IR / SDPA problem
+     "params": {...},                                      # the parameters compiled with
+     "system": {"path", "name", "sha256"} | null,          # path relative to the certificate
+     "ir": {"sha256", "embedded": IR dict | null},         # embedded when not recompilable
+     "backend": {"name", "status", "native_status", "strategy", "margin", "iterations",
+                 "solve_s", "versions": {package: version}},
+     "solution": {"x": [...], "objective", "variables": {name: value}, "farkas": {...} | null},
+     "tolerances": {...},
+     "certificate": {verdict, reason, lmis, linear, objective, derived, checks, exact, farkas,
+                     margin, ...}}                          # Certificate.to_dict() without x
+
+The IR hash is :func:`ir_hash`: :func:`lmic.ir.jsonio.problem_hash` of the IR with the
+volatile ``meta`` entries (timings ``*_s`` and the local ``system_path``) left out, so that two
+compilations of the same theorem with the same numbers hash alike.
+
+:func:`audit_certificate` trusts nothing in the file: it recompiles the IR from the recorded
+theorem and system file (or loads the embedded IR), checks the data and IR hashes, re-derives
+the variable values from ``x``, re-runs :func:`lmic.certify.certify` with the recorded
+tolerances, and compares every recorded number with the recomputed one. The first field that
+differs is named (``system.sha256``, ``ir.sha256``, ``solution.variables.P``,
+``certificate.lmis[0].min_eig``, ...).
+
+Examples
+--------
+>>> import tempfile, os, numpy as np, scipy.sparse as sp
+>>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+>>> from lmic.solution import Solution
+>>> from lmic.certify import certify
+>>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+>>> s = Solution("optimal", x=np.array([2.0]), backend="clarabel")
+>>> path = os.path.join(tempfile.mkdtemp(), "cert.json")
+>>> _ = write_certificate(path, p, s, certify(p, s))
+>>> audit_certificate(path).ok
+True
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime as _dt
+import json
+import math
+import os
+import tempfile
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lmic import __version__
+from lmic.certify.check import Certificate, Tolerances, _jsonable, certify
+from lmic.errors import CertificateError, LmicError
+from lmic.ir.problem import Problem
+from lmic.solution import STATUSES, Solution
+
+__all__ = [
+    "SCHEMA_VERSION",
+    "ir_hash",
+    "certificate_document",
+    "write_certificate",
+    "read_certificate",
+    "audit_certificate",
+    "AuditResult",
+]
+
+#: version of the certificate file format (the ``lmic_certificate`` key)
+SCHEMA_VERSION = 1
+
+_VOLATILE_META = ("system_path",)
+
+#: python packages behind each backend name (for the ``versions`` record)
+_PACKAGES = {
+    "clarabel": "clarabel",
+    "scs": "scs",
+    "cvxopt": "cvxopt",
+    "sdpa": "sdpa-python",
+    "cvxpy": "cvxpy",
+    "picos": "picos",
+}
+
+
+def ir_hash(problem: Problem) -> str:
+    """SHA-256 of the IR without volatile ``meta`` (timings, local paths).
+
+    Examples
+    --------
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LinearConstraints, Objective, Problem, Variable
+    >>> p = Problem([Variable("t", "scalar", (1, 1))], [], LinearConstraints.empty(1),
+    ...             Objective("min", [0.0, 1.0]), meta={"plan_s": 0.1})
+    >>> q = Problem(p.variables, [], p.linear, p.objective, meta={"plan_s": 0.7})
+    >>> ir_hash(p) == ir_hash(q)
+    True
+    """
+    from lmic.ir.jsonio import problem_hash
+
+    meta = {k: v for k, v in problem.meta.items() if not (k.endswith("_s") or k in _VOLATILE_META)}
+    return problem_hash(replace(problem, meta=meta))
+
+
+def _versions(backend: str, info: dict[str, Any]) -> dict[str, str]:
+    from importlib import metadata
+
+    out: dict[str, str] = {"lmic": __version__}
+    names = {"numpy", "scipy", "python-flint"}
+    head = backend.split(":")[0].lower()
+    if head in _PACKAGES:
+        names.add(_PACKAGES[head])
+    tail = backend.split(":")[1].lower() if ":" in backend else ""
+    if tail in _PACKAGES:
+        names.add(_PACKAGES[tail])
+    for name in sorted(names):
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            continue
+    for key in ("version", "solver_version"):
+        if isinstance(info.get(key), str):
+            out["solver"] = info[key]
+    return out
+
+
+def _farkas_json(farkas: dict[str, Any] | None) -> dict[str, Any] | None:
+    if farkas is None:
+        return None
+    out: dict[str, Any] = {
+        "lmis": [None if Z is None else np.asarray(Z, dtype=float).tolist() for Z in farkas.get("lmis") or []],
+        "linear": np.asarray(farkas.get("linear") if farkas.get("linear") is not None else [], dtype=float).tolist(),
+    }
+    return out
+
+
+def certificate_document(
+    problem: Problem,
+    solution: Solution,
+    certificate: Certificate,
+    *,
+    system: Any = None,
+    path: str | os.PathLike[str] | None = None,
+    embed_ir: bool | None = None,
+) -> dict[str, Any]:
+    """The certificate file's content as a dict (see the module docstring).
+
+    Parameters
+    ----------
+    problem, solution, certificate
+        The IR, the backend's answer and what :func:`lmic.certify.certify` made of it.
+    system : lmic.system.System, optional
+        The system the problem was compiled from (its path and data hash are recorded).
+    path : path, optional
+        Where the file will live (the system path is recorded relative to it).
+    embed_ir : bool, optional
+        Embed the IR (default: only when it cannot be recompiled from a theorem and a system
+        file).
+    """
+    meta = problem.meta or {}
+    theorem_id = meta.get("theorem")
+    theorem = (
+        {"id": str(theorem_id), "title": meta.get("title"), "citation": meta.get("citation")} if theorem_id else None
+    )
+    sys_entry = None
+    sys_path = getattr(system, "path", None) if system is not None else meta.get("system_path")
+    if system is not None or sys_path:
+        rel = None
+        if sys_path:
+            base = Path(path).resolve().parent if path is not None else Path.cwd()
+            try:
+                rel = os.path.relpath(Path(sys_path).resolve(), base)
+            except ValueError:  # another drive (Windows)
+                rel = str(Path(sys_path).resolve())
+        digest = system.data_hash() if system is not None else meta.get("data_hash")
+        sys_entry = {"path": rel, "name": getattr(system, "name", "") or meta.get("system", ""), "sha256": digest}
+    recompilable = theorem is not None and sys_entry is not None and sys_entry["path"] is not None
+    if embed_ir is None:
+        embed_ir = not recompilable
+    embedded = None
+    if embed_ir:
+        from lmic.ir.jsonio import problem_to_dict
+
+        embedded = problem_to_dict(problem)
+    cert = certificate.to_dict()
+    cert.pop("x", None)
+    x = None if solution.x is None else np.asarray(solution.x, dtype=float)
+    doc = {
+        "lmic_certificate": SCHEMA_VERSION,
+        "lmic": __version__,
+        "created": _dt.datetime.now(_dt.UTC).replace(microsecond=0).isoformat().replace("+00:00", "Z"),
+        "theorem": theorem,
+        "params": _jsonable(meta.get("params") or {}),
+        "system": sys_entry,
+        "ir": {"sha256": ir_hash(problem), "embedded": embedded},
+        "backend": {
+            "name": solution.backend,
+            "status": solution.status,
+            "native_status": solution.native_status,
+            "strategy": solution.strategy,
+            "margin": solution.margin,
+            "iterations": solution.iterations,
+            "solve_s": solution.solve_s,
+            "versions": _versions(solution.backend or "", solution.info or {}),
+        },
+        "solution": {
+            "x": None if x is None else x.tolist(),
+            "objective": None if solution.objective is None else float(solution.objective),
+            "variables": None if x is None else _jsonable(problem.unpack(x)),
+            "farkas": _farkas_json(solution.farkas) if solution.status == "infeasible" else None,
+        },
+        "tolerances": dict(certificate.tolerances),
+        "certificate": cert,
+    }
+    return _jsonable(doc)
+
+
+def write_certificate(
+    path: str | os.PathLike[str],
+    problem: Problem,
+    solution: Solution,
+    certificate: Certificate,
+    *,
+    system: Any = None,
+    embed_ir: bool | None = None,
+) -> dict[str, Any]:
+    """Write a certificate file atomically (temporary file + rename); return its content.
+
+    Examples
+    --------
+    >>> import tempfile, os, numpy as np, scipy.sparse as sp, json
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p>0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> s = Solution("optimal", x=np.array([2.0]))
+    >>> f = os.path.join(tempfile.mkdtemp(), "c.json")
+    >>> doc = write_certificate(f, p, s, certify(p, s))
+    >>> json.load(open(f))["certificate"]["verdict"]
+    'certified'
+    """
+    doc = certificate_document(problem, solution, certificate, system=system, path=path, embed_ir=embed_ir)
+    text = json.dumps(doc, indent=1, allow_nan=False) + "\n"
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    if not folder.is_dir():
+        raise CertificateError(f"{target}: folder {folder} does not exist")
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return doc
+
+
+def _schema() -> dict[str, Any]:
+    try:
+        from lmic.schemas import load_schema
+
+        return load_schema("certificate")
+    except (ImportError, LmicError):
+        here = Path(__file__).resolve().parents[2] / "schemas" / "certificate.schema.json"
+        return json.loads(here.read_text(encoding="utf-8"))
+
+
+def _reject_constant(name: str) -> float:
+    raise ValueError(f"{name} is not allowed")
+
+
+def read_certificate(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Read and validate a certificate file.
+
+    Raises
+    ------
+    CertificateError
+        One line: unreadable, not JSON (e.g. truncated), unknown schema version, or not
+        following ``schemas/certificate.schema.json`` (naming the field).
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> f = os.path.join(tempfile.mkdtemp(), "c.json")
+    >>> _ = open(f, "w").write('{"lmic_certificate": 99}')
+    >>> read_certificate(f)
+    Traceback (most recent call last):
+    ...
+    lmic.errors.CertificateError: c.json: unknown certificate schema version 99 (this lmic reads 1)
+    """
+    p = Path(path)
+    name = p.name
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise CertificateError(f"{p}: no such certificate file") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise CertificateError(f"{p}: cannot read: {err}") from None
+    if not text.strip():
+        raise CertificateError(f"{name}: empty certificate file")
+    try:
+        doc = json.loads(text, parse_constant=_reject_constant)
+    except json.JSONDecodeError as err:
+        raise CertificateError(
+            f"{name}: not valid JSON (truncated or corrupted?) at line {err.lineno} column {err.colno}: {err.msg}"
+        ) from None
+    except ValueError as err:
+        raise CertificateError(f"{name}: {err}") from None
+    if not isinstance(doc, dict) or "lmic_certificate" not in doc:
+        raise CertificateError(f"{name}: not an lmic certificate (no 'lmic_certificate' key)")
+    version = doc["lmic_certificate"]
+    if version != SCHEMA_VERSION or isinstance(version, bool):
+        raise CertificateError(
+            f"{name}: unknown certificate schema version {version!r} (this lmic reads {SCHEMA_VERSION})"
+        )
+    import jsonschema
+
+    validator = jsonschema.Draft202012Validator(_schema())
+    errors = sorted(validator.iter_errors(doc), key=lambda e: list(e.absolute_path))
+    if errors:
+        err = errors[0]
+        where = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in err.absolute_path).lstrip(".")
+        msg = " ".join(err.message.split())
+        if len(msg) > 160:
+            msg = msg[:157] + "..."
+        raise CertificateError(f"{name}: {where or 'top level'}: {msg}")
+    return doc
+
+
+@dataclass
+class AuditResult:
+    """The outcome of :func:`audit_certificate`.
+
+    Attributes
+    ----------
+    ok : bool
+        Every hash and number matches the recomputation.
+    verdict : str
+        The recomputed verdict when ``ok``; ``"rejected"`` otherwise.
+    recorded_verdict : str
+    field : str or None
+        The first field that differs.
+    message : str
+        One line.
+    certificate : Certificate or None
+        The recomputed certificate (``None`` when the audit stopped before certifying).
+    exact : bool
+        Whether the exact proof was re-run.
+    """
+
+    ok: bool
+    verdict: str
+    recorded_verdict: str
+    field: str | None = None
+    message: str = ""
+    certificate: Certificate | None = None
+    exact: bool = False
+    theorem: str | None = None
+    checked: list[str] = dataclasses.field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able form."""
+        return _jsonable(
+            {
+                "ok": self.ok,
+                "verdict": self.verdict,
+                "recorded_verdict": self.recorded_verdict,
+                "field": self.field,
+                "message": self.message,
+                "theorem": self.theorem,
+                "exact": self.exact,
+                "checked": self.checked,
+                "certificate": None if self.certificate is None else self.certificate.to_dict(),
+            }
+        )
+
+
+def _fail(doc: dict, fld: str, message: str, cert: Certificate | None = None, **kw: Any) -> AuditResult:
+    return AuditResult(
+        ok=False,
+        verdict="rejected",
+        recorded_verdict=doc["certificate"]["verdict"],
+        field=fld,
+        message=message,
+        certificate=cert,
+        **kw,
+    )
+
+
+def _rebuild(doc: dict[str, Any], base: Path) -> tuple[Problem, str | None, AuditResult | None]:
+    """The problem to audit against; an early AuditResult if a hash already differs."""
+    embedded = doc["ir"]["embedded"]
+    theorem = doc["theorem"]
+    if embedded is not None:
+        from lmic.ir.jsonio import problem_from_dict
+
+        try:
+            problem = problem_from_dict(embedded, source="certificate ir.embedded")
+        except LmicError as err:
+            raise CertificateError(f"embedded IR is malformed: {err}") from None
+        return problem, "embedded IR", None
+    if theorem is None or doc["system"] is None or not doc["system"].get("path"):
+        raise CertificateError("the certificate neither embeds its IR nor records a theorem and a system file")
+    from lmic.compile import compile_theorem
+    from lmic.registry import get_theorem
+    from lmic.system import load_system
+
+    try:
+        thm = get_theorem(theorem["id"])
+    except LmicError:
+        raise CertificateError(f"theorem '{theorem['id']}' is not installed here") from None
+    sys_path = Path(doc["system"]["path"])
+    if not sys_path.is_absolute():
+        sys_path = base / sys_path
+    if not sys_path.is_file():
+        raise CertificateError(f"system file {sys_path} (recorded in the certificate) not found")
+    system = load_system(sys_path)
+    if system.data_hash() != doc["system"]["sha256"]:
+        return (
+            None,  # type: ignore[return-value]
+            f"theorem {theorem['id']}",
+            _fail(
+                doc,
+                "system.sha256",
+                f"system.sha256 differs: the data of {sys_path.name} changed since the certificate was written",
+            ),
+        )
+    params = doc["params"] or {}
+    problem = compile_theorem(thm, system, params=params)
+    return problem, f"theorem {theorem['id']} on {sys_path.name}", None
+
+
+def _num(v: Any) -> float | None:
+    if isinstance(v, bool):
+        return None
+    if isinstance(v, int | float):
+        return float(v)
+    if v in ("nan", "inf", "-inf"):
+        return float(v)
+    return None
+
+
+def _close(a: float, b: float, atol: float) -> bool:
+    if math.isnan(a) or math.isnan(b):
+        return math.isnan(a) and math.isnan(b)
+    if math.isinf(a) or math.isinf(b):
+        return a == b
+    return abs(a - b) <= 1e-9 * max(abs(a), abs(b)) + atol
+
+
+def _first_diff(rec: Any, new: Any, where: str, atol: float = 1e-300) -> tuple[str, Any, Any] | None:
+    ra, na = _num(rec), _num(new)
+    if ra is not None and na is not None:
+        return None if _close(ra, na, atol) else (where, rec, new)
+    if isinstance(rec, dict) and isinstance(new, dict):
+        scale = _num(new.get("scale")) if "min_eig" in new else None
+        sub_atol = 1e-12 * scale if scale and math.isfinite(scale) else atol
+        for key in list(rec) + [k for k in new if k not in rec]:
+            if key in ("time_s", "reason", "note", "detail") or where.endswith("tolerances"):
+                continue
+            if key not in rec or key not in new:
+                return (f"{where}.{key}", rec.get(key, "<missing>"), new.get(key, "<missing>"))
+            d = _first_diff(rec[key], new[key], f"{where}.{key}", sub_atol)
+            if d:
+                return d
+        return None
+    if isinstance(rec, list) and isinstance(new, list):
+        if len(rec) != len(new):
+            return (f"{where} (length)", len(rec), len(new))
+        for i, (a, b) in enumerate(zip(rec, new, strict=True)):
+            d = _first_diff(a, b, f"{where}[{i}]", atol)
+            if d:
+                return d
+        return None
+    return None if rec == new else (where, rec, new)
+
+
+def _short(v: Any) -> str:
+    s = json.dumps(v) if not isinstance(v, str) else v
+    return s if len(s) <= 60 else s[:57] + "..."
+
+
+def audit_certificate(path: str | os.PathLike[str], exact: bool = False) -> AuditResult:
+    """Recompute a certificate from scratch and compare it with the file.
+
+    Parameters
+    ----------
+    path : path
+        The certificate file.
+    exact : bool
+        Re-run (or run) the exact rational proof.
+
+    Returns
+    -------
+    AuditResult
+        ``ok`` is False (verdict ``rejected``) when any hash or number differs; ``field`` names
+        the first one.
+
+    Raises
+    ------
+    CertificateError
+        Malformed, truncated or unknown-version file; theorem not installed; system file
+        missing (one line each).
+
+    Examples
+    --------
+    >>> import tempfile, os, json, numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p>0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> s = Solution("optimal", x=np.array([2.0]))
+    >>> f = os.path.join(tempfile.mkdtemp(), "c.json")
+    >>> doc = write_certificate(f, p, s, certify(p, s))
+    >>> doc["solution"]["x"] = [-1.0]; _ = open(f, "w").write(json.dumps(doc))
+    >>> r = audit_certificate(f)
+    >>> r.ok, r.field
+    (False, 'solution.variables.p')
+    """
+    p = Path(path)
+    doc = read_certificate(p)
+    recorded = doc["certificate"]
+    problem, label, early = _rebuild(doc, p.resolve().parent)
+    if early is not None:
+        early.theorem = (doc["theorem"] or {}).get("id")
+        return early
+    checked = ["schema", "system.sha256" if doc["system"] and doc["ir"]["embedded"] is None else "embedded IR"]
+    theorem_id = (doc["theorem"] or {}).get("id")
+    digest = ir_hash(problem)
+    if digest != doc["ir"]["sha256"]:
+        why = (
+            "the embedded IR was modified"
+            if doc["ir"]["embedded"] is not None
+            else "recompiling gives a different IR (the theorem plugin, the compiler or the parameters changed)"
+        )
+        return _fail(doc, "ir.sha256", f"ir.sha256 differs: {why}", theorem=theorem_id, checked=checked)
+    checked.append("ir.sha256")
+    sol = doc["solution"]
+    x = None if sol["x"] is None else np.asarray(sol["x"], dtype=float)
+    if x is not None:
+        if x.shape != (problem.n,):
+            return _fail(
+                doc, "solution.x", f"solution.x has {x.size} entries, the IR {problem.n} variables", theorem=theorem_id
+            )
+        variables = _jsonable(problem.unpack(x))
+        rec_vars = sol["variables"] or {}
+        for v in problem.variables:
+            if v.name not in rec_vars or _first_diff(rec_vars[v.name], variables[v.name], "v", 0.0):
+                return _fail(
+                    doc,
+                    f"solution.variables.{v.name}",
+                    f"solution.variables.{v.name} differs from the value x gives",
+                    theorem=theorem_id,
+                    checked=checked,
+                )
+        checked.append("solution.variables")
+    backend = doc["backend"]
+    status = backend["status"] if backend["status"] in STATUSES else "error"
+    solution = Solution(
+        status=status,
+        x=x,
+        objective=sol["objective"],
+        backend=backend["name"] or "",
+        native_status=backend.get("native_status") or "",
+        farkas=sol.get("farkas"),
+        margin=backend.get("margin"),
+        strategy=backend.get("strategy") or "none",
+    )
+    tol = Tolerances.coerce({k: v for k, v in doc["tolerances"].items() if k in Tolerances().to_dict()})
+    cert = certify(problem, solution, exact=exact, tol=tol)
+    new = cert.to_dict()
+    new.pop("x", None)
+    rec = dict(recorded)
+    if not exact:
+        rec.pop("exact", None)
+        new.pop("exact", None)
+    elif rec.get("exact") is None:
+        rec.pop("exact", None)
+        new.pop("exact", None)
+    order = [k for k in rec if k != "verdict"] + ["verdict"]
+    for key in order:
+        if key in ("time_s", "reason", "tolerances"):
+            continue
+        d = _first_diff(rec.get(key, "<missing>"), new.get(key, "<missing>"), f"certificate.{key}")
+        if d:
+            fld, a, b = d
+            return _fail(
+                doc,
+                fld,
+                f"{fld} differs: recorded {_short(a)}, recomputed {_short(b)}",
+                cert,
+                theorem=theorem_id,
+                exact=exact,
+                checked=checked,
+            )
+    checked.append("certificate")
+    msg = f"every hash and number matches ({label}); verdict {cert.label}"
+    if exact and cert.exact is not None:
+        msg += f"; exact proof {'holds' if cert.exact['proven'] else 'not obtained: ' + cert.exact['reason']}"
+    return AuditResult(
+        ok=True,
+        verdict=cert.verdict,
+        recorded_verdict=recorded["verdict"],
+        message=msg,
+        certificate=cert,
+        exact=exact,
+        theorem=theorem_id,
+        checked=checked,
+    )
