@@ -1,0 +1,111 @@
+"""``lmic audit CERT.json [--exact] [--json]``: recompute a certificate and compare.
+
+Exit codes: 0 the certificate is consistent and certifies a solution; 3 it is consistent and
+certifies infeasibility; 1 it was tampered with, no longer matches its system file or theorem,
+or records a verdict that certifies nothing (``rejected``/``unverified``); 2 the file is
+malformed, truncated, of an unknown schema version, or its theorem or system file is missing
+(one line on stderr).
+
+Examples
+--------
+>>> import argparse
+>>> parser = argparse.ArgumentParser(); sub = parser.add_subparsers()
+>>> register(sub)
+>>> parser.parse_args(["audit", "c.json", "--exact"]).exact
+True
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from rich.console import Console
+from rich.table import Table
+
+from lmic.certify.certificate import AuditResult, audit_certificate
+
+__all__ = ["register", "run", "exit_code"]
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``audit`` sub-command."""
+    p = sub.add_parser("audit", help="recompute a certificate file and reject it if anything differs")
+    p.add_argument("certificate", metavar="CERT.json", help="a certificate written by 'lmic solve -o'")
+    p.add_argument("--exact", action="store_true", help="also prove every LMI in exact rational arithmetic")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(func=run)
+
+
+def exit_code(result: AuditResult) -> int:
+    """0 consistent and certified, 3 consistent and infeasible-certified, 1 otherwise.
+
+    >>> exit_code(AuditResult(ok=False, verdict="rejected", recorded_verdict="certified"))
+    1
+    """
+    if not result.ok:
+        return 1
+    if result.verdict == "certified":
+        return 0
+    if result.verdict == "infeasible-certified":
+        return 3
+    return 1
+
+
+def _fmt(v: object) -> str:
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return "" if v is None else str(v)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Audit the certificate; print a table (or JSON); return the exit code."""
+    result = audit_certificate(args.certificate, exact=args.exact)
+    code = exit_code(result)
+    if args.json:
+        from lmic.commands._common import print_json
+
+        print_json(dict(result.to_dict(), exit_code=code))
+        return code
+    console = Console()
+    head = Table(title=f"audit of {args.certificate}", show_header=False)
+    head.add_column("field")
+    head.add_column("value", overflow="fold")
+    head.add_row("theorem", result.theorem or "(raw IR)")
+    head.add_row("checked", ", ".join(result.checked))
+    head.add_row("recorded verdict", result.recorded_verdict)
+    colour = "green" if code in (0, 3) else "red"
+    label = result.certificate.label if (result.ok and result.certificate) else result.verdict
+    head.add_row("audit", f"[{colour}]{'consistent' if result.ok else 'REJECTED'}: {label}[/{colour}]")
+    if result.field:
+        head.add_row("first difference", result.field)
+    head.add_row("message", result.message)
+    console.print(head)
+    cert = result.certificate
+    if cert is not None and cert.lmis:
+        t = Table(title="LMIs (recomputed)")
+        for col in ("name", "dim", "strict", "lambda_min", "relative", "ok"):
+            t.add_column(col)
+        for e in cert.lmis:
+            t.add_row(
+                e["name"],
+                str(e["dim"]),
+                str(e["strict"]),
+                _fmt(e["min_eig"]),
+                _fmt(e["rel_margin"]),
+                "[green]yes[/green]" if e["ok"] else "[red]no[/red]",
+            )
+        console.print(t)
+    if cert is not None and cert.checks:
+        t = Table(title="checks (recomputed)")
+        for col in ("name", "kind", "value", "ok"):
+            t.add_column(col)
+        for e in cert.checks:
+            t.add_row(e["name"], e["kind"], _fmt(e["value"]), "[green]yes[/green]" if e["ok"] else "[red]no[/red]")
+        console.print(t)
+    if cert is not None and cert.exact is not None:
+        e = cert.exact
+        console.print(
+            f"exact: {'proven' if e['proven'] else 'not proven'} (denominator {e['denominator']}, "
+            f"{e['time_s']:.3f} s) {e['reason']}"
+        )
+    return code
