@@ -24,6 +24,7 @@ Examples
 from __future__ import annotations
 
 import contextlib
+import importlib
 import importlib.util
 import multiprocessing
 import os
@@ -338,6 +339,15 @@ class Backend(ABC):
         from lmic.backends import strict
 
         options = options or SolveOptions()
+        try:
+            for module in self.requires:  # import time is not lmic's overhead
+                importlib.import_module(module)
+        except ImportError as err:
+            return Solution(
+                status="error",
+                backend=self.label,
+                message=f"{_describe(err)}; pip install {' '.join(self.missing_packages())}",
+            )
         t0 = time.perf_counter()
         try:
             reduced, inverse = strict.reduce(problem, options)

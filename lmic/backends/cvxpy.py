@@ -29,7 +29,13 @@ __all__ = ["CVXPYBackend", "SUBSOLVER_OPTIONS"]
 
 
 def _clarabel(o: SolveOptions) -> dict[str, Any]:
-    out = {"tol_gap_abs": o.tol, "tol_gap_rel": o.tol, "tol_feas": o.tol}
+    # chordal decomposition off: see lmic.backends.clarabel (wrong "Solved" on control1)
+    out: dict[str, Any] = {
+        "tol_gap_abs": o.tol,
+        "tol_gap_rel": o.tol,
+        "tol_feas": o.tol,
+        "chordal_decomposition_enable": False,
+    }
     if o.max_iter is not None:
         out["max_iter"] = o.max_iter
     if o.time_limit is not None:

@@ -1,0 +1,323 @@
+"""The pipeline in one call: compile -> lower + solve -> certify -> :class:`Result`.
+
+``target`` is a theorem id (with a system file), an IR (``.json``) or SDPA (``.dat-s``) file, or
+an IR :class:`~lmic.ir.problem.Problem`. The result carries the status, the objective, the
+variables, the derived quantities, the certificate and the timings, and maps to the exit codes
+of DESIGN section 7 (:meth:`Result.exit_code`).
+
+``backend="auto"`` follows the route of :func:`lmic.backends.auto.route`: the first backend's
+answer is certified, and the next backend of the route runs only when the certificate fails.
+
+Examples
+--------
+>>> import scipy.sparse as sp
+>>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+>>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+>>> result = solve(p)
+>>> result.status, result.verdict, result.exit_code()
+('feasible', 'certified', 0)
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lmic import __version__
+from lmic.backends.base import Backend, SolveOptions
+from lmic.errors import BackendError, LmicError
+from lmic.ir.problem import Problem
+from lmic.solution import Solution
+
+__all__ = ["Result", "solve", "load_target", "solve_problem", "certify_solution", "EXIT_CODES"]
+
+#: exit codes of DESIGN section 7
+EXIT_CODES = {"certified": 0, "failed": 1, "usage": 2, "infeasible": 3}
+
+_FILE_SUFFIXES = (".json", ".dat-s")
+
+
+@dataclass
+class Result:
+    """Everything one pipeline run produced.
+
+    Attributes
+    ----------
+    target : str
+        What was solved (theorem id, file path or ``"<problem>"``).
+    theorem : str or None
+    backend : str
+        The backend that produced the answer (for ``auto``: the one finally used).
+    status : str
+        The backend's status (:data:`lmic.solution.STATUSES`).
+    objective : float or None
+    variables, derived : dict
+        Values at the returned point (derived quantities from the IR's expression trees).
+    certificate : object or None
+        :class:`lmic.certify.Certificate` (``None`` if the certifier is not installed).
+    timings : dict
+        ``compile_s`` (compile or file load), ``lower_s`` (lmic's reduction, lowering and result
+        mapping), ``solve_s`` (inside the solver), ``certify_s``.
+    attempts : list of dict
+        For ``auto``: every backend tried, its status and verdict.
+    """
+
+    target: str
+    theorem: str | None
+    backend: str
+    status: str
+    objective: float | None
+    variables: dict[str, Any]
+    derived: dict[str, Any]
+    certificate: Any
+    timings: dict[str, float]
+    problem: Problem
+    solution: Solution
+    params: dict[str, Any] = field(default_factory=dict)
+    attempts: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def verdict(self) -> str:
+        """The certificate's verdict (``unverified`` without a certifier)."""
+        return getattr(self.certificate, "verdict", "unverified") if self.certificate else "unverified"
+
+    @property
+    def min_margin(self) -> float | None:
+        """Smallest ``min_margin`` over the LMIs in the certificate (``None`` if unknown)."""
+        lmis = getattr(self.certificate, "lmis", None) or []
+        margins = [m.get("min_margin") for m in lmis if m.get("min_margin") is not None]
+        return float(min(margins)) if margins else None
+
+    def exit_code(self) -> int:
+        """0 certified, 3 infeasible, 1 rejected / inaccurate / failed (DESIGN section 7)."""
+        if self.verdict == "certified" and self.status in ("optimal", "feasible"):
+            return EXIT_CODES["certified"]
+        if self.status == "infeasible" and self.verdict != "rejected":
+            return EXIT_CODES["infeasible"]
+        return EXIT_CODES["failed"]
+
+    def certificate_dict(self) -> dict[str, Any]:
+        """The certificate as JSON-ready dict (``verdict``, ``lmis``, ``checks``, ``exact`` ...)."""
+        if self.certificate is None:
+            return {"verdict": "unverified", "lmis": [], "checks": [], "exact": None}
+        d = dict(self.certificate.to_dict())
+        d.setdefault("verdict", self.verdict)
+        d.setdefault("lmis", [])
+        d.setdefault("checks", [])
+        d.setdefault("exact", None)
+        return d
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``lmic solve --json`` object (DESIGN section 7)."""
+        sol = self.solution
+        return {
+            "lmic": __version__,
+            "target": self.target,
+            "theorem": self.theorem,
+            "params": self.params,
+            "backend": self.backend,
+            "status": self.status,
+            "native_status": sol.native_status,
+            "message": sol.message,
+            "objective": self.objective,
+            "variables": self.variables,
+            "derived": self.derived,
+            "strict": {"strategy": sol.strategy, "margin": sol.margin},
+            "certificate": self.certificate_dict(),
+            "timings": self.timings,
+            "attempts": self.attempts,
+            "exit_code": self.exit_code(),
+        }
+
+
+def load_target(
+    target: str | os.PathLike[str] | Problem,
+    system: Any = None,
+    params: dict[str, Any] | None = None,
+) -> tuple[Problem, str | None, float]:
+    """The IR for ``target`` (compiled or loaded), the theorem id, and the time it took.
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> load_target(p)[1] is None
+    True
+    """
+    t0 = time.perf_counter()
+    if isinstance(target, Problem):
+        if system is not None or params:
+            raise LmicError("a system and parameters apply to a theorem, not to an IR problem")
+        return target, target.meta.get("theorem"), time.perf_counter() - t0
+    text = os.fspath(target)
+    if text.endswith(_FILE_SUFFIXES) or (Path(text).is_file() and system is None):
+        if system is not None:
+            raise LmicError(f"{text}: an IR or SDPA file takes no system file (got '{system}')")
+        if params:
+            raise LmicError(f"{text}: -p parameters apply to a theorem, not to an IR or SDPA file")
+        if not Path(text).is_file():
+            raise LmicError(f"{text}: no such file")
+        from lmic.ir.io import load_problem
+
+        problem = load_problem(text)
+        return problem, problem.meta.get("theorem"), time.perf_counter() - t0
+    if system is None:
+        raise LmicError(
+            f"'{text}' is neither an IR/SDPA file (.json, .dat-s) nor usable as a theorem "
+            "without a system file: give THEOREM SYSTEM"
+        )
+    from lmic.compile import compile_theorem
+
+    problem = compile_theorem(text, system, params)
+    return problem, text, time.perf_counter() - t0
+
+
+def _backend(spec: str | Backend) -> Backend:
+    if isinstance(spec, Backend):
+        return spec
+    from lmic.backends.registry import get_backend
+
+    return get_backend(spec)
+
+
+def solve_problem(problem: Problem, backend: str | Backend, options: SolveOptions | None = None) -> Solution:
+    """Solve with one backend after checking it can take the problem.
+
+    Raises :class:`BackendError` with the ``supports(..., explain=True)`` reason otherwise.
+
+    >>> from lmic.testing.conformance import CASES
+    >>> solve_problem(CASES["max_sense"].build(), "clarabel").status
+    'optimal'
+    """
+    be = _backend(backend)
+    ok, why = be.supports(problem, explain=True)  # type: ignore[misc]
+    if not ok:
+        raise BackendError(f"backend '{be.label}' cannot take this problem: {why}")
+    return be.solve(problem, options)
+
+
+def certify_solution(problem: Problem, solution: Solution, exact: bool = False) -> Any:
+    """The certifier's :class:`~lmic.certify.Certificate`, or ``None`` if it is not installed."""
+    try:
+        from lmic.certify import certify
+    except ImportError:
+        return None
+    return certify(problem, solution, exact=exact)
+
+
+def _values(problem: Problem, x: np.ndarray | None, certificate: Any) -> tuple[dict, dict]:
+    if x is None:
+        return {}, {}
+    variables = problem.unpack(x)
+    derived: dict[str, Any] = {}
+    from_cert = getattr(certificate, "derived", None) or []
+    if from_cert:
+        for item in from_cert:
+            derived[item["name"]] = item.get("value")
+    elif problem.derived:
+        try:
+            env = problem.environment(x)
+            derived = {d.name: env[d.name] for d in problem.derived}
+        except Exception as err:  # noqa: BLE001 - a gain that cannot be computed is reported
+            derived = {"error": f"{type(err).__name__}: {err}"}
+    return variables, derived
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.floating | np.integer):
+        return value.item()
+    return value
+
+
+def solve(
+    target: str | os.PathLike[str] | Problem,
+    system: Any = None,
+    params: dict[str, Any] | None = None,
+    backend: str | Backend = "clarabel",
+    options: SolveOptions | None = None,
+    exact: bool = False,
+) -> Result:
+    """Compile (or load), solve, certify.
+
+    Parameters
+    ----------
+    target : str, path or Problem
+        A theorem id (then ``system`` is required), an ``.json`` IR or ``.dat-s`` SDPA file, or
+        a Problem.
+    system : path, dict or System, optional
+    params : dict, optional
+        Parameter overrides (theorems only).
+    backend : str or Backend
+        A backend name (``"clarabel"``, ``"cvxpy:SCS"``, ``"auto"`` ...) or instance.
+    options : SolveOptions, optional
+    exact : bool
+        Ask the certifier for an exact rational proof too.
+
+    Returns
+    -------
+    Result
+
+    Examples
+    --------
+    >>> from lmic.testing.conformance import CASES
+    >>> r = solve(CASES["linear_equalities"].build(), backend="cvxopt")
+    >>> r.status, round(r.objective, 6)
+    ('optimal', 0.585786)
+    """
+    problem, theorem, compile_s = load_target(target, system, params)
+    name = target if isinstance(target, str) else ("<problem>" if isinstance(target, Problem) else os.fspath(target))
+    spec = backend.label if isinstance(backend, Backend) else str(backend)
+    if spec.split(":")[0].lower() == "auto":
+        from lmic.backends.auto import route
+
+        chain = route(problem)
+    else:
+        chain = [backend]
+    attempts: list[dict[str, Any]] = []
+    sol: Solution | None = None
+    cert: Any = None
+    certify_s = 0.0
+    used = spec
+    for k, step in enumerate(chain):
+        sol = solve_problem(problem, step, options)
+        t0 = time.perf_counter()
+        cert = certify_solution(problem, sol, exact=exact)
+        certify_s += time.perf_counter() - t0
+        used = sol.backend or str(step)
+        verdict = getattr(cert, "verdict", "unverified") if cert is not None else "unverified"
+        attempts.append({"backend": used, "status": sol.status, "verdict": verdict, "solve_s": sol.solve_s})
+        if verdict in ("certified", "infeasible-certified") or k == len(chain) - 1:
+            break
+    assert sol is not None
+    variables, derived = _values(problem, sol.x, cert)
+    timings = {
+        "compile_s": compile_s,
+        "lower_s": sol.lower_s,
+        "solve_s": sum(a["solve_s"] for a in attempts),
+        "certify_s": certify_s,
+    }
+    return Result(
+        target=str(name),
+        theorem=theorem,
+        backend=used,
+        status=sol.status,
+        objective=sol.objective,
+        variables=_jsonable(variables),
+        derived=_jsonable(derived),
+        certificate=cert,
+        timings=timings,
+        problem=problem,
+        solution=sol,
+        params=dict(params or {}),
+        attempts=attempts if len(chain) > 1 else [],
+    )

@@ -1,0 +1,128 @@
+"""``lmic solve``: compile (or load), solve on a backend, certify.
+
+Forms::
+
+    lmic solve THEOREM SYSTEM [-p k=v]... [--backend B] [--json] [-o CERT.json]
+    lmic solve FILE.json|FILE.dat-s [--backend B] [--json] [-o CERT.json]
+
+Exit codes (DESIGN section 7): 0 certified, 3 infeasible, 1 rejected / inaccurate / failed
+solve, 2 bad usage or input (unknown backend, missing solver package, a problem the backend
+cannot take).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+__all__ = ["register", "run", "add_solver_options", "solve_options"]
+
+
+def add_solver_options(p: argparse.ArgumentParser) -> None:
+    """Options shared by ``solve`` and ``crosscheck``: tolerance, limits, margin, verbosity."""
+    p.add_argument("--tol", type=float, default=None, help="solver tolerance (default 1e-8)")
+    p.add_argument("--max-iter", type=int, default=None, help="iteration limit")
+    p.add_argument("--time-limit", type=float, default=None, help="seconds per solve")
+    p.add_argument("--margin", type=float, default=None, help="margin on strict LMIs of optimisation problems")
+    p.add_argument("--verbose", action="store_true", help="show the solver's own output")
+
+
+def solve_options(args: argparse.Namespace) -> Any:
+    """A :class:`~lmic.backends.base.SolveOptions` from the parsed arguments."""
+    from lmic.backends.base import SolveOptions
+
+    opts = SolveOptions(verbose=bool(getattr(args, "verbose", False)))
+    if getattr(args, "tol", None) is not None:
+        opts.tol = args.tol
+    if getattr(args, "max_iter", None) is not None:
+        opts.max_iter = args.max_iter
+    if getattr(args, "time_limit", None) is not None:
+        opts.time_limit = args.time_limit
+    if getattr(args, "margin", None) is not None:
+        opts.margin = args.margin
+    return opts
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``solve`` sub-command."""
+    from lmic.commands._common import add_param_option
+
+    p = sub.add_parser(
+        "solve",
+        help="solve and certify a theorem for a system, or an IR / SDPA file",
+        description="lmic solve THEOREM SYSTEM [-p k=v]... | FILE.json | FILE.dat-s",
+    )
+    p.add_argument("target", help="theorem id, or an IR (.json) / SDPA (.dat-s) file")
+    p.add_argument("system", nargs="?", default=None, help="system file (with a theorem)")
+    add_param_option(p)
+    p.add_argument("--backend", "-b", default="clarabel", help="backend (see 'lmic backends')")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("-o", "--output", default=None, help="write the certificate file here")
+    p.add_argument("--exact", action="store_true", help="also prove the LMIs exactly")
+    add_solver_options(p)
+    p.set_defaults(func=run)
+
+
+def _fmt(v: Any) -> str:
+    return "-" if v is None else (f"{v:.6g}" if isinstance(v, float) else str(v))
+
+
+def _write_certificate(path: str, result: Any, system: Any) -> None:
+    from lmic.certify import write_certificate
+    from lmic.system import load_system
+
+    sysobj = load_system(system) if system is not None else None
+    write_certificate(path, result.problem, result.solution, result.certificate, system=sysobj)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the pipeline and report; the exit code follows the certificate."""
+    from lmic.api import solve
+    from lmic.commands._common import parse_params, print_json
+
+    params = parse_params(args.param)
+    result = solve(
+        args.target,
+        system=args.system,
+        params=params or None,
+        backend=args.backend,
+        options=solve_options(args),
+        exact=args.exact,
+    )
+    if args.output:
+        if result.certificate is None:
+            sys.stderr.write("lmic: no certifier installed: no certificate written\n")
+        else:
+            _write_certificate(args.output, result, args.system)
+    if args.json:
+        print_json(result.to_dict())
+        return result.exit_code()
+    sol = result.solution
+    out = sys.stdout
+    out.write(f"target     {result.target}" + (f" {args.system}" if args.system else "") + "\n")
+    out.write(f"backend    {result.backend}\n")
+    status = result.status + (f" ({sol.native_status})" if sol.native_status else "")
+    out.write(f"status     {status}\n")
+    if sol.message:
+        out.write(f"message    {sol.message}\n")
+    if result.objective is not None:
+        out.write(f"objective  {result.objective:.10g}\n")
+    if sol.strategy != "none":
+        out.write(f"strict     {sol.strategy}, margin {_fmt(sol.margin)}\n")
+    cert = result.certificate_dict()
+    reason = cert.get("reason") or ""
+    out.write(f"verdict    {result.verdict}" + (f": {reason}" if reason else "") + "\n")
+    for lmi in cert.get("lmis", []):
+        ok = "ok" if lmi.get("ok") else "VIOLATED"
+        out.write(f"  LMI {lmi.get('name')}: min margin {_fmt(lmi.get('min_margin'))} {ok}\n")
+    for chk in cert.get("checks", []):
+        ok = "ok" if chk.get("ok") else "FAILED"
+        out.write(f"  check {chk.get('name')}: {_fmt(chk.get('value'))} {ok}\n")
+    for att in result.attempts:
+        out.write(f"  tried {att['backend']}: {att['status']}, {att['verdict']}\n")
+    t = result.timings
+    out.write("timings    " + ", ".join(f"{k[:-2]} {v:.3f} s" for k, v in t.items() if isinstance(v, float)) + "\n")
+    if args.output and result.certificate is not None:
+        out.write(f"wrote      {args.output}\n")
+    return result.exit_code()
