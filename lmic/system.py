@@ -60,12 +60,14 @@ class System:
         return os.path.basename(self.path) if self.path else "<system>"
 
     def data_hash(self) -> str:
-        """SHA-256 of the canonical JSON of ``data`` and ``params`` (what a certificate pins)."""
-        payload = {
-            "data": {k: v.tolist() for k, v in sorted(self.data.items())},
-            "params": dict(sorted(self.params.items())),
-        }
-        return hashlib.sha256(canonical_json(payload).encode()).hexdigest()
+        """SHA-256 of ``data`` (names, shapes, float64 bytes) and ``params`` (what a certificate pins)."""
+        h = hashlib.sha256(b"lmic-system-v1")
+        for key in sorted(self.data):
+            arr = np.ascontiguousarray(self.data[key], dtype="<f8")
+            h.update(canonical_json([key, list(arr.shape)]).encode())
+            h.update(arr.tobytes())
+        h.update(canonical_json(dict(sorted(self.params.items()))).encode())
+        return h.hexdigest()
 
     def with_params(self, overrides: dict[str, Any]) -> System:
         """A copy with some parameters overridden."""

@@ -216,9 +216,10 @@ class _Binder:
             self.vars[v.name] = var
             offset += var.size
         self.n = offset
-        self._bases: dict[tuple[str, bool], sp.csr_matrix] = {}
-        self._products: dict[tuple, sp.csr_matrix] = {}
-        self._coef_fns: dict[sympy.Expr, Any] = {}
+        self._products: dict[tuple, np.ndarray] = {}
+        self._dims_key = tuple(sorted((str(k), v) for k, v in inputs.dims.items()))
+        # a fixed random point at which symmetry of blocks is probed (exact up to rounding)
+        self._z = np.random.default_rng(20261121).standard_normal(1 + self.n)
         self._factor_cache: dict[Any, np.ndarray] = {}
         self._param_args = [self._coef_arg(s) for s in plan.coef_symbols]
 
@@ -235,10 +236,10 @@ class _Binder:
     def coef(self, expr: sympy.Expr) -> float:
         if expr.is_number:
             return float(expr)
-        fn = self._coef_fns.get(expr)
+        fn = self.plan.cache.get(("coef", expr))
         if fn is None:
             fn = sympy.lambdify(self.plan.coef_symbols, expr, modules="math", dummify=True)
-            self._coef_fns[expr] = fn
+            self.plan.cache[("coef", expr)] = fn
         try:
             value = float(fn(*self._param_args))
         except (ValueError, ZeroDivisionError, OverflowError) as err:
@@ -278,24 +279,59 @@ class _Binder:
                 out = out @ v
         return out
 
-    def basis(self, name: str, transposed: bool) -> sp.csr_matrix:
-        key = (name, transposed)
-        B = self._bases.get(key)
-        if B is None:
-            var = self.vars[name]
-            B = var.basis().tocsr()
-            if transposed and var.kind not in ("symmetric", "diagonal", "blockdiag", "scalar"):
-                r, c = var.shape
-                # vec(V^T)[j*c + i] = vec(V)[i*r + j]  for V^T[i, j] = V[j, i]
-                i, j = np.meshgrid(np.arange(c), np.arange(r), indexing="ij")
-                perm = np.empty(r * c, dtype=int)
-                perm[(j * c + i).ravel()] = (i * r + j).ravel()
-                B = B[perm]
-            self._bases[key] = B
-        return B
+    def basis(self, name: str, transposed: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """Basis of ``V`` (or ``V^T``) as triplets ``(i, j, k)`` with unit values, and row count.
 
-    def term_matrix(self, term: Term, rows: int, cols: int) -> tuple[sp.spmatrix | np.ndarray, int]:
-        """(contribution to vec(block), column offset); unscaled by the coefficient."""
+        ``x_k`` puts a 1 at entry ``(i, j)`` (several entries per ``k`` for symmetric variables).
+        """
+        key = ("basis", name, transposed, self._dims_key)
+        cached = self.plan.cache.get(key)
+        if cached is None:
+            var = self.vars[name]
+            coo = var.basis().tocoo()
+            r, c = var.shape
+            i, j, k = coo.row % r, coo.row // r, coo.col
+            if transposed:
+                i, j, r = j, i, c
+            cached = (i.astype(np.int64), j.astype(np.int64), k.astype(np.int64), r)
+            self.plan.cache[key] = cached
+        return cached
+
+    def _term_index(self, term: Term, rows: int, cols: int) -> tuple[np.ndarray, np.ndarray]:
+        """(row in vec(block), IR column) of every coefficient a term can touch (dims only)."""
+        key = ("term", term.left, term.var, term.transposed, term.right, rows, cols, self._dims_key)
+        cached = self.plan.cache.get(key)
+        if cached is not None:
+            return cached
+        if term.var is None or self.vars[term.var].kind == "scalar":
+            col = 0 if term.var is None else 1 + self.vars[term.var].offset
+            cached = (np.arange(rows * cols, dtype=np.int64), np.full(rows * cols, col, dtype=np.int64))
+        else:
+            var = self.vars[term.var]
+            bi, bj, bk, vr = self.basis(term.var, term.transposed)
+            L_rows = None if self._is_identity(term.left) else rows
+            R_cols = None if self._is_identity(term.right) else cols
+            if L_rows is None and R_cols is None:
+                r_idx, k = bi + bj * rows, bk
+            elif R_cols is None:
+                r_idx = (np.arange(rows)[None, :] + (bj * rows)[:, None]).ravel()
+                k = np.repeat(bk, rows)
+            elif L_rows is None:
+                r_idx = (bi[:, None] + np.arange(cols)[None, :] * rows).ravel()
+                k = np.repeat(bk, cols)
+            else:
+                a, b = np.arange(rows), np.arange(cols)
+                r_idx = np.broadcast_to(a[None, :, None] + b[None, None, :] * rows, (len(bi), rows, cols)).ravel()
+                k = np.repeat(bk, rows * cols)
+            cached = (r_idx, k + 1 + var.offset)
+        self.plan.cache[key] = cached
+        return cached
+
+    def _is_identity(self, factors: tuple[Any, ...]) -> bool:
+        return all(isinstance(f, Identity) for f in factors)
+
+    def term_values(self, term: Term, rows: int, cols: int) -> np.ndarray:
+        """Values matching :meth:`_term_index`, unscaled by the coefficient."""
         if term.var is None or self.vars[term.var].kind == "scalar":
             M = self.product(term.left)
             if M is None:
@@ -306,151 +342,151 @@ class _Binder:
                 raise TemplateError(
                     f"theorem {self.tid}: term '{term.text}' has shape {M.shape}, its block is {rows}x{cols}"
                 )
-            col = 0 if term.var is None else 1 + self.vars[term.var].offset
-            return M.reshape(-1, order="F"), col
+            return M.reshape(-1, order="F")
         key = (term.left, term.var, term.transposed, term.right)
-        S = self._products.get(key)
-        if S is None:
-            var = self.vars[term.var]
-            B = self.basis(term.var, term.transposed)
-            vr, vc = (var.shape[1], var.shape[0]) if term.transposed else var.shape
-            L = self.product(term.left)
-            R = self.product(term.right)
-            if L is not None and L.shape[1] != vr or R is not None and R.shape[0] != vc:
-                raise TemplateError(f"theorem {self.tid}: term '{term.text}' has inconsistent shapes")
-            if L is None and R is None:
-                S = B
-            else:
-                Ls = sp.identity(vr, format="csr") if L is None else sp.csr_matrix(L)
-                Rt = sp.identity(vc, format="csr") if R is None else sp.csr_matrix(R.T)
-                S = sp.kron(Rt, Ls, format="csr") @ B
-            out_r = vr if L is None else L.shape[0]
-            out_c = vc if R is None else R.shape[1]
-            if (out_r, out_c) != (rows, cols):
-                raise TemplateError(
-                    f"theorem {self.tid}: term '{term.text}' is {out_r}x{out_c}, its block is {rows}x{cols}"
-                )
-            S = sp.csr_matrix(S)
-            self._products[key] = S
-        return S, 1 + self.vars[term.var].offset
+        cached = self._products.get(key)
+        if cached is not None:
+            return cached
+        var = self.vars[term.var]
+        bi, bj, _, vr = self.basis(term.var, term.transposed)
+        vc = var.shape[0] if term.transposed else var.shape[1]
+        L = self.product(term.left)
+        R = self.product(term.right)
+        if (L is not None and L.shape[1] != vr) or (R is not None and R.shape[0] != vc):
+            raise TemplateError(f"theorem {self.tid}: term '{term.text}' has inconsistent shapes")
+        out_r = vr if L is None else L.shape[0]
+        out_c = vc if R is None else R.shape[1]
+        if (out_r, out_c) != (rows, cols):
+            raise TemplateError(
+                f"theorem {self.tid}: term '{term.text}' is {out_r}x{out_c}, its block is {rows}x{cols}"
+            )
+        # the basis entry E_ij contributes the outer product L[:, i] R[j, :]
+        if L is None and R is None:
+            vals = np.ones(len(bi))
+        elif R is None:
+            vals = L[:, bi].T.ravel()
+        elif L is None:
+            vals = R[bj, :].ravel()
+        else:
+            vals = (L[:, bi].T[:, :, None] * R[bj, :][:, None, :]).ravel()
+        self._products[key] = vals
+        return vals
 
-    def entry_coo(self, terms: list[Term], rows: int, cols: int) -> sp.csr_matrix:
-        """Coefficients of vec(entry): sparse (rows*cols, 1 + n)."""
-        parts_r, parts_c, parts_v = [], [], []
+    def entry_pieces(self, terms: list[Term], rows: int, cols: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """(row in vec(entry), IR column, value) for every term (values scaled by the coefficient)."""
+        out = []
         for term in terms:
             c = self.coef(term.coef)
-            if c == 0:
-                continue
-            M, col = self.term_matrix(term, rows, cols)
-            if isinstance(M, np.ndarray):
-                nz = np.flatnonzero(M)
-                parts_r.append(nz)
-                parts_c.append(np.full(len(nz), col))
-                parts_v.append(c * M[nz])
-            else:
-                coo = M.tocoo()
-                parts_r.append(coo.row)
-                parts_c.append(coo.col + col)
-                parts_v.append(c * coo.data)
-        if not parts_r:
-            return sp.csr_matrix((rows * cols, 1 + self.n))
-        return sp.csr_matrix(
-            (np.concatenate(parts_v), (np.concatenate(parts_r), np.concatenate(parts_c))),
-            shape=(rows * cols, 1 + self.n),
-        )
+            r, k = self._term_index(term, rows, cols)
+            out.append((r, k, c * self.term_values(term, rows, cols)))
+        return out
+
+    def _probe(self, pieces, size: int) -> tuple[np.ndarray, np.ndarray]:
+        """vec of an entry at the random point ``z`` and the sum of absolute contributions."""
+        val, mag = np.zeros(size), np.zeros(size)
+        for r, k, v in pieces or ():
+            w = v * self._z[k]
+            val += np.bincount(r, weights=w, minlength=size)
+            mag += np.bincount(r, weights=np.abs(w), minlength=size)
+        return val, mag
 
     # -- LMIs ----------------------------------------------------------------------------
     def lmi(self, lp: LmiPlan) -> LMI:
         sizes = [self._size(s, f"block row of LMI '{lp.name}'") for s in lp.sizes]
-        starts = np.concatenate([[0], np.cumsum(sizes)]).astype(int)
-        d = int(starts[-1])
-        rows_all, cols_all, vals_all = [], [], []
+        d = int(sum(sizes))
 
         def where(i: int, j: int) -> str:
             return f"theorem {self.tid}: LMI '{lp.name}' block ({i + 1},{j + 1})"
 
-        def entry(i: int, j: int) -> sp.csr_matrix | None:
-            if (i, j) in lp.entries:
+        entries: dict[tuple[int, int], Any] = {}
+
+        def entry(i: int, j: int):
+            if (i, j) not in lp.entries:
+                return None  # zero
+            if (i, j) not in entries:
                 try:
-                    return self.entry_coo(lp.entries[(i, j)].terms, sizes[i], sizes[j])
+                    entries[(i, j)] = self.entry_pieces(lp.entries[(i, j)].terms, sizes[i], sizes[j])
                 except TemplateError as err:
                     raise TemplateError(f"{where(i, j)}: {err}") from None
-            return None  # zero
+            return entries[(i, j)]
 
+        # which entry fills each lower block, in a fixed order; symmetry checks every bind
+        order: list[tuple[int, int, int, int]] = []  # (i, j, source i, source j)
         for j in range(lp.k):
             for i in range(j, lp.k):
-                ri, cj = sizes[i], sizes[j]
-                lower_star = (i, j) in lp.stars
-                upper_star = (j, i) in lp.stars
-                if lower_star:
-                    U = entry(j, i)  # (cj x ri) block; its transpose sits at (i, j)
-                    if U is None:
-                        continue
-                    coo = U.tocoo()
-                    a_up, b_up = coo.row % cj, coo.row // cj
-                    gi, gj = starts[i] + b_up, starts[j] + a_up
-                    vals, cols = coo.data, coo.col
-                else:
-                    Lw = entry(i, j)
-                    if i != j and not upper_star:
-                        U = entry(j, i)
-                        self._check_mirror(Lw, U, ri, cj, where(j, i), i, j)
-                    if Lw is None:
-                        continue
-                    if i == j:
-                        self._check_symmetric(Lw, ri, where(i, i))
-                    coo = Lw.tocoo()
-                    a, b = coo.row % ri, coo.row // ri
-                    gi, gj = starts[i] + a, starts[j] + b
-                    vals, cols = coo.data, coo.col
+                if (i, j) in lp.stars:
+                    if entry(j, i) is not None:
+                        order.append((i, j, j, i))
+                    continue
+                Lw = entry(i, j)
+                if i != j and (j, i) not in lp.stars:
+                    self._check_mirror(Lw, entry(j, i), sizes[i], sizes[j], where(j, i), i, j)
+                if Lw is None:
+                    continue
                 if i == j:
-                    keep = gi >= gj
-                    gi, gj, vals, cols = gi[keep], gj[keep], vals[keep], cols[keep]
-                rows_all.append(tril_index(gi, gj, d))
-                cols_all.append(cols)
-                vals_all.append(vals)
-        if rows_all:
-            r = np.concatenate(rows_all)
-            c = np.concatenate(cols_all)
-            v = np.concatenate(vals_all)
-        else:
-            r = c = np.zeros(0, dtype=int)
-            v = np.zeros(0)
+                    self._check_symmetric(Lw, sizes[i], where(i, i))
+                order.append((i, j, i, j))
+        vals = [v for (_, _, si, sj) in order for (_, _, v) in entries[(si, sj)]]
+        key = ("lmi", lp.name, self._dims_key, tuple(order))
+        structure = self.plan.cache.get(key)
+        if structure is None:
+            structure = self._lmi_structure(order, entries, sizes)
+            self.plan.cache[key] = structure
+        indptr, indices, pos, nslots = structure
+        v = np.concatenate(vals) if vals else np.zeros(0)
+        data = np.bincount(pos, weights=v, minlength=nslots + 1)[:nslots]
         if lp.negated:
-            v = -v
-        coeffs = sp.csc_matrix((v, (r, c)), shape=(tril_size(d), 1 + self.n))
-        coeffs.sum_duplicates()
+            data = -data
+        coeffs = sp.csc_matrix((data, indices.copy(), indptr.copy()), shape=(tril_size(d), 1 + self.n))
         coeffs.eliminate_zeros()
         return LMI(lp.name, d, coeffs, lp.strict, lp.relation, tuple(sizes))
 
-    def _check_symmetric(self, M: sp.csr_matrix, r: int, where: str) -> None:
-        if M.nnz == 0:
-            return
-        a, b = np.meshgrid(np.arange(r), np.arange(r), indexing="ij")
-        perm = np.empty(r * r, dtype=int)
-        perm[(a + b * r).ravel()] = (b + a * r).ravel()
-        diff = M - M[perm]
-        scale = float(np.max(np.abs(M.data)))
-        if diff.nnz and float(np.max(np.abs(diff.data))) > _SYM_TOL * max(scale, 1.0):
+    def _lmi_structure(self, order, entries, sizes) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """CSC structure of an LMI and the slot of every value (dims only; cached)."""
+        starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        d = int(starts[-1])
+        rows_all, cols_all = [], []
+        for i, j, si, sj in order:
+            for r, k, _ in entries[(si, sj)]:
+                if (si, sj) == (i, j):
+                    gi, gj = starts[i] + r % sizes[i], starts[j] + r // sizes[i]
+                else:  # mirrored: entry (j, i) of size (sizes[j] x sizes[i]) transposed
+                    gi, gj = starts[i] + r // sizes[j], starts[j] + r % sizes[j]
+                srow = tril_index(gi, gj, d)
+                if i == j:
+                    srow = np.where(gi >= gj, srow, -1)  # the upper triangle is not stored
+                rows_all.append(srow)
+                cols_all.append(k)
+        if not rows_all:
+            return np.zeros(1 + self.n + 1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), 0
+        r = np.concatenate(rows_all)
+        c = np.concatenate(cols_all)
+        valid = r >= 0
+        nrows = tril_size(d)
+        lin = np.where(valid, c * nrows + r, -1)
+        uniq, inv = np.unique(lin[valid], return_inverse=True)
+        nslots = len(uniq)
+        pos = np.full(len(r), nslots, dtype=np.int64)  # dropped entries go to a spare slot
+        pos[valid] = inv
+        cols_u, rows_u = uniq // nrows, uniq % nrows
+        indptr = np.searchsorted(cols_u, np.arange(2 + self.n)).astype(np.int64)
+        return indptr, rows_u.astype(np.int64), pos, nslots
+
+    def _check_symmetric(self, pieces, r: int, where: str) -> None:
+        val, mag = self._probe(pieces, r * r)
+        M, S = val.reshape((r, r), order="F"), mag.reshape((r, r), order="F")
+        if np.any(np.abs(M - M.T) > _SYM_TOL * (S + S.T + 1e-300)):
             raise TemplateError(f"{where} is not symmetric (a diagonal block must equal its transpose)")
 
     def _check_mirror(self, Lw, U, ri: int, cj: int, where_upper: str, i: int, j: int) -> None:
         """An explicit upper block must be the transpose of the explicit lower one."""
         if Lw is None and U is None:
             return
-        shape = (ri * cj, 1 + self.n)
-        Lm = Lw if Lw is not None else sp.csr_matrix(shape)
-        if U is None:
-            Um = sp.csr_matrix(shape)
-        else:
-            a_up, b_up = np.meshgrid(np.arange(cj), np.arange(ri), indexing="ij")  # upper (cj x ri)
-            perm = np.empty(ri * cj, dtype=int)
-            # lower position (b_up, a_up) has vec index b_up + a_up * ri; upper index a_up + b_up * cj
-            perm[(b_up + a_up * ri).ravel()] = (a_up + b_up * cj).ravel()
-            Um = U[perm]
-        diff = Lm - Um
-        scale = max([1.0] + [float(np.max(np.abs(X.data))) for X in (Lm, Um) if X.nnz])
-        if diff.nnz and float(np.max(np.abs(diff.data))) > _SYM_TOL * scale:
+        lv, lm = self._probe(Lw, ri * cj)
+        uv, um = self._probe(U, ri * cj)
+        Lz, Ls = lv.reshape((ri, cj), order="F"), lm.reshape((ri, cj), order="F")
+        Uz, Us = uv.reshape((cj, ri), order="F").T, um.reshape((cj, ri), order="F").T
+        if np.any(np.abs(Lz - Uz) > _SYM_TOL * (Ls + Us + 1e-300)):
             raise TemplateError(
                 f"{where_upper} is not the transpose of block ({i + 1},{j + 1}): write '*' (STAR) "
                 "for one of them, or make them agree"

@@ -121,6 +121,8 @@ class Plan:
     constraints: list[tuple[str, str, bool, LinearForm]]  # (name, "eq"|"ge", strict, lhs - rhs (>=))
     objective: tuple[str, LinearForm]
     coef_symbols: list[sympy.Symbol]
+    #: numeric structures that depend only on the dimensions (filled by bind, reused by sweeps)
+    cache: dict[Any, Any] = field(default_factory=dict, repr=False)
 
     @property
     def id(self) -> str:
