@@ -548,6 +548,9 @@ class _Binder:
             "data_hash": system.data_hash(),
             "lmic_version": __version__,
         }
+        if t.observer_decl is not None:
+            ob = t.observer_decl
+            meta["observer"] = {"model": ob.model, "time": ob.time, "roles": dict(ob.roles)}
         return Problem(list(self.vars.values()), lmis, linear, objective, data, derived, checks, meta)
 
 

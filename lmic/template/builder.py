@@ -42,6 +42,7 @@ __all__ = [
     "ConstraintDecl",
     "DerivedDecl",
     "CheckDecl",
+    "ObserverDecl",
 ]
 
 _SIGNS = ("free", "positive", "nonnegative", "negative", "nonpositive")
@@ -143,6 +144,16 @@ class DerivedDecl:
 
 
 @dataclass
+class ObserverDecl:
+    """How the designed observer runs, for simulation: a model name and role -> IR name."""
+
+    model: str
+    time: str
+    roles: dict[str, str]
+    doc: str = ""
+
+
+@dataclass
 class CheckDecl:
     """A check on derived quantities."""
 
@@ -189,6 +200,7 @@ class Template:
         self.objective: tuple[str, Any] = ("feasibility", sympy.Integer(0))
         self.derived: list[DerivedDecl] = []
         self.checks: list[CheckDecl] = []
+        self.observer_decl: ObserverDecl | None = None
         self._names: set[str] = set()
 
     # -- helpers ---------------------------------------------------------------------------
@@ -354,6 +366,29 @@ class Template:
         if not isinstance(spec, CheckSpec):
             raise TemplateError(f"{self.theorem_id}: check '{name}' must be built with schur_stable(...) etc.")
         self.checks.append(CheckDecl(name, spec, doc))
+
+    def observer(self, model: str, time: str, doc: str = "", **roles: Any) -> None:
+        """Declare the observer the theorem designs, for ``lmic simulate``.
+
+        Parameters
+        ----------
+        model : str
+            The observer structure, e.g. ``"luenberger"`` (``x^+ = A x^ + f(x^) + L (y - C x^)``),
+            ``"uio"`` (``z^+ = N z + G u + L y``, ``x^ = z - E y``), ``"sampled"``
+            (continuous plant, output sampled at ``t_k``) — :mod:`lmic.simulate` lists them.
+        time : {"discrete", "continuous", "sampled"}
+        roles
+            Role -> symbol (data, derived quantity or variable), e.g. ``A=A, C=C, L=L``.
+        """
+        if time not in ("discrete", "continuous", "sampled"):
+            raise TemplateError(f"{self.theorem_id}: observer time must be discrete, continuous or sampled")
+        names = {}
+        for role, sym in roles.items():
+            name = getattr(sym, "name", sym)
+            if not isinstance(name, str):
+                raise TemplateError(f"{self.theorem_id}: observer role '{role}' must name a symbol")
+            names[role] = name
+        self.observer_decl = ObserverDecl(model, time, names, doc)
 
     # -- lookups ---------------------------------------------------------------------------
     def role(self, name: str) -> str | None:

@@ -3,39 +3,77 @@
 Source: Y. Wang, Y. Song, W. Zhang, *State estimation for discrete-time systems with
 generalized Lipschitz nonlinear dynamics*, Advances in Difference Equations 2015:307.
 System ``x(k+1) = A x + B u + f(x, y)``, ``y = C x``, with the quadratic inner-boundedness
-(QIB) condition ``|f(x) - f(x^)|^2 <= beta |x - x^|^2 + gamma <x - x^, f(x) - f(x^)>``.
+(QIB) condition ``|f(x) - f(x^)|^2 <= beta |x - x^|^2 + gamma <x - x^, f(x) - f(x^)>``
+(Assumption 1; beta, gamma any reals); a Lipschitz f (constant lambda, Assumption 2) is QIB
+with ``beta = lambda^2``, ``gamma = 0``.
+
+Every LMI of the paper is homogeneous (no constant blocks): the margin of a strict solve is
+scale-free, and a near-zero point says nothing (the certifier judges margins relative to
+the term scale).
+
+Fixed gains (audits): ``fixed_L: 1`` (full order, ``R = L^T P`` substituted) and
+``fixed_K: 1`` (reduced order, (21) in ``(P, omega)`` with ``K`` given).
 """
 
 from __future__ import annotations
 
+import numpy as np
+
+from lmic.errors import DataError
 from lmic.template import STAR, I, block, schur_stable, theorem
+
+__all__ = ["THEOREMS", "reduced_coordinates"]
+
+CITATION = "Wang, Song & Zhang (2015), Adv. Difference Equ. 2015:307"
+
+
+def _full_order(t):
+    """Data, ``P``, ``R`` (or ``L^T P`` for a fixed L), ``omega`` and ``X = A^T P - C^T R``."""
+    n, p = t.dims("n p")
+    A = t.data("A", n, n, doc="state matrix")
+    C = t.data("C", p, n, doc="output matrix")
+    fixed = t.flag("fixed_L", doc="1: L is given as data (audit), R = L^T P")
+    P = t.symmetric("P", n)
+    if fixed:
+        L = t.data("L", n, p, doc="the observer gain to audit (fixed_L = 1)")
+        R = L.T * P
+    else:
+        L = None
+        R = t.full("R", p, n, doc="R = L^T P")
+    w = t.scalar("omega", sign="positive")
+    return n, A, C, P, R, L, w, A.T * P - C.T * R
+
+
+def _full_order_gain(t, A, C, P, R, L):
+    if L is None:
+        L = t.derive("L", P.inv() * R.T, doc="observer gain L = P^-1 R^T")
+    t.check("A - L C Schur stable", schur_stable(A - L * C))
 
 
 @theorem(
     id="qib.thm1",
     title="Full-order observer for QIB nonlinear DT systems, LMI (7)",
-    citation="Wang, Song & Zhang (2015), Adv. Difference Equ. 2015:307, Theorem 1",
+    citation=CITATION + ", Theorem 1",
     kind="S",
     objective="feasibility; L = P^-1 R^T",
     system_class="discrete time, QIB (beta, gamma) nonlinearity",
     notes="Checked against the proof (lines 102-132 of the source); L = P^-1 R^T (R = L^T P). "
-    "The LMI is homogeneous in (P, R, omega).",
+    "The LMI is homogeneous in (P, R, omega). fixed_L: 1 audits a given gain.",
 )
 def qib_thm1(t):
     """Theorem 1 (source 003, line 95), LMI (7).
 
     ``[-P + 2 w beta I, A^T P - C^T R + w gamma I, A^T P - C^T R; *, P - 2 w I, 0; *, *, -P] < 0``
     with ``P > 0``, ``w > 0``; the observer gain is ``L = P^-1 R^T``.
+
+    Reference (seeds catalogue 3.1, 6; flexible joint, Euler Te = 0.1, beta = 0.00110889,
+    gamma = 0): the published (P, R, omega) is a certificate (lambda_max of (7) = -0.05581);
+    a fresh solve gives L = [1 0.1; -4.86 2.5134; 0 0.4295; 0.195 0.0264] (rho = 0.3525),
+    essentially the published L; the published L is certified with ``fixed_L: 1``.
     """
-    n, p = t.dims("n p")
-    A = t.data("A", n, n, doc="state matrix")
-    C = t.data("C", p, n, doc="output matrix")
+    n, A, C, P, R, L, w, X = _full_order(t)
     beta = t.param("beta", domain="real", doc="QIB constant beta")
     gamma = t.param("gamma", default=0.0, domain="real", doc="QIB constant gamma")
-    P = t.symmetric("P", n)
-    R = t.full("R", p, n)
-    w = t.scalar("omega", sign="positive")
-    X = A.T * P - C.T * R
     t.lmi("P > 0", block(P) > 0)
     t.lmi(
         "(7)",
@@ -48,8 +86,178 @@ def qib_thm1(t):
         )
         < 0,
     )
-    L = t.derive("L", P.inv() * R.T, doc="observer gain L = P^-1 R^T")
-    t.check("A - L C Schur stable", schur_stable(A - L * C))
+    _full_order_gain(t, A, C, P, R, L)
 
 
-THEOREMS = [qib_thm1]
+@theorem(
+    id="qib.cor1",
+    title="Full-order observer for Lipschitz DT systems, LMI (13)",
+    citation=CITATION + ", Corollary 1",
+    kind="S",
+    objective="feasibility; L = P^-1 R^T",
+    system_class="discrete time, Lipschitz (constant lambda)",
+    notes="Theorem 1 with beta = lambda^2, gamma = 0 and omega renamed (2 omega -> omega). "
+    "Homogeneous. fixed_L: 1 audits a given gain.",
+)
+def qib_cor1(t):
+    """Corollary 1 (source 003, line 136), LMI (13).
+
+    ``[-P + w lambda^2 I, A^T P - C^T R, A^T P - C^T R; *, P - w I, 0; *, *, -P] < 0``,
+    ``P > 0``, ``w > 0``; ``L = P^-1 R^T``. This is Theorem 1 with ``beta = lambda^2``,
+    ``gamma = 0`` and ``2 w`` renamed ``w``.
+
+    Reference (seeds catalogue 3.2; flexible joint, lambda = 0.0333): feasible,
+    L = [1 0.1; -4.86 2.5104; 0 0.428; 0.195 0.0255].
+    """
+    n, A, C, P, R, L, w, X = _full_order(t)
+    lam = t.param("lambda", domain="positive", doc="Lipschitz constant lambda of f")
+    t.lmi("P > 0", block(P) > 0)
+    t.lmi(
+        "(13)",
+        block([[-P + w * lam**2 * I(n), X, X], [STAR, P - w * I(n), 0], [STAR, STAR, -P]]) < 0,
+    )
+    _full_order_gain(t, A, C, P, R, L)
+
+
+def reduced_coordinates(H: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``[N M] = [H; C]^-1`` of (15), split after the first ``n - p`` columns.
+
+    Raises :class:`DataError` when ``[H; C]`` is singular.
+
+    Examples
+    --------
+    >>> N, M = reduced_coordinates(np.array([[0.0, 1.0]]), np.array([[1.0, 0.0]]))
+    >>> N.ravel().tolist(), M.ravel().tolist()
+    [0.0, 1.0] [1.0, 0.0]
+    """
+    T = np.vstack([np.atleast_2d(H), np.atleast_2d(C)])
+    if T.shape[0] != T.shape[1] or np.linalg.cond(T) > 1e12:
+        raise DataError("data 'H': [H; C] must be square and nonsingular (15)")
+    Tinv = np.linalg.inv(T)
+    k = np.atleast_2d(H).shape[0]
+    return Tinv[:, :k], Tinv[:, k:]
+
+
+def _check_nm(tid):
+    def rule(v):
+        T = np.vstack([v["H"], v["C"]])
+        NM = np.hstack([v["N"], v["M"]])
+        err = float(np.max(np.abs(T @ NM - np.eye(T.shape[0]))))
+        if err > 1e-9 * max(1.0, float(np.max(np.abs(T))) * float(np.max(np.abs(NM)))):
+            raise DataError(
+                f"theorem {tid}: data 'N', 'M' must satisfy [N M] = [H; C]^-1 (15) "
+                f"(max |[H; C][N M] - I| = {err:.3g}); omit N and M to have them computed"
+            )
+        return err
+
+    return rule
+
+
+def _reduced_order(t, beta, gamma):
+    """Theorem 2 / Corollary 2: (26) with P = alpha I, or (21) with K fixed (``fixed_K: 1``).
+
+    ``gamma`` is ``None`` for Corollary 2 (the (1,2) block is 0).
+    """
+    tid = t.theorem_id
+    n, p = t.dims("n p")
+    A = t.data("A", n, n, doc="state matrix")
+    C = t.data("C", p, n, doc="output matrix")
+    H = t.data("H", n - p, n, doc="z = H x, [H; C] nonsingular (14)-(15)")
+    N = t.data("N", n, n - p, default=lambda v, r, c: reduced_coordinates(v["H"], v["C"])[0],
+               doc="[N M] = [H; C]^-1 (15); computed when omitted")
+    M = t.data("M", n, p, default=lambda v, r, c: reduced_coordinates(v["H"], v["C"])[1],
+               doc="[N M] = [H; C]^-1 (15); computed when omitted")
+    alpha = t.param("alpha", default=1.0, domain="positive",
+                    doc="P = alpha I (Remark 2); (26) is homogeneous in (alpha, omega)")
+    fixed = t.flag("fixed_K", doc="1: K is given as data and P is free (LMI (21) in P, omega)")
+    t.const("[N M] = [H; C]^-1", _check_nm(tid), doc="checks (15)")
+    AZ = t.const("A_Z", lambda v: v["H"] @ v["A"] @ v["N"], shape=(n - p, n - p), doc="A_Z = H A N")
+    CZ = t.const("C_Z", lambda v: v["C"] @ v["A"] @ v["N"], shape=(p, n - p), doc="C_Z = C A N")
+    del M  # M enters only the observer (18), not the LMI
+    w = t.scalar("omega", sign="positive")
+    if fixed:
+        K = t.data("K", n - p, p, doc="the reduced-order gain to audit (fixed_K = 1)")
+        P = t.symmetric("P", n)
+        t.lmi("P > 0", block(P) > 0)
+        a11 = -N.T * P * N + 2 * w * beta * N.T * N
+        a13 = (AZ - K * CZ).T * N.T * P
+        a23 = (H - K * C).T * N.T * P
+        a33 = -P
+        name = "(21)" if gamma is not None else "(27)"
+    else:
+        K = t.full("K", n - p, p, doc="reduced-order observer gain")
+        a11 = (-alpha + 2 * w * beta) * N.T * N
+        a13 = alpha * (AZ - K * CZ).T * N.T
+        a23 = alpha * (H - K * C).T * N.T
+        a33 = -alpha * I(n)
+        name = "(26)" if gamma is not None else "(27) with P = alpha I"
+    a12 = 0 if gamma is None else w * gamma * N.T
+    t.lmi(name, block([[a11, a12, a13], [STAR, -2 * w * I(n), a23], [STAR, STAR, a33]]) < 0)
+    t.check("A_Z - K C_Z Schur stable", schur_stable(AZ - K * CZ))
+
+
+@theorem(
+    id="qib.thm2",
+    title="Reduced-order observer for QIB nonlinear DT systems, LMI (26) (Remark 2, P = alpha I)",
+    citation=CITATION + ", Theorem 2 and Remark 2",
+    kind="S",
+    objective="feasibility; gain K",
+    system_class="discrete time, QIB (beta, gamma) nonlinearity, reduced-order observer",
+    notes="(21) is bilinear (P K); Remark 2's P = alpha I gives the LMI (26) in (K, omega). "
+    "fixed_K: 1 gives (21) in (P, omega) for a given K. The published K is infeasible.",
+)
+def qib_thm2(t):
+    """Theorem 2 (source 003, line 191), LMI (21), and Remark 2 (line 231), LMI (26).
+
+    Reduced coordinates (14)-(15): ``z = H x``, ``[H; C]^-1 = [N M]``, ``A_Z = H A N``,
+    ``C_Z = C A N``; error ``eps(k+1) = (A_Z - K C_Z) eps + (H - K C) dg`` (20).
+
+    ``(21) [-N^T P N + 2 w beta N^T N, w gamma N^T, (A_Z - K C_Z)^T N^T P;
+    *, -2 w I, (H - K C)^T N^T P; *, *, -P] < 0`` is bilinear in (P, K) (the paper says so).
+    Default form: Remark 2, ``P = alpha I`` with alpha given,
+    ``(26) [(-alpha + 2 w beta) N^T N, w gamma N^T, alpha (A_Z - K C_Z)^T N^T;
+    *, -2 w I, alpha (H - K C)^T N^T; *, *, -alpha I] < 0`` in (K, w). (26) is homogeneous in
+    (alpha, w): its feasibility does not depend on alpha. With ``fixed_K: 1`` the gain K is
+    data and (21) is an LMI in (P, w), ``P > 0``.
+
+    The text says "by solving the LMI (21)" with alpha given: it must mean (26). N and M may be
+    given (the example prints them; they must equal [H; C]^-1) or are computed.
+
+    Result (seeds catalogue 3.3, 6): on the flexible-joint example (26) is infeasible for every
+    alpha and K (C_Z's second column is 0, so ||A_Z - K C_Z|| >= sqrt(2)); the published
+    K = [0 0.2057; 0 -0.0401] is the least-infeasible point of (26). With K_pub fixed, (21) is
+    marginally infeasible (phase-1 t* = 5.9e-11): solvers may return an 'inaccurate' point with
+    a tiny violation, which must not be certified. The dead-beat K = [0 0.4115; 0 0.1656] is
+    feasible in (21).
+    """
+    beta = t.param("beta", domain="real", doc="QIB constant beta")
+    gamma = t.param("gamma", default=0.0, domain="real", doc="QIB constant gamma")
+    _reduced_order(t, beta, gamma)
+
+
+@theorem(
+    id="qib.cor2",
+    title="Reduced-order observer for Lipschitz DT systems, LMI (27) with P = alpha I",
+    citation=CITATION + ", Corollary 2",
+    kind="S",
+    objective="feasibility; gain K",
+    system_class="discrete time, Lipschitz (constant lambda), reduced-order observer",
+    notes="Theorem 2 with beta = lambda^2, gamma = 0 (the factor 2 of 2 omega stays). "
+    "P = alpha I as in Remark 2; fixed_K: 1 gives (27) in (P, omega).",
+)
+def qib_cor2(t):
+    """Corollary 2 (source 003, line 238), LMI (27):
+
+    ``[-N^T P N + 2 w lambda^2 N^T N, 0, (A_Z - K C_Z)^T N^T P; *, -2 w I, (H - K C)^T N^T P;
+    *, *, -P] < 0``: Theorem 2 with ``beta = lambda^2``, ``gamma = 0`` (unlike Corollary 1,
+    omega is not rescaled). As for Theorem 2 the default form sets ``P = alpha I`` (Remark 2),
+    an LMI in (K, w); ``fixed_K: 1`` gives (27) in (P, w) for a given K.
+
+    Reference (seeds catalogue 3.4; flexible joint, lambda = 0.0333): infeasible (same proof
+    as Theorem 2).
+    """
+    lam = t.param("lambda", domain="positive", doc="Lipschitz constant lambda of f")
+    _reduced_order(t, lam**2, None)
+
+
+THEOREMS = [qib_thm1, qib_cor1, qib_thm2, qib_cor2]
