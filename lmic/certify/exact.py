@@ -403,9 +403,12 @@ def _project_eq(problem: Problem, point: ExactPoint) -> tuple[ExactPoint, str]:
         return point, ""
     flint = _flint()
     A = lin.A.tocsr()[eq].toarray()
-    Aq = flint.fmpq_mat([[Fraction(float(v)) for v in row[1:]] for row in A])
-    a0 = flint.fmpq_mat([[Fraction(float(row[0]))] for row in A])
-    xq = flint.fmpq_mat([[f] for f in point.fractions()])
+    def q(f: Fraction):
+        return flint.fmpq(f.numerator, f.denominator)
+
+    Aq = flint.fmpq_mat([[q(Fraction(float(v))) for v in row[1:]] for row in A])
+    a0 = flint.fmpq_mat([[q(Fraction(float(row[0])))] for row in A])
+    xq = flint.fmpq_mat([[q(f)] for f in point.fractions()])
     res = Aq * xq + a0
     if all(v == 0 for v in res.entries()):
         return point, ""

@@ -1,0 +1,181 @@
+"""Exact proofs: rational points, exact F(x), congruence / LDL^T / charpoly, the benchmark."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import time
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from conftest import lmi_from
+
+from lmic.certify import certify
+from lmic.certify.exact import (
+    exact_float,
+    exact_matrix,
+    prove,
+    prove_pd,
+    prove_psd,
+    round_point,
+)
+from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+from lmic.ir.svec import tril_rows_cols
+from lmic.solution import Solution
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _benchmark():
+    spec = importlib.util.spec_from_file_location("lmic_bench_exact", ROOT / "benchmarks" / "exact.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.mark.parametrize("v", [0.1, -3.75, 1e-300, 5e-324, 1.7976931348623157e308, 2.0**-60 * 3])
+def test_exact_float_is_exact(v):
+    m, e = exact_float(v)
+    assert Fraction(m) * Fraction(2) ** e == Fraction(v)
+    assert m % 2 == 1
+
+
+def test_round_point_rounds_to_the_dyadic_grid():
+    pt = round_point(np.array([0.1, -0.3, 2.5, 0.0]), 4)
+    assert pt.den == 16 and pt.describe() == "2^4"
+    assert pt.num == [2, -5, 40, 0]
+    for f, v in zip(pt.fractions(), [0.1, -0.3, 2.5, 0.0], strict=True):
+        assert abs(f - Fraction(v)) <= Fraction(1, 32)
+
+
+def test_exact_matrix_equals_the_rational_evaluation():
+    rng = np.random.default_rng(0)
+    d, n = 4, 3
+    mats = []
+    for _ in range(n + 1):
+        M = rng.standard_normal((d, d)) * 10.0 ** rng.integers(-5, 5)
+        mats.append(M + M.T)
+    lmi = lmi_from("random", mats)
+    pt = round_point(rng.standard_normal(n), 30)
+    M = exact_matrix(lmi, pt)
+    # reference: F(x_q) entry by entry in Fractions
+    xs = [Fraction(1)] + pt.fractions()
+    ref = [[sum(Fraction(float(mats[k][i, j])) * xs[k] for k in range(n + 1)) for j in range(d)] for i in range(d)]
+    # M = c * ref for one positive c
+    c = Fraction(M[0][0]) / ref[0][0]
+    assert c > 0
+    assert all(Fraction(M[i][j]) == c * ref[i][j] for i in range(d) for j in range(d))
+
+
+def test_prove_pd_and_psd_small_and_by_every_method():
+    assert prove_pd([[2, 1], [1, 2]])["proven"]
+    r = prove_pd([[1, 2], [2, 1]])
+    assert not r["proven"] and r["disproved"]
+    # singular PSD: the congruence fails, LDL^T with a zero pivot proves PSD, disproves PD
+    B = np.array([[1, 2, 3], [2, 4, 6], [0, 1, 1]])
+    G = (B.T @ B).tolist()
+    assert prove_psd(G)["proven"] and prove_psd(G)["method"] == "ldl"
+    assert prove_pd(G)["disproved"]
+    assert prove_psd([[0, 1], [1, 0]])["disproved"]
+
+
+def test_charpoly_fallback_for_singular_psd_of_moderate_size():
+    rng = np.random.default_rng(1)
+    B = rng.integers(-3, 4, size=(45, 60))  # rank 45 < 60: singular PSD Gram matrix
+    G = (B.T @ B).tolist()
+    r = prove_psd(G)
+    assert r["proven"] and r["method"] == "charpoly"
+    G2 = (B.T @ B - np.eye(60, dtype=int)).tolist()  # has eigenvalue -1
+    r2 = prove_psd(G2)
+    assert r2["disproved"] and not r2["proven"]
+
+
+def test_ill_conditioned_matrix_needs_more_rounds_but_is_proved():
+    d = 30
+    H = [[Fraction(1, i + j + 1) for j in range(d)] for i in range(d)]  # Hilbert: cond ~ 1e44
+    den = 1
+    for row in H:
+        for f in row:
+            den = den * f.denominator // math.gcd(den, f.denominator)
+    M = [[int(f * den) for f in row] for row in H]
+    r = prove_pd(M)
+    assert r["proven"]  # by congruence rounds or by exact LDL^T
+
+
+def test_prove_uses_few_bits_for_comfortable_margins(lyapunov_point):
+    prob, x = lyapunov_point
+    r = prove(prob, x)
+    assert r["proven"] and not r["disproved"]
+    assert r["rounded"] and r["bits"] < 30
+    assert r["denominator"] == f"2^{r['bits']}"
+    assert all(e["method"] == "congruence" for e in r["lmis"])
+
+
+def test_tiny_margin_falls_back_to_the_float_point_itself():
+    # [[p, 1], [1, q]] with p q - 1 = 1e-15: rounding x coarsely would break it
+    prob = Problem(
+        [Variable("p", "scalar", (1, 1), offset=0), Variable("q", "scalar", (1, 1), offset=1)],
+        [lmi_from("tight", [np.array([[0.0, 1.0], [1.0, 0.0]]), np.diag([1.0, 0.0]), np.diag([0.0, 1.0])])],
+        LinearConstraints.empty(2),
+        Objective("feasibility", np.zeros(3)),
+    )
+    x = np.array([1.0 + 2.0**-40, 1.0])
+    r = prove(prob, x)
+    assert r["proven"]
+    assert r["bits"] >= 40
+
+
+def test_exact_disproof_at_the_solver_point_rejects():
+    prob = Problem(
+        [Variable("p", "scalar", (1, 1))],
+        [LMI("p - 1 >= 0", 1, sp.csc_matrix([[-1.0, 1.0]]), strict=False)],
+        LinearConstraints.empty(1),
+        Objective("feasibility", np.zeros(2)),
+    )
+    x = np.array([1.0 - 2.0**-52])  # violation 2.2e-16: within every float tolerance
+    cert = certify(prob, Solution("optimal", x=x), exact=True)
+    assert cert.exact["disproved"] and not cert.exact["proven"]
+    assert cert.verdict == "rejected"
+    assert cert.reason.startswith("exact: LMI 'p - 1 >= 0' is not positive semidefinite at the solver's point")
+
+
+def test_equality_rows_are_met_exactly_by_projection():
+    # 0.1 x + y = 1 (the float 0.1 is not 1/10, rounding x, y cannot meet it), diag(x, y) > 0
+    A = sp.csr_matrix(np.array([[-1.0, 0.1, 1.0]]))
+    prob = Problem(
+        [Variable("x", "scalar", (1, 1), offset=0), Variable("y", "scalar", (1, 1), offset=1)],
+        [lmi_from("diag", [np.zeros((2, 2)), np.diag([1.0, 0.0]), np.diag([0.0, 1.0])])],
+        LinearConstraints(A, ["eq"], [False], ["0.1 x + y = 1"]),
+        Objective("feasibility", np.zeros(3)),
+    )
+    r = prove(prob, np.array([1.0, 0.9 + 1e-13]))
+    assert r["proven"], r["reason"]
+    assert r["linear"][0]["proven"] and r["linear"][0]["value"] == 0.0
+    assert r["projection"] == "projected exactly onto the equality rows"
+    assert not r["denominator"].startswith("2^")  # no longer a dyadic point
+
+
+def test_benchmark_size_90_is_fast_and_proved():
+    bench = _benchmark()
+    prob = bench.qib_thm1_problem(30, 15)
+    x = bench.feasible_point(prob)
+    t0 = time.perf_counter()
+    cert = certify(prob, Solution("feasible", x=x), exact=True)
+    elapsed = time.perf_counter() - t0
+    assert cert.label == "certified (exact)"
+    assert cert.exact["lmis"][0]["method"] == "congruence"
+    assert cert.exact["bits"] <= 30
+    assert elapsed < 5.0
+    # the float LMI agrees with a dense evaluation of the printed block matrix
+    v = prob.unpack(x)
+    A, C = np.array(prob.data["A"]), np.array(prob.data["C"])
+    P, R, w, beta = v["P"], v["R"], v["omega"], prob.data["beta"]
+    X = A.T @ P - C.T @ R
+    n = P.shape[0]
+    Z, I = np.zeros((n, n)), np.eye(n)
+    M = np.block([[-P + 2 * w * beta * I, X, X], [X.T, P - 2 * w * I, Z], [X.T, Z, -P]])
+    assert np.allclose(prob.lmis[0].matrix(x), -M, atol=1e-12)
+    _ = tril_rows_cols  # the storage convention is what exact_matrix reads
