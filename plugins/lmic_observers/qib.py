@@ -119,20 +119,20 @@ def qib_cor1(t):
     _full_order_gain(t, A, C, P, R, L)
 
 
-def reduced_coordinates(H: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def reduced_coordinates(H: np.ndarray, C: np.ndarray, where: str = "") -> tuple[np.ndarray, np.ndarray]:
     """``[N M] = [H; C]^-1`` of (15), split after the first ``n - p`` columns.
 
-    Raises :class:`DataError` when ``[H; C]`` is singular.
+    Raises :class:`DataError` (prefixed by ``where``) when ``[H; C]`` is singular.
 
     Examples
     --------
     >>> N, M = reduced_coordinates(np.array([[0.0, 1.0]]), np.array([[1.0, 0.0]]))
     >>> N.ravel().tolist(), M.ravel().tolist()
-    [0.0, 1.0] [1.0, 0.0]
+    ([0.0, 1.0], [1.0, 0.0])
     """
     T = np.vstack([np.atleast_2d(H), np.atleast_2d(C)])
     if T.shape[0] != T.shape[1] or np.linalg.cond(T) > 1e12:
-        raise DataError("data 'H': [H; C] must be square and nonsingular (15)")
+        raise DataError(f"{where}data 'H': [H; C] must be square and nonsingular (15)")
     Tinv = np.linalg.inv(T)
     k = np.atleast_2d(H).shape[0]
     return Tinv[:, :k], Tinv[:, k:]
@@ -160,20 +160,20 @@ def _reduced_order(t, beta, gamma):
     """
     tid = t.theorem_id
     n, p = t.dims("n p")
-    A = t.data("A", n, n, doc="state matrix")
+    t.data("A", n, n, doc="state matrix (enters through A_Z, C_Z)")
     C = t.data("C", p, n, doc="output matrix")
     H = t.data("H", n - p, n, doc="z = H x, [H; C] nonsingular (14)-(15)")
-    N = t.data("N", n, n - p, default=lambda v, r, c: reduced_coordinates(v["H"], v["C"])[0],
+    where = f"theorem {tid}: "
+    N = t.data("N", n, n - p, default=lambda v, r, c: reduced_coordinates(v["H"], v["C"], where)[0],
                doc="[N M] = [H; C]^-1 (15); computed when omitted")
-    M = t.data("M", n, p, default=lambda v, r, c: reduced_coordinates(v["H"], v["C"])[1],
-               doc="[N M] = [H; C]^-1 (15); computed when omitted")
+    t.data("M", n, p, default=lambda v, r, c: reduced_coordinates(v["H"], v["C"], where)[1],
+           doc="[N M] = [H; C]^-1 (15), enters the observer (18) only; computed when omitted")
     alpha = t.param("alpha", default=1.0, domain="positive",
                     doc="P = alpha I (Remark 2); (26) is homogeneous in (alpha, omega)")
     fixed = t.flag("fixed_K", doc="1: K is given as data and P is free (LMI (21) in P, omega)")
-    t.const("[N M] = [H; C]^-1", _check_nm(tid), doc="checks (15)")
+    t.const("NM_check", _check_nm(tid), doc="checks [N M] = [H; C]^-1 (15)")
     AZ = t.const("A_Z", lambda v: v["H"] @ v["A"] @ v["N"], shape=(n - p, n - p), doc="A_Z = H A N")
     CZ = t.const("C_Z", lambda v: v["C"] @ v["A"] @ v["N"], shape=(p, n - p), doc="C_Z = C A N")
-    del M  # M enters only the observer (18), not the LMI
     w = t.scalar("omega", sign="positive")
     if fixed:
         K = t.data("K", n - p, p, doc="the reduced-order gain to audit (fixed_K = 1)")
