@@ -11,7 +11,7 @@ from conftest import lmi_from, lyapunov, observer
 
 from lmic.certify import Certificate, Tolerances, certify
 from lmic.errors import LmicError
-from lmic.ir.problem import LMI, Check, LinearConstraints, NamedExpr, Objective, Problem, Variable
+from lmic.ir.problem import LMI, Check, LinearConstraints, Objective, Problem, Variable
 from lmic.solution import Solution
 
 
