@@ -66,15 +66,30 @@ def test_compile_writes_an_ir_file(qib_file, tmp_path):
         (["frobnicate"], "invalid choice"),
     ],
 )
-def test_bad_input_is_one_line_and_exit_2(args, message, qib_file, tmp_path):
+def test_bad_input_is_one_line_and_exit_2(args, message, qib_file, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     out = tmp_path / "ir.json"
     args = [a.format(sys=qib_file, out=out) for a in args]
-    proc = subprocess.run([sys.executable, "-m", "lmic.cli", *args], capture_output=True, text=True, cwd=tmp_path)
-    assert proc.returncode == 2
-    lines = proc.stderr.strip().splitlines()
-    assert len(lines) == 1 and message in lines[0], proc.stderr
-    assert "Traceback" not in proc.stderr
+    try:
+        rc = main(args)
+    except SystemExit as exc:  # argparse usage errors
+        rc = exc.code
+    assert rc == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0], lines
     assert not out.exists()  # nothing half-written
+
+
+def test_errors_in_a_real_process_have_no_traceback(tmp_path):
+    proc = subprocess.run(
+        [sys.executable, "-m", "lmic.cli", "compile", "qib.thm1", "nope.yaml", "-o", "x.json"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
+    assert proc.returncode == 2
+    assert proc.stderr.strip() == "lmic: error: nope.yaml: no such file"
+    assert not (tmp_path / "x.json").exists()
 
 
 def test_version_flag(capsys):
