@@ -27,6 +27,7 @@ Examples
 from __future__ import annotations
 
 import time
+import warnings
 from typing import ClassVar
 
 import numpy as np
@@ -109,7 +110,9 @@ class SDPABackend(Backend):
         K = sdpap.SymCone(f=len(eq), l=len(ge), s=tuple(dims))
         J = sdpap.SymCone(f=problem.n)
         t0 = time.perf_counter()
-        with quiet_native(not options.verbose):
+        with quiet_native(not options.verbose), warnings.catch_warnings():
+            # sdpa-python recomputes feasibility errors with scipy eigs and warns on tiny blocks
+            warnings.simplefilter("ignore", RuntimeWarning)
             xi, y, _pinfo, _tinfo, info = sdpap.solve(A, b, c, K, J, self._options(options))
         solve_s = time.perf_counter() - t0
         native = str(info.get("phasevalue", "noINFO"))
