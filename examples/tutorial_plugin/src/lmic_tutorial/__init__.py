@@ -1,0 +1,1 @@
+"""The lmic tutorial plugin (see docs/writing-a-theorem.md in the lmic repository)."""
