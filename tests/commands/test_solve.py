@@ -1,0 +1,138 @@
+"""``lmic solve``, ``lmic backends`` and ``lmic crosscheck`` from the command line."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from lmic.cli import main
+from lmic.ir.io import save_problem
+from lmic.testing.conformance import CASES
+
+SDPLIB = Path(__file__).resolve().parents[3] / "shared" / "sdplib"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+QIB = EXAMPLES / "qib.thm1.flexible-joint.yaml"
+
+
+@pytest.fixture
+def ir_file(tmp_path):
+    def make(case: str) -> str:
+        path = tmp_path / f"{case}.json"
+        save_problem(CASES[case].build(), path)
+        return str(path)
+
+    return make
+
+
+def _json(capsys) -> dict:
+    return json.loads(capsys.readouterr().out)
+
+
+def test_backends_json_lists_every_builtin(capsys):
+    assert main(["backends", "--json"]) == 0
+    rows = {r["name"]: r for r in _json(capsys)["backends"]}
+    assert {"clarabel", "scs", "cvxopt", "sdpa", "cvxpy", "picos", "auto"} <= set(rows)
+    assert rows["clarabel"]["available"] and rows["clarabel"]["default"]
+    assert "cvxpy:SCS" in rows["cvxpy"]["variants"]
+
+
+def test_backends_table(capsys):
+    assert main(["backends"]) == 0
+    out = capsys.readouterr().out
+    assert "clarabel (default)" in out and "sdpa" in out
+
+
+def test_solve_ir_file_json_shape(ir_file, capsys):
+    code = main(["solve", ir_file("linear_equalities"), "--json"])
+    d = _json(capsys)
+    assert code == 0
+    for key in ("lmic", "theorem", "backend", "status", "objective", "variables", "derived", "certificate", "timings"):
+        assert key in d
+    assert d["status"] == "optimal" and d["certificate"]["verdict"] == "certified"
+    assert abs(d["objective"] - 0.5857864376) < 1e-6
+    assert set(d["timings"]) >= {"compile_s", "solve_s", "certify_s"}
+    assert {"name", "min_margin", "ok"} <= set(d["certificate"]["lmis"][0])
+
+
+def test_solve_infeasible_exits_3(ir_file, capsys):
+    assert main(["solve", ir_file("lyapunov_unstable"), "--backend", "cvxopt", "--json"]) == 3
+    assert _json(capsys)["status"] == "infeasible"
+
+
+def test_solve_sdpa_file(capsys):
+    code = main(["solve", str(SDPLIB / "truss1.dat-s"), "--backend", "sdpa"])
+    out = capsys.readouterr().out
+    assert code == 0 and "objective  -8.99999" in out and "verdict    certified" in out
+
+
+def test_solve_sdplib_infeasible_is_certified(capsys):
+    assert main(["solve", str(SDPLIB / "infp1.dat-s"), "--json"]) == 3
+    assert _json(capsys)["certificate"]["verdict"] == "infeasible-certified"
+
+
+def test_solve_theorem_and_system_writes_certificate(tmp_path, capsys):
+    cert = tmp_path / "cert.json"
+    code = main(["solve", "qib.thm1", str(QIB), "--backend", "scs", "--json", "-o", str(cert)])
+    d = _json(capsys)
+    assert code == 0 and d["theorem"] == "qib.thm1" and d["status"] == "feasible"
+    assert d["strict"]["strategy"] == "max-margin" and d["strict"]["margin"] > 1e-3
+    assert "L" in d["derived"]
+    assert json.loads(cert.read_text())["certificate"]["verdict"] == "certified"
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["solve", "CASE", "--backend", "nope"], "unknown backend 'nope'; available backends: auto"),
+        (["solve", "missing.json"], "missing.json: no such file"),
+        (["solve", "qib.thm1"], "give THEOREM SYSTEM"),
+        (["solve", "CASE", "-p", "beta=1"], "-p parameters apply to a theorem"),
+        (["crosscheck", "CASE", "--backends", "clarabel,nope"], "unknown backend 'nope'"),
+    ],
+)
+def test_bad_input_exits_2_with_one_line(argv, message, ir_file, capsys):
+    argv = [ir_file("max_sense") if a == "CASE" else a for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_missing_solver_package_exits_2(monkeypatch, ir_file, capsys):
+    from lmic.backends.scs import SCSBackend
+
+    monkeypatch.setattr(SCSBackend, "requires", {"scs_not_installed_here": "scs"})
+    assert main(["solve", ir_file("max_sense"), "--backend", "scs"]) == 2
+    assert "pip install scs" in capsys.readouterr().err
+
+
+def test_backend_that_cannot_take_the_problem_exits_2(monkeypatch, ir_file, capsys):
+    from lmic.backends.cvxopt import CVXOPTBackend
+
+    monkeypatch.setattr(CVXOPTBackend, "capabilities", frozenset({"lmi"}))
+    assert main(["solve", ir_file("linear_equalities"), "--backend", "cvxopt"]) == 2
+    assert "cannot take eq constraints" in capsys.readouterr().err
+
+
+def test_time_out_is_a_failed_solve(ir_file, capsys):
+    code = main(["solve", ir_file("bounded_real"), "--backend", "scs", "--max-iter", "3", "--json"])
+    d = _json(capsys)
+    assert code == 1 and d["status"] in ("inaccurate", "error")
+
+
+def test_crosscheck_table_and_json(ir_file, capsys):
+    path = ir_file("bounded_real")
+    assert main(["crosscheck", path, "--backends", "clarabel,cvxopt,sdpa"]) == 0
+    out = capsys.readouterr().out
+    assert "agree" in out and "cvxopt" in out and "certified" in out
+    assert main(["crosscheck", path, "--backends", "clarabel,scs", "--json"]) == 0
+    d = _json(capsys)
+    assert d["agree"] is True and d["max_rel_objective_gap"] < 1e-3
+    assert {"backend", "status", "objective", "verdict", "min_margin", "solve_s"} <= set(d["results"][0])
+
+
+def test_crosscheck_theorem_with_system(capsys):
+    code = main(["crosscheck", "qib.thm1", str(QIB), "--backends", "clarabel,scs,cvxopt", "--json"])
+    d = _json(capsys)
+    assert code == 0 and d["agree"] and all(r["verdict"] == "certified" for r in d["results"])

@@ -1,0 +1,68 @@
+"""The pipeline: compile or load, solve, certify, exit codes, the auto route."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lmic.api import load_target, solve
+from lmic.backends import auto
+from lmic.errors import BackendUnavailable, LmicError
+from lmic.ir.problem import Problem
+from lmic.testing.conformance import CASES, lyapunov_problem
+
+QIB = Path(__file__).resolve().parents[1] / "examples" / "qib.thm1.flexible-joint.yaml"
+
+
+def test_problem_target_certified():
+    r = solve(CASES["lyapunov_stable"].build(), backend="cvxopt")
+    assert r.status == "feasible" and r.verdict == "certified" and r.exit_code() == 0
+    assert r.min_margin is not None and r.min_margin > 0
+    assert r.to_dict()["strict"]["strategy"] == "max-margin"
+
+
+def test_infeasible_exit_code():
+    r = solve(CASES["lyapunov_unstable"].build())
+    assert r.status == "infeasible" and r.exit_code() == 3
+
+
+def test_unbounded_is_a_failed_solve():
+    r = solve(CASES["unbounded"].build())
+    assert r.status == "unbounded" and r.exit_code() == 1
+
+
+def test_theorem_target_compiles_with_params():
+    r = solve("qib.thm1", QIB, params={"beta": 0.0005}, backend="clarabel")
+    assert r.theorem == "qib.thm1" and r.params == {"beta": 0.0005}
+    assert r.verdict == "certified"
+    L = np.asarray(r.derived["L"])
+    assert L.shape == (4, 2)
+    assert r.timings["compile_s"] > 0 and r.timings["solve_s"] > 0
+
+
+def test_load_target_errors():
+    with pytest.raises(LmicError, match="no such file"):
+        load_target("nothing_here.dat-s")
+    with pytest.raises(LmicError, match="not to an IR problem"):
+        load_target(CASES["max_sense"].build(), system="x.yaml")
+    with pytest.raises(BackendUnavailable):
+        solve(CASES["max_sense"].build(), backend="nope")
+
+
+def test_auto_route_by_size():
+    assert auto.route(CASES["max_sense"].build()) == ["clarabel"]
+    big = lyapunov_problem(-np.eye(60))
+    assert isinstance(big, Problem) and auto.route(big) == ["scs", "cvxopt"]
+
+
+def test_auto_falls_back_when_the_certificate_fails(monkeypatch):
+    monkeypatch.setattr(auto, "route", lambda problem: ["scs", "clarabel"])
+    from lmic.backends.base import SolveOptions
+
+    # SCS stopped after 5 iterations cannot be certified; Clarabel then is
+    r = solve(CASES["bounded_real"].build(), backend="auto", options=SolveOptions(max_iter=5))
+    assert [a["backend"] for a in r.attempts][0] == "scs"
+    assert r.attempts[0]["verdict"] != "certified"
+    assert r.backend == "clarabel" and len(r.attempts) == 2

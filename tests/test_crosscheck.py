@@ -1,0 +1,35 @@
+"""Cross-checking one problem on several backends."""
+
+from __future__ import annotations
+
+from lmic.crosscheck import crosscheck, status_class
+from lmic.testing.conformance import CASES
+
+
+def test_agreeing_backends():
+    rep = crosscheck(CASES["max_sense"].build(), backends=["clarabel", "cvxopt", "sdpa", "scs"])
+    assert rep.agree and rep.exit_code() == 0
+    assert rep.max_rel_objective_gap < 1e-3
+    assert [r["verdict"] for r in rep.results] == ["certified"] * 4
+
+
+def test_infeasible_agreement_exits_3():
+    rep = crosscheck(CASES["infeasible"].build(), backends=["clarabel", "cvxopt"])
+    assert rep.agree and rep.exit_code() == 3
+    assert {r["verdict"] for r in rep.results} == {"infeasible-certified"}
+
+
+def test_a_failing_backend_breaks_agreement():
+    rep = crosscheck(CASES["bounded_real"].build(), backends=["clarabel", "nope"])
+    assert not rep.agree and rep.exit_code() == 1
+    assert rep.results[1]["status"] == "error" and "unknown backend" in rep.results[1]["message"]
+
+
+def test_status_classes():
+    assert status_class("optimal") == status_class("feasible") != status_class("infeasible")
+    assert set(crosscheck(CASES["max_sense"].build(), backends=["clarabel"]).to_dict()) >= {
+        "target",
+        "results",
+        "agree",
+        "max_rel_objective_gap",
+    }
