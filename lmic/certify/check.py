@@ -278,7 +278,7 @@ def lmi_report(lmi: LMI, x: np.ndarray, tol: Tolerances, *, inaccurate: bool = F
     -------
     dict
         ``name, dim, strict, min_eig, max_eig, max_abs, scale, min_margin, rel_margin,
-        threshold, ok`` and ``note``.
+        float_err`` (the float64 error bound of ``lambda_min``), ``threshold, ok`` and ``note``.
 
     Examples
     --------
@@ -305,6 +305,7 @@ def lmi_report(lmi: LMI, x: np.ndarray, tol: Tolerances, *, inaccurate: bool = F
             scale=T,
             min_margin=float("nan"),
             rel_margin=float("nan"),
+            float_err=float("nan"),
             threshold=None,
             ok=False,
             note="F(x) is not finite",
@@ -320,6 +321,7 @@ def lmi_report(lmi: LMI, x: np.ndarray, tol: Tolerances, *, inaccurate: bool = F
         scale=T,
         min_margin=lmin,
         rel_margin=rel,
+        float_err=err_rel * T,
     )
     zero = T == 0.0 or (coef_scale > 0 and T <= tol.zero_rel * coef_scale)
     if lmi.strict:
@@ -346,13 +348,15 @@ def _lmi_reason(r: dict) -> str:
         )
     if not math.isfinite(r["min_eig"]):
         return f"LMI '{r['name']}' could not be evaluated: F(x) is not finite"
+    if r["strict"] and abs(r["min_eig"]) <= r["float_err"]:
+        return (
+            f"LMI '{r['name']}' not certified: lambda_min = {_g(r['min_eig'])} "
+            f"(relative {_g(r['rel_margin'])}) is zero to float64 accuracy, needs > 0 (strict)"
+        )
     need = "> 0 (strict)" if r["strict"] else f">= {_g(r['threshold'])}"
     if r["strict"] and r["min_eig"] > 0:
         need = f"> {_g(r['threshold'])} (strict, relative {_g(r['threshold'] / r['scale'])})"
-    return (
-        f"LMI '{r['name']}' violated: lambda_min = {_g(r['min_eig'])} "
-        f"(relative {_g(r['rel_margin'])}), needs {need}"
-    )
+    return f"LMI '{r['name']}' violated: lambda_min = {_g(r['min_eig'])} (relative {_g(r['rel_margin'])}), needs {need}"
 
 
 def _linear_reports(problem: Problem, x: np.ndarray, tol: Tolerances, inaccurate: bool) -> list:
@@ -435,9 +439,7 @@ def _environment(problem: Problem, x: np.ndarray) -> tuple[dict, list[dict]]:
             continue
         v = env[d.name]
         ok = _finite(v)
-        report.append(
-            {"name": d.name, "value": _value_json(v), "ok": ok, "error": "" if ok else "not finite"}
-        )
+        report.append({"name": d.name, "value": _value_json(v), "ok": ok, "error": "" if ok else "not finite"})
     return env, report
 
 
@@ -475,9 +477,7 @@ def _judge(c: Check, v: Any, tol: Tolerances) -> tuple[float, bool]:
     M = np.atleast_2d(np.asarray(v, dtype=float))
     if c.kind == "finite":
         finite = bool(np.all(np.isfinite(M)))
-        return (
-            float(np.max(np.abs(M))) if finite and M.size else (0.0 if finite else float("inf"))
-        ), finite
+        return (float(np.max(np.abs(M))) if finite and M.size else (0.0 if finite else float("inf"))), finite
     if not np.all(np.isfinite(M)):
         raise ValueError("the checked quantity is not finite")
     if c.kind in ("less_than", "greater_than"):
@@ -643,9 +643,7 @@ def certify(
     reasons: list[str] = []
     failing = [r for r in cert.lmis if not r["ok"]]
     if failing:
-        worst = min(
-            failing, key=lambda r: r["rel_margin"] if math.isfinite(r["rel_margin"]) else -math.inf
-        )
+        worst = min(failing, key=lambda r: r["rel_margin"] if math.isfinite(r["rel_margin"]) else -math.inf)
         reasons.append(_lmi_reason(worst))
         if len(failing) > 1:
             reasons[-1] += f" (and {len(failing) - 1} more LMI(s))"
@@ -654,9 +652,7 @@ def certify(
     reasons += [_check_reason(r) for r in cert.checks if not r["ok"]]
     if cert.objective is not None and not cert.objective["ok"]:
         o = cert.objective
-        reasons.append(
-            f"objective: the solver reports {o['claimed']!r}, the point gives {o['value']!r}"
-        )
+        reasons.append(f"objective: the solver reports {o['claimed']!r}, the point gives {o['value']!r}")
 
     if exact:
         from lmic.certify.exact import prove
@@ -673,14 +669,11 @@ def certify(
         cert.reason = "every constraint and check holds"
         if worst is not None:
             cert.reason += (
-                f"; smallest margin {_g(worst['min_eig'])} "
-                f"(relative {_g(worst['rel_margin'])}) on '{worst['name']}'"
+                f"; smallest margin {_g(worst['min_eig'])} (relative {_g(worst['rel_margin'])}) on '{worst['name']}'"
             )
         if inaccurate:
             cert.reason += " (despite the solver's 'inaccurate' status)"
         if cert.exact is not None:
-            cert.reason += "; exact proof: " + (
-                "yes" if cert.exact["proven"] else cert.exact["reason"]
-            )
+            cert.reason += "; exact proof: " + ("yes" if cert.exact["proven"] else cert.exact["reason"])
     cert.time_s = time.perf_counter() - t0
     return cert
