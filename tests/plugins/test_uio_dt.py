@@ -1,0 +1,281 @@
+"""uio_dt plugins (thesis Paper C): published example, reference values, random cross-checks, bad input.
+
+Reference values: thesis catalogue sections 4.1-4.3, 10 (Paper C rows) and 11.3, 11.8.
+"""
+
+from __future__ import annotations
+
+import cvxpy as cp
+import numpy as np
+import pytest
+from delshad_helpers import (
+    bisect,
+    certify_point,
+    cvx_max_margin,
+    cvx_min,
+    exact_projector,
+    example,
+    largest_eig,
+    pinv,
+    with_fixed_margin,
+)
+
+from lmic.api import solve, solve_problem
+from lmic.certify import certify
+from lmic.compile import compile_theorem
+from lmic.errors import DataError
+
+EX31 = "uio_dt.thm3_1.flexible_joint_published_gains.yaml"
+EX32 = "uio_dt.thm3_2.flexible_joint.yaml"
+EX41 = "uio_dt.thm4_1.flexible_joint.yaml"
+
+P_PUB = np.array([[396.4, 0, 0, 0], [0, 396.4, 0, 0], [0, 0, 3215.4, -759.1], [0, 0, -759.1, 202.7]])
+Y_PUB = np.array([[0, 0], [0, -1], [0, -2.5], [0, -8.9]])
+K_PUB = np.array([[0, 0], [0, 0], [1.4, -2.4], [5.4, -8.7]])
+
+
+# -- Theorem 3.1: analysis LMI in P ---------------------------------------------------------------
+
+
+@pytest.mark.parametrize("backend", ["clarabel", "sdpa"])
+def test_thm3_1_published_gains_feasible(backend):
+    r = solve("uio_dt.thm3_1", example(EX31), backend=backend)
+    assert r.status == "feasible"
+    assert r.certificate.verdict == "certified", r.certificate.reason
+
+
+@pytest.mark.parametrize("gamma", [1.0, 0.5, 0.1])
+def test_thm3_1_published_P_certifies(gamma):
+    prob = compile_theorem("uio_dt.thm3_1", example(EX31), {"gamma": gamma})
+    x = prob.pack({"P": P_PUB})
+    cert = certify_point(prob, x)
+    assert cert.verdict == "certified", cert.reason
+    if gamma == 1.0:  # catalogue 4.2: max eig of (9) at the published point = -0.2445
+        nine = -prob.lmis[1].matrix(x)
+        assert largest_eig(nine) == pytest.approx(-0.2445, abs=1e-3)
+
+
+def test_thm3_1_largest_gamma_at_published_gains():
+    """Catalogue 11.8: (9) at the published gains with P free holds up to gamma = 3.72."""
+
+    def feasible(g):
+        return solve("uio_dt.thm3_1", example(EX31), {"gamma": g}).certificate.verdict == "certified"
+
+    lo, hi = bisect(feasible, 1.0, 6.0, 0.004)
+    assert lo == pytest.approx(3.72, abs=0.01)
+    r = solve("uio_dt.thm3_1", example(EX31), {"gamma": 3.8})
+    assert r.certificate.verdict == "infeasible-certified"
+
+
+# -- Theorem 3.2: synthesis ------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("backend", ["clarabel", "sdpa"])
+def test_thm3_2_example_feasible_and_N_stable(backend):
+    r = solve("uio_dt.thm3_2", example(EX32), backend=backend)
+    assert r.status in ("feasible", "inaccurate")
+    assert r.certificate.verdict == "certified", r.certificate.reason
+    assert max(abs(np.linalg.eigvals(np.array(r.derived["N"])))) < 1
+    M = np.array(r.derived["M"])
+    assert np.allclose(M @ np.array(r.problem.data["D1"]), 0, atol=1e-9)
+
+
+def test_thm3_2_constants_U_V():
+    prob = compile_theorem("uio_dt.thm3_2", example(EX32))
+    assert np.allclose(prob.data["U"], [[-1, 0], [0, 0], [0, 0], [0, 0]], atol=1e-12)
+    assert np.array_equal(prob.data["V"], np.array([[0.0, 0.0], [0.0, 1.0]]))
+
+
+def test_thm3_2_published_point():
+    """The published (P, Y, K): certificate max eig -0.2445; recomputed gains (catalogue 4.2)."""
+    prob = compile_theorem("uio_dt.thm3_2", example(EX32))
+    x = prob.pack({"P": P_PUB, "Ybar": P_PUB @ Y_PUB, "Kbar": P_PUB @ K_PUB})
+    cert = certify_point(prob, x)
+    assert cert.verdict == "certified", cert.reason
+    assert largest_eig(-prob.lmis[0].matrix(x)) == pytest.approx(-0.2445, abs=1e-3)
+    env = prob.environment(x)
+    assert np.allclose(env["Y"], Y_PUB, atol=1e-9) and np.allclose(env["K"], K_PUB, atol=1e-9)
+    assert np.allclose(env["M"], [[0, 0, 0, 0], [0, 0, 0, 0], [0, -2.5, 1, 0], [0, -8.9, 0, 1]], atol=1e-9)
+    assert np.allclose(env["E"], [[-1, 0], [0, -1], [0, -2.5], [0, -8.9]], atol=1e-9)  # printed -8.8
+    n_ref = [[0, 0, 0, 0], [0, 0, 0, 0], [0.0575, -0.0625, -0.4575, 0.012], [0.0227, -0.0665, -5.4227, 1]]
+    assert np.allclose(env["N"], n_ref, atol=1e-3)
+    assert sorted(abs(np.linalg.eigvals(env["N"])))[-2:] == pytest.approx([0.4114, 0.9539], abs=1e-3)
+    assert np.allclose(env["L"], [[0, 0], [0, 0], [1.4575, -3.4994], [5.4227, -13.4233]], atol=1e-3)
+    assert np.allclose(env["G"], [[0], [0], [-0.6475], [-2.3051]], atol=1e-3)
+
+
+# -- Theorem 4.1: gamma_max -------------------------------------------------------------------------
+
+
+def test_thm4_1_gamma_max_by_bisection():
+    """gamma_max = 51.5 (Table 2) by bisection on Theorem 3.2 feasibility (catalogue 4.3, 11.3).
+
+    The supremum is not attained (lambda_max(P) ~ 1e8 near it): each step solves the
+    feasibility problem with the fixed margin 1e-7 and the point is proven by the certifier in
+    exact arithmetic (its relative margins are ~1e-13, below the default strict threshold).
+    """
+
+    def feasible(g):
+        prob = compile_theorem("uio_dt.thm3_2", example(EX32), {"gamma": g})
+        sol = solve_problem(with_fixed_margin(prob), "clarabel")
+        cert = certify(prob, sol, tol={"strict_rel": 0.0}, exact=True)
+        return cert.verdict == "certified" and cert.exact["proven"]
+
+    lo, hi = bisect(feasible, 48.5, 55.0, 0.05)  # 48.5: the method of [10] in Table 2
+    assert lo == pytest.approx(51.5, abs=0.1)
+    prob = compile_theorem("uio_dt.thm3_2", example(EX32), {"gamma": 55.0})
+    sol = solve_problem(with_fixed_margin(prob), "clarabel")
+    assert sol.status == "infeasible"
+    assert certify(prob, sol).verdict == "infeasible-certified"
+
+
+def test_thm4_1_direct_min_rho_stops_early():
+    """Direct min rho: a valid but early point (Clarabel ~11-12 on the example, not 51.5)."""
+    r = solve("uio_dt.thm4_1", example(EX41), backend="clarabel")
+    assert r.status == "optimal"
+    cert = certify(r.problem, r.solution, tol={"strict_rel": 0.0}, exact=True)
+    assert cert.verdict == "certified" and cert.exact["proven"], cert.reason
+    assert 5.0 < r.derived["gamma_max"] < 51.5
+    assert r.derived["gamma_max"] == pytest.approx(1 / np.sqrt(r.objective), rel=1e-9)
+
+
+def test_thm4_1_gamma_parameter_bounds_rho():
+    prob = compile_theorem("uio_dt.thm4_1", example(EX41), {"gamma": 10.0})
+    row = prob.linear.A.toarray()[-1]
+    rho = prob.variable("rho")
+    assert row[0] == 1.0 and row[1 + rho.offset] == pytest.approx(-100.0)
+
+
+# -- random systems against the LMIs written directly in CVXPY -------------------------------------
+
+
+def _random_plant(seed):
+    rng = np.random.default_rng(seed)
+    n, p = 3, 2
+    A = rng.normal(size=(n, n))
+    A *= 0.9 / max(abs(np.linalg.eigvals(A)))
+    return {
+        "A": A,
+        "B": rng.normal(size=(n, 1)),
+        "C": rng.normal(size=(p, n)),
+        "D": rng.normal(size=(n, 1)),
+        "D1": rng.normal(size=(n, 1)),
+    }
+
+
+def _system(data, **params):
+    return {"lmic": 1, "data": {k: np.asarray(v).tolist() for k, v in data.items()}, "params": params}
+
+
+def _deltas(d, P, Yb, Kb):
+    A, C, D, D1 = d["A"], d["C"], d["D"], d["D1"]
+    CD1 = C @ D1
+    U, V = -D1 @ pinv(CD1), exact_projector(CD1)
+    d13 = A.T @ P + (U @ C @ A).T @ P + (V @ C @ A).T @ Yb.T - C.T @ Kb.T
+    d23 = D.T @ P + (U @ C @ D).T @ P + (V @ C @ D).T @ Yb.T
+    return d13, d23
+
+
+def _cvx_thm3_2(d, gamma):
+    n, p, q = 3, 2, 1
+    P = cp.Variable((n, n), symmetric=True)
+    Yb, Kb = cp.Variable((n, p)), cp.Variable((n, p))
+    d13, d23 = _deltas(d, P, Yb, Kb)
+    M = cp.bmat(
+        [
+            [-P + gamma**2 * np.eye(n), np.zeros((n, q)), d13],
+            [np.zeros((q, n)), -np.eye(q), d23],
+            [d13.T, d23.T, -P],
+        ]
+    )
+    return cvx_max_margin([M])
+
+
+def _cvx_thm3_1(N, M, D, gamma):
+    n, q = N.shape[0], D.shape[1]
+    P = cp.Variable((n, n), symmetric=True)
+    nine = cp.bmat(
+        [
+            [-P + gamma**2 * np.eye(n), np.zeros((n, q)), N.T @ P],
+            [np.zeros((q, n)), -np.eye(q), D.T @ M.T @ P],
+            [P @ N, P @ M @ D, -P],
+        ]
+    )
+    return cvx_max_margin([nine, -P])
+
+
+def _cvx_thm4_1(d):
+    n, p, q = 3, 2, 1
+    P = cp.Variable((n, n), symmetric=True)
+    Yb, Kb, rho = cp.Variable((n, p)), cp.Variable((n, p)), cp.Variable()
+    d13, d23 = _deltas(d, P, Yb, Kb)
+    Z = np.zeros
+    M = cp.bmat(
+        [
+            [-P, Z((n, q)), d13, np.eye(n)],
+            [Z((q, n)), -np.eye(q), d23, Z((q, n))],
+            [d13.T, d23.T, -P, Z((n, n))],
+            [np.eye(n), Z((n, q)), Z((n, n)), -rho * np.eye(n)],
+        ]
+    )
+    return cvx_min(rho, [M], [rho])
+
+
+def _agree(r, t_ref):
+    assert t_ref is not None
+    assert r.solution.margin == pytest.approx(t_ref, rel=1e-4, abs=1e-6)
+    if t_ref > 1e-5:
+        assert r.status in ("feasible", "inaccurate") and r.certificate.verdict == "certified"
+    else:
+        assert t_ref < -1e-5 and r.status == "infeasible"
+
+
+@pytest.mark.parametrize("backend", ["clarabel", "sdpa"])
+@pytest.mark.parametrize("seed,gamma", [(1, 0.05), (2, 0.3), (3, 4.0)])
+def test_thm3_2_random_matches_cvxpy(seed, gamma, backend):
+    d = _random_plant(seed)
+    t_ref = _cvx_thm3_2(d, gamma)
+    _agree(solve("uio_dt.thm3_2", _system(d, gamma=gamma), backend=backend), t_ref)
+
+
+@pytest.mark.parametrize("backend", ["clarabel", "sdpa"])
+@pytest.mark.parametrize("seed,gamma", [(4, 0.1), (5, 2.0)])
+def test_thm3_1_random_matches_cvxpy(seed, gamma, backend):
+    rng = np.random.default_rng(seed)
+    N = rng.normal(size=(3, 3))
+    N *= 0.8 / max(abs(np.linalg.eigvals(N)))
+    M, D = rng.normal(size=(3, 3)), rng.normal(size=(3, 1))
+    t_ref = _cvx_thm3_1(N, M, D, gamma)
+    _agree(solve("uio_dt.thm3_1", _system({"N": N, "M": M, "D": D}, gamma=gamma), backend=backend), t_ref)
+
+
+@pytest.mark.parametrize("seed", [3, 5])
+def test_thm4_1_random_matches_cvxpy(seed):
+    """Instances where min rho is attained (> 0); the two backends and CVXPY agree."""
+    d = _random_plant(seed)
+    status, rho_ref = _cvx_thm4_1(d)
+    assert status == "optimal" and rho_ref > 1.0
+    r = solve("uio_dt.thm4_1", _system(d), backend="clarabel")
+    assert r.status == "optimal" and r.certificate.verdict == "certified", r.certificate.reason
+    assert r.objective == pytest.approx(rho_ref, rel=1e-5)
+    r2 = solve("uio_dt.thm4_1", _system(d), backend="sdpa")
+    assert r2.status in ("optimal", "inaccurate")
+    assert r2.objective == pytest.approx(rho_ref, rel=1e-3)  # SDPA stops at ~1e-4 here
+
+
+# -- bad input -------------------------------------------------------------------------------------
+
+
+def test_bad_input_missing_shape_domain_rank():
+    d = _random_plant(1)
+    missing = {k: v for k, v in d.items() if k != "D1"}
+    with pytest.raises(DataError, match=r"uio_dt\.thm3_2.*missing data 'D1'"):
+        compile_theorem("uio_dt.thm3_2", _system(missing, gamma=1.0))
+    wrong = dict(d, D1=np.ones((2, 1)))
+    with pytest.raises(DataError, match=r"uio_dt\.thm3_2.*data 'D1' has shape 2x1"):
+        compile_theorem("uio_dt.thm3_2", _system(wrong, gamma=1.0))
+    with pytest.raises(DataError, match=r"uio_dt\.thm3_2.*parameter gamma = -1.*outside"):
+        compile_theorem("uio_dt.thm3_2", _system(d, gamma=-1.0))
+    undecoupled = dict(d, C=np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 2.0]]), D1=np.array([[1.0], [0.0], [0.0]]))
+    with pytest.raises(DataError, match=r"uio_dt\.thm3_2.*constant 'U'.*rank\(C D1\)"):
+        compile_theorem("uio_dt.thm3_2", _system(undecoupled, gamma=1.0))
