@@ -158,8 +158,8 @@ def certificate_document(
     path : path, optional
         Where the file will live (the system path is recorded relative to it).
     embed_ir : bool, optional
-        Embed the IR (default: only when it cannot be recompiled from a theorem and a system
-        file).
+        Embed the IR (default: unless ``system`` is given, has a path, and the problem records
+        its theorem; then the audit recompiles it).
     """
     meta = problem.meta or {}
     theorem_id = meta.get("theorem")
@@ -178,7 +178,11 @@ def certificate_document(
                 rel = str(Path(sys_path).resolve())
         digest = system.data_hash() if system is not None else meta.get("data_hash")
         sys_entry = {"path": rel, "name": getattr(system, "name", "") or meta.get("system", ""), "sha256": digest}
-    recompilable = theorem is not None and sys_entry is not None and sys_entry["path"] is not None
+    # recompile only from a System the caller compiled with; an IR file (even one that
+    # records its theorem) is embedded, since that IR is what was solved
+    recompilable = (
+        theorem is not None and system is not None and sys_entry is not None and sys_entry["path"] is not None
+    )
     if embed_ir is None:
         embed_ir = not recompilable
     embedded = None

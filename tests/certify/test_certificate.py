@@ -229,3 +229,17 @@ def test_theorem_not_installed_and_missing_system(theorem_cert):
     sysfile.unlink()
     with pytest.raises(CertificateError, match="not found"):
         audit_certificate(path)
+
+
+def test_compiled_ir_without_its_system_is_embedded(tmp_path):
+    from lmic.compile import compile_theorem
+
+    prob = compile_theorem("thesis.lyapunov", {"lmic": 1, "data": {"A": A3}})
+    x = prob.pack({"P": solve_continuous_lyapunov(np.array(A3).T, -np.eye(3))})
+    sol = Solution("optimal", x=x)
+    path = tmp_path / "ir.json"
+    doc = write_certificate(path, prob, sol, certify(prob, sol))
+    assert doc["theorem"]["id"] == "thesis.lyapunov"
+    assert doc["ir"]["embedded"] is not None
+    r = audit_certificate(path)
+    assert r.ok and "embedded IR" in r.checked
