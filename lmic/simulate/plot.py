@@ -1,0 +1,112 @@
+"""Figures of a simulated run, drawn with matplotlib's Agg canvas (no display, no pyplot state).
+
+Like the papers' figures: one panel per state with the true state (solid) and its estimate
+(dashed), and a last panel with the estimation error norm ``|x - xhat|`` on a log scale.
+
+Examples
+--------
+>>> import numpy as np
+>>> from lmic.simulate.run import Trajectory
+>>> t = np.linspace(0, 1, 11)
+>>> traj = Trajectory(t, np.c_[np.cos(t), np.sin(t)], np.c_[np.cos(t), np.sin(t) * (1 - np.exp(-t))],
+...                   "luenberger", "continuous")
+>>> png = plot_png(traj, title="demo")
+>>> png[:8] == b"\\x89PNG\\r\\n\\x1a\\n"
+True
+"""
+
+from __future__ import annotations
+
+import io
+import math
+
+import numpy as np
+
+from lmic.simulate.run import Trajectory
+
+__all__ = ["figure", "plot_png"]
+
+_TRUE = "#1f4e9c"
+_EST = "#d9480f"
+_ERR = "#2b8a3e"
+
+
+def figure(traj: Trajectory, title: str = "") -> object:
+    """A matplotlib :class:`~matplotlib.figure.Figure` of ``traj`` (Agg canvas attached).
+
+    States fill a grid of two columns; the error norm spans the bottom row.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+
+    n = traj.x.shape[1]
+    cols = 1 if n == 1 else 2
+    rows = math.ceil(n / cols)
+    height = 1.9 * rows + 2.4
+    fig = Figure(figsize=(5.2 * cols, height), dpi=100)
+    FigureCanvasAgg(fig)
+    gs = fig.add_gridspec(rows + 1, cols, height_ratios=[1.0] * rows + [1.25])
+    fig.subplots_adjust(left=0.08, right=0.985, top=1 - 0.75 / height, bottom=0.5 / height, hspace=0.32, wspace=0.2)
+    discrete = traj.time == "discrete"
+    style = {"marker": ".", "markersize": 3} if discrete and traj.t.size <= 200 else {}
+    xlabel = "t = k dt" if discrete else "t (s)"
+    first = None
+    for i in range(n):
+        ax = fig.add_subplot(gs[i // cols, i % cols], sharex=first)
+        first = first or ax
+        ax.plot(traj.t, traj.x[:, i], color=_TRUE, lw=1.4, **style)
+        ax.plot(traj.t, traj.xhat[:, i], color=_EST, lw=1.2, ls="--", **style)
+        ax.set_ylabel(f"$x_{{{i + 1}}}$")
+        ax.grid(alpha=0.3)
+        ax.tick_params(labelbottom=i >= n - cols)
+    ax = fig.add_subplot(gs[rows, :], sharex=first)
+    err = traj.error_norm
+    floor = max(float(err.max()) * 1e-16, 1e-300)
+    ax.semilogy(traj.t, np.maximum(err, floor), color=_ERR, lw=1.4, **style)
+    if traj.samples is not None and traj.samples.size <= 2000:
+        lo = float(np.maximum(err, floor).min())
+        ax.plot(traj.samples, np.full(traj.samples.size, lo), "|", color="0.45", ms=7)
+    ax.set_ylabel(r"$\|x - \hat{x}\|$")
+    ax.set_xlabel(xlabel)
+    ax.grid(alpha=0.3, which="major")
+    handles = [
+        Line2D([], [], color=_TRUE, lw=1.4, label="true state $x_i$"),
+        Line2D([], [], color=_EST, lw=1.2, ls="--", label=r"estimate $\hat{x}_i$"),
+        Line2D([], [], color=_ERR, lw=1.4, label=r"error norm $\|x - \hat{x}\|$"),
+    ]
+    if traj.samples is not None:
+        handles.append(Line2D([], [], color="0.45", ls="none", marker="|", ms=7, label="samples $t_k$"))
+    fig.legend(
+        handles=handles,
+        loc="upper center",
+        ncols=len(handles),
+        fontsize=8.5,
+        frameon=False,
+        bbox_to_anchor=(0.5, 1 - 0.32 / height),
+    )
+    verdict = "decayed" if traj.decayed else "did not decay"
+    head = f"{title}: " if title else ""
+    fig.suptitle(
+        f"{head}{traj.model} observer, {traj.time} time; final error {traj.final_error:.3g} ({verdict})",
+        fontsize=10.5,
+        y=1 - 0.06 / height,
+        va="top",
+    )
+    return fig
+
+
+def plot_png(traj: Trajectory, title: str = "", dpi: int = 100) -> bytes:
+    """The figure of ``traj`` as PNG bytes.
+
+    Parameters
+    ----------
+    traj : Trajectory
+    title : str
+        Prefix of the figure title (e.g. the theorem id).
+    dpi : int
+    """
+    fig = figure(traj, title)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)  # type: ignore[attr-defined]
+    return buf.getvalue()
