@@ -128,7 +128,7 @@ def test_tiny_margin_falls_back_to_the_float_point_itself():
     assert r["bits"] >= 40
 
 
-def test_exact_disproof_at_the_solver_point_rejects():
+def test_exact_disproof_of_a_tolerated_non_strict_violation():
     prob = Problem(
         [Variable("p", "scalar", (1, 1))],
         [LMI("p - 1 >= 0", 1, sp.csc_matrix([[-1.0, 1.0]]), strict=False)],
@@ -137,9 +137,26 @@ def test_exact_disproof_at_the_solver_point_rejects():
     )
     x = np.array([1.0 - 2.0**-52])  # violation 2.2e-16: within every float tolerance
     cert = certify(prob, Solution("optimal", x=x), exact=True)
+    assert cert.verdict == "certified" and cert.label == "certified"  # within tolerance only
     assert cert.exact["disproved"] and not cert.exact["proven"]
+    assert cert.exact["reason"].startswith("LMI 'p - 1 >= 0' is not positive semidefinite at the solver's point")
+
+
+def test_exact_disproof_of_a_strict_lmi_rejects(monkeypatch):
+    # make the float test blind (a huge tolerance) to show the exact disproof decides
+    prob = Problem(
+        [Variable("p", "scalar", (1, 1))],
+        [LMI("p - 1 > 0", 1, sp.csc_matrix([[-1.0, 1.0]]), strict=True)],
+        LinearConstraints.empty(1),
+        Objective("feasibility", np.zeros(2)),
+    )
+    import lmic.certify.check as check
+
+    monkeypatch.setattr(check, "_U", -1.0)  # pretend float64 had no round-off at all
+    x = np.array([1.0 - 2.0**-52])
+    cert = certify(prob, Solution("optimal", x=x), exact=True, tol={"strict_rel": -1.0})
     assert cert.verdict == "rejected"
-    assert cert.reason.startswith("exact: LMI 'p - 1 >= 0' is not positive semidefinite at the solver's point")
+    assert cert.reason.startswith("exact: LMI 'p - 1 > 0' is not positive definite at the solver's point")
 
 
 def test_equality_rows_are_met_exactly_by_projection():
