@@ -48,6 +48,7 @@ def _full_order_gain(t, A, C, P, R, L):
     if L is None:
         L = t.derive("L", P.inv() * R.T, doc="observer gain L = P^-1 R^T")
     t.check("A - L C Schur stable", schur_stable(A - L * C))
+    t.observer("luenberger", "discrete", A=A, C=C, L=L)
 
 
 @theorem(
@@ -140,6 +141,7 @@ def reduced_coordinates(H: np.ndarray, C: np.ndarray, where: str = "") -> tuple[
 
 def _check_nm(tid):
     def rule(v):
+        reduced_coordinates(v["H"], v["C"], f"theorem {tid}: ")  # [H; C] nonsingular
         T = np.vstack([v["H"], v["C"]])
         NM = np.hstack([v["N"], v["M"]])
         err = float(np.max(np.abs(T @ NM - np.eye(T.shape[0]))))
