@@ -111,6 +111,7 @@ def nonuniform_thm1(t):
     if L is None:
         L = t.derive("L", P.inv() * Lt, doc="observer gain L = P^-1 L~")
     t.check("A + L C Hurwitz", hurwitz(A + L * C))
+    t.observer("sampled", "sampled", A=A, C=C, L=L)
 
 
 THEOREMS = [nonuniform_thm1]

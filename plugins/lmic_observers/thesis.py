@@ -169,6 +169,7 @@ def thesis_cor3_19(t):
         block([[A.T * P + P * A - C.T * Lbar.T - Lbar * C + G.T * G, P], [STAR, -1]]) < 0,
     )
     L = t.derive("L", P.inv() * Lbar, doc="observer gain L = P^-1 Lbar")
+    t.observer("luenberger", "continuous", A=A, B="B", C=C, L=L)
     Acl = A - L * C
     t.check(
         "(3.19) before the Schur complement",
