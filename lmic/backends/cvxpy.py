@@ -16,6 +16,7 @@ Examples
 from __future__ import annotations
 
 import time
+import warnings
 from typing import Any, ClassVar
 
 import numpy as np
@@ -84,9 +85,11 @@ class CVXPYBackend(Backend):
         "optimal": "optimal",
         "optimal_inaccurate": "inaccurate",
         "infeasible": "infeasible",
-        "infeasible_inaccurate": "inaccurate",
+        # an inexact infeasibility claim stays a claim of infeasibility: the certifier checks
+        # the Farkas ray (verdict infeasible-certified or not)
+        "infeasible_inaccurate": "infeasible",
         "unbounded": "unbounded",
-        "unbounded_inaccurate": "inaccurate",
+        "unbounded_inaccurate": "unbounded",
         "infeasible_or_unbounded": "error",
         "user_limit": "error",
         "solver_error": "error",
@@ -152,7 +155,8 @@ class CVXPYBackend(Backend):
         build_s = time.perf_counter() - t_build
         t0 = time.perf_counter()
         try:
-            with quiet_native(not options.verbose):
+            with quiet_native(not options.verbose), warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)  # "may be inaccurate": a status
                 prob.solve(solver=self.solver, verbose=options.verbose, **kwargs)
             native = str(prob.status)
             message = ""

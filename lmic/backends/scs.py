@@ -76,9 +76,10 @@ class SCSBackend(Backend):
         "solved": "optimal",
         "solved_inaccurate": "inaccurate",
         "infeasible": "infeasible",
-        "infeasible_inaccurate": "inaccurate",
+        # inexact infeasibility claims stay claims: the certifier checks the Farkas ray
+        "infeasible_inaccurate": "infeasible",
         "unbounded": "unbounded",
-        "unbounded_inaccurate": "inaccurate",
+        "unbounded_inaccurate": "unbounded",
         "indeterminate": "error",
         "failed": "error",
         "sigint": "error",
