@@ -657,7 +657,7 @@ def certify(
     if exact:
         from lmic.certify.exact import prove
 
-        cert.exact = prove(problem, x, inaccurate=inaccurate, tol=tolr)
+        cert.exact = prove(problem, x, inaccurate=inaccurate, tol=tolr, min_eigs=[r["min_eig"] for r in cert.lmis])
         # an exact disproof of a strict LMI rejects; a non-strict LMI the float test accepted
         # within tolerance stays accepted (the exact block says it is not proven)
         if any(e["disproved"] and e["strict"] for e in cert.exact.get("lmis", [])):

@@ -157,8 +157,15 @@ def round_point(x: np.ndarray, K: int) -> ExactPoint:
     [2, 1]
     """
     K = int(max(K, 0))
+    x = np.asarray(x, dtype=float).ravel()
+    scaled = np.ldexp(x, K)
+    if x.size == 0 or (np.all(np.isfinite(scaled)) and float(np.max(np.abs(scaled))) < 2.0**52):
+        # fast path: x 2^K is exact in float64, its rounding to an integer too (half away
+        # from zero, like the exact path below)
+        q = np.where(scaled >= 0, np.floor(scaled + 0.5), -np.floor(-scaled + 0.5))
+        return ExactPoint(q.astype(np.int64).tolist(), 1 << K, K)
     num = []
-    for v in np.asarray(x, dtype=float):
+    for v in x:
         m, e = exact_float(float(v))
         s = e + K
         if s >= 0:
@@ -213,10 +220,16 @@ def exact_matrix(lmi: LMI, point: ExactPoint) -> list[list[int]]:
     return M
 
 
+def _max_bits(M: list[list[int]]) -> int:
+    return max((max(map(abs, row), default=0) for row in M), default=0).bit_length()
+
+
 def _to_float(M: list[list[int]]) -> np.ndarray:
-    big = max((abs(v).bit_length() for row in M for v in row), default=0)
-    s = max(0, big - 900)
-    return np.array([[float(v >> s) if s else float(v) for v in row] for row in M])
+    try:
+        return np.array(M, dtype=float)
+    except OverflowError:
+        s = _max_bits(M) - 900
+        return np.array([[float(v >> s) for v in row] for row in M])
 
 
 def _dominant(N) -> tuple[bool, int]:
@@ -245,17 +258,19 @@ def _congruence(M: list[list[int]]) -> tuple[bool, str]:
         if np.any(~np.isfinite(Mf)) or np.any(diag <= 0):
             return False, "a diagonal entry is not positive"
         s = 1.0 / np.sqrt(diag)
-        try:
-            L = np.linalg.cholesky(Mf * s[:, None] * s[None, :])
-        except np.linalg.LinAlgError:
+        # LAPACK directly: small matrices, no gufunc or threading overhead
+        L, info = sla.lapack.dpotrf(Mf * s[:, None] * s[None, :], lower=1, clean=1)
+        if info != 0:
             return False, "float Cholesky failed (not numerically positive definite)"
-        W = sla.solve_triangular(L, np.eye(d), lower=True) * s[None, :]
-        W = np.tril(W)
+        Linv, info = sla.lapack.dtrtri(L, lower=1)
+        if info != 0:
+            return False, "float Cholesky factor is singular"
+        W = np.tril(Linv) * s[None, :]
         # scale every row to ~2^50 and round to integers (row scaling keeps the congruence)
         rmax = np.max(np.abs(W), axis=1)
         expo = 50 - np.ceil(np.log2(rmax)).astype(int)
         Wi = np.rint(np.ldexp(W, expo[:, None]))
-        Wint = [[int(v) for v in row] for row in Wi]
+        Wint = Wi.astype(np.int64).tolist()
         for i in range(d):
             if Wint[i][i] == 0:  # keep W non-singular
                 Wint[i][i] = 1
@@ -366,19 +381,22 @@ def _prove(M: list[list[int]], strict: bool) -> dict[str, Any]:
     }
 
 
-def _needed_bits(problem: Problem, x: np.ndarray) -> int | None:
+def _needed_bits(problem: Problem, x: np.ndarray, min_eigs: list[float] | None = None) -> int | None:
     """Bits ``K`` so that rounding to ``2^-K`` keeps every positive float margin (None: use x)."""
     xx = np.concatenate([[1.0], x])
     need = 0
-    for lmi in problem.lmis:
+    for i, lmi in enumerate(problem.lmis):
         C = lmi.coeffs.tocsr()
-        F = tril_unvec(C @ xx, lmi.dim)
-        lmin = float(np.linalg.eigvalsh(F)[0]) if lmi.dim else 1.0
+        if min_eigs is not None:
+            lmin = float(min_eigs[i])
+        else:
+            F = tril_unvec(C @ xx, lmi.dim)
+            lmin = float(np.linalg.eigvalsh(F)[0]) if lmi.dim else 1.0
         G = tril_unvec(abs(C[:, 1:]) @ np.ones(problem.n), lmi.dim)
         g = float(np.max(np.sum(np.abs(G), axis=1))) if lmi.dim else 0.0
         if g == 0:
             continue
-        if lmin <= 0:
+        if not lmin > 0 or not math.isfinite(lmin):
             return None
         need = max(need, math.ceil(math.log2(16.0 * g / lmin)))
     lin = problem.linear
@@ -403,6 +421,7 @@ def _project_eq(problem: Problem, point: ExactPoint) -> tuple[ExactPoint, str]:
         return point, ""
     flint = _flint()
     A = lin.A.tocsr()[eq].toarray()
+
     def q(f: Fraction):
         return flint.fmpq(f.numerator, f.denominator)
 
@@ -434,10 +453,7 @@ def _linear_exact(problem: Problem, point: ExactPoint) -> list[dict[str, Any]]:
     for i in range(len(lin)):
         lo, hi = A.indptr[i], A.indptr[i + 1]
         r = sum(
-            (
-                Fraction(float(v)) * xs[j]
-                for v, j in zip(A.data[lo:hi], A.indices[lo:hi], strict=True)
-            ),
+            (Fraction(float(v)) * xs[j] for v, j in zip(A.data[lo:hi], A.indices[lo:hi], strict=True)),
             Fraction(0),
         )
         kind, strict = lin.kinds[i], bool(lin.strict[i])
@@ -461,6 +477,7 @@ def prove(
     inaccurate: bool = False,
     tol: Any = None,
     bits: int | None = None,
+    min_eigs: list[float] | None = None,
 ) -> dict[str, Any]:
     """Prove every LMI and linear row of ``problem`` at a rational rounding of ``x``.
 
@@ -476,6 +493,8 @@ def prove(
     bits : int, optional
         Force the denominator ``2^bits`` (default: chosen from the float margins, then the
         bits of ``x`` itself if the first attempt does not prove everything).
+    min_eigs : list of float, optional
+        The float ``lambda_min`` of every LMI at ``x``, when already known (saves work).
 
     Returns
     -------
@@ -502,7 +521,7 @@ def prove(
     if bits is not None:
         attempts = [int(bits)]
     else:
-        K = _needed_bits(problem, x)
+        K = _needed_bits(problem, x, min_eigs)
         attempts = [K_full] if K is None or K >= K_full else [K, K_full]
     result: dict[str, Any] = {}
     for K in attempts:
@@ -520,7 +539,7 @@ def _attempt(problem: Problem, x: np.ndarray, K: int, K_full: int) -> dict[str, 
     lmis = []
     for lmi in problem.lmis:
         M = exact_matrix(lmi, point)
-        bitsz = max((abs(v).bit_length() for row in M for v in row), default=0)
+        bitsz = _max_bits(M)
         r = prove_pd(M) if lmi.strict else prove_psd(M)
         lmis.append(
             {
@@ -548,9 +567,7 @@ def _attempt(problem: Problem, x: np.ndarray, K: int, K_full: int) -> dict[str, 
                 reason = f"LMI '{bad['name']}' not proven ({bad['detail']})"
         else:
             row = next(e for e in linear if not e["proven"])
-            reason = (
-                f"row '{row['name']}' not proven at the rational point (value {row['value']:.3g})"
-            )
+            reason = f"row '{row['name']}' not proven at the rational point (value {row['value']:.3g})"
         if proj.startswith("the equality rows are rank"):
             reason += "; " + proj
     return {
