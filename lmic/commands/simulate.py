@@ -85,7 +85,9 @@ def run(args: argparse.Namespace) -> int:
             "no certified gains, nothing simulated\n"
         )
         if args.json:
-            print_json({"theorem": args.theorem, "status": result.status, "verdict": result.verdict, "simulation": None})
+            print_json(
+                {"theorem": args.theorem, "status": result.status, "verdict": result.verdict, "simulation": None}
+            )
         return result.exit_code()
     observer, traj = simulate(result.problem, result.solution.x, sysobj)
     png = plot_png(traj, title=args.theorem) if args.output else None
