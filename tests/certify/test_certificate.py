@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import lyapunov
+from certify_helpers import lyapunov
 from scipy.linalg import solve_continuous_lyapunov
 
 from lmic.certify import certify

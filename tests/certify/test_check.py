@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from conftest import lmi_from, lyapunov, observer
+from certify_helpers import lmi_from, lyapunov, observer
 
 from lmic.certify import Certificate, Tolerances, certify
 from lmic.errors import LmicError

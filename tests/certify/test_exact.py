@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from conftest import lmi_from
+from certify_helpers import lmi_from
 
 from lmic.certify import certify
 from lmic.certify.exact import (

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from conftest import lmi_from, lyapunov
+from certify_helpers import lmi_from, lyapunov
 
 from lmic.certify import certify
 from lmic.certify.farkas import verify_farkas

@@ -1,0 +1,76 @@
+"""Small hand-built IR problems for the certifier tests (no compiler, no backend needed).
+
+A uniquely named module (not ``conftest``) so that test modules can import it unambiguously.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from lmic.ir.problem import LMI, Check, LinearConstraints, NamedExpr, Objective, Problem, Variable
+from lmic.ir.svec import tril_size, tril_vec
+
+
+def lmi_from(name: str, mats: list[np.ndarray], strict: bool = True, relation: str = ">") -> LMI:
+    """LMI ``mats[0] + sum_k x_k mats[1 + k]`` (dense symmetric matrices)."""
+    d = mats[0].shape[0]
+    coeffs = sp.csc_matrix(np.column_stack([tril_vec(M) for M in mats]))
+    assert coeffs.shape == (tril_size(d), len(mats))
+    return LMI(name, d, coeffs, strict=strict, relation=relation)
+
+
+def lyapunov(A: np.ndarray, strict: bool = True, checks: bool = True) -> Problem:
+    """``P > 0`` and ``A^T P + P A < 0`` (homogeneous); derived ``Pinv``; check ``A`` Hurwitz."""
+    n = A.shape[0]
+    P = Variable("P", "symmetric", (n, n))
+    B = P.basis().toarray()
+    basis = [B[:, k].reshape(n, n, order="F") for k in range(P.size)]
+    zero = np.zeros((n, n))
+    lmi_p = lmi_from("P > 0", [zero] + basis, strict)
+    lmi_a = lmi_from("A'P + PA < 0", [zero] + [-(A.T @ E + E @ A) for E in basis], strict, "<")
+    return Problem(
+        [P],
+        [lmi_p, lmi_a],
+        LinearConstraints.empty(P.size),
+        Objective("feasibility", np.zeros(1 + P.size)),
+        data={"A": A.tolist()},
+        derived=[NamedExpr("Pinv", {"op": "inv", "args": [{"name": "P"}]})],
+        checks=[Check("A Hurwitz", "hurwitz", {"name": "A"})] if checks else [],
+    )
+
+
+def observer(A: np.ndarray, C: np.ndarray) -> Problem:
+    """A discrete-time observer LMI in (P, G): [[P, A^T P - C^T G^T], [*, P]] > 0 (homogeneous).
+
+    Derived ``L = P^-1 G``; check ``A - L C`` Schur stable.
+    """
+    n, p = A.shape[0], C.shape[0]
+    P = Variable("P", "symmetric", (n, n), offset=0)
+    G = Variable("G", "full", (n, p), offset=P.size)
+    N = P.size + G.size
+    mats = [np.zeros((2 * n, 2 * n))]
+    BP = P.basis().toarray()
+    for k in range(P.size):
+        E = BP[:, k].reshape(n, n, order="F")
+        mats.append(np.block([[E, A.T @ E], [E @ A, E]]))
+    BG = G.basis().toarray()
+    for k in range(G.size):
+        E = BG[:, k].reshape(n, p, order="F")
+        X = -C.T @ E.T
+        mats.append(np.block([[np.zeros((n, n)), X], [X.T, np.zeros((n, n))]]))
+    lmi = lmi_from("observer", mats, True)
+    L = {"op": "mul", "args": [{"op": "inv", "args": [{"name": "P"}]}, {"name": "G"}]}
+    closed = {
+        "op": "add",
+        "args": [{"name": "A"}, {"op": "neg", "args": [{"op": "mul", "args": [{"name": "L"}, {"name": "C"}]}]}],
+    }
+    return Problem(
+        [P, G],
+        [lmi],
+        LinearConstraints.empty(N),
+        Objective("feasibility", np.zeros(1 + N)),
+        data={"A": A.tolist(), "C": C.tolist()},
+        derived=[NamedExpr("L", L)],
+        checks=[Check("A - L C Schur stable", "schur_stable", closed)],
+    )
