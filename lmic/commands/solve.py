@@ -4,6 +4,8 @@ Forms::
 
     lmic solve THEOREM SYSTEM [-p k=v]... [--backend B] [--json] [-o CERT.json]
     lmic solve FILE.json|FILE.dat-s [--backend B] [--json] [-o CERT.json]
+    lmic solve THEOREM SYSTEM --maximize PARAM [--lo a --hi b --xtol t --rtol r]   (lmic.sweep)
+    lmic solve THEOREM SYSTEM --sweep PARAM=a:b:n | PARAM=log:a:b:n            (lmic.sweep)
 
 Exit codes (DESIGN section 7): 0 certified, 3 infeasible, 1 rejected / inaccurate / failed
 solve, 2 bad usage or input (unknown backend, missing solver package, a problem the backend
@@ -61,6 +63,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", default=None, help="write the certificate file here")
     p.add_argument("--exact", action="store_true", help="also prove the LMIs exactly")
     add_solver_options(p)
+    # -- sup and sweep: options and logic live in lmic.sweep (owner: sweep/published) ------------
+    from lmic.sweep import add_cli_options
+
+    add_cli_options(p)
+    # -- end sup and sweep ------------------------------------------------------------------------
     p.set_defaults(func=run)
 
 
@@ -81,6 +88,12 @@ def run(args: argparse.Namespace) -> int:
     from lmic.api import solve
     from lmic.commands._common import parse_params, print_json
 
+    # -- sup and sweep (lmic.sweep) ---------------------------------------------------------------
+    if getattr(args, "maximize", None) or getattr(args, "sweep", None):
+        from lmic.sweep import run_cli
+
+        return run_cli(args)
+    # -- end sup and sweep ------------------------------------------------------------------------
     params = parse_params(args.param)
     result = solve(
         args.target,

@@ -1,0 +1,1133 @@
+"""Suprema and grids over one scalar parameter: ``lmic solve ... --maximize P`` and ``--sweep P=a:b:n``.
+
+Both re-bind the theorem's cached plan (:func:`lmic.compile.plan_for`, :func:`lmic.compile.bind`)
+for every value of the parameter: the template is analysed once, each point costs one bind
+(pure numerics), one solve and one certification.
+
+How a point is decided (:func:`decide`)
+---------------------------------------
+A value counts as **feasible** only when the certifier certifies a point there: every LMI, linear
+row and theorem check holds at the returned ``x`` (:func:`lmic.certify.certify`). When the float
+certificate fails only because the margins are below the floating-point error bound (points near a
+supremum that is not attained, where ``P`` grows like ``1e8``), an exact rational proof
+(:mod:`lmic.certify.exact`) may still prove every LMI at the rounded point: that also counts
+("certified (exact)"). A value counts as **infeasible** only when the solver reports infeasibility
+(with or without a verified Farkas certificate; which one is recorded) or when the maximal margin
+``t*`` of the strict problem is ``<= 0``. Everything else is **undecided** and reported as such.
+
+For the supremum the parameter only has to be feasible, so the theorem's objective is dropped and
+the strict constraints get a fixed margin (``SolveOptions.margin``); the solver is given each LMI
+after a diagonal congruence ``D F(x) D`` with ``D = diag(F(x_ref))^-1/2`` taken at the last
+certified point ``x_ref``. A congruence does not change which ``x`` are feasible, and the
+certificate is always computed on the original LMIs; the scaling only equilibrates LMIs whose
+blocks differ by ``1e12`` near the supremum (``-rho I`` against ``P``), which is what lets the
+solver get within ``1e-4`` of ``gamma_max = 51.5`` on ``uio_dt.thm4_1``. If a point is undecided
+the same problem is tried unscaled, then as the max-margin problem.
+
+Bisection (:func:`maximize`) assumes that the feasible values form an interval that contains the
+lower end of the bracket (true for Lipschitz constants, delay bounds and similar parameters). Its
+report is honest about both ends: ``lower`` is certified; ``upper`` is the smallest value tried
+that was not certified, with whether it was proven infeasible or merely not certified.
+
+Examples
+--------
+>>> parse_grid("alpha=log:1e-3:1:4")
+('alpha', [0.001, 0.01, 0.1, 1.0])
+>>> r = maximize("thesis.thm3_2_2", {"data": {"A": [[-1.0]], "B": [[0.0]], "C": [[1.0]]}},
+...              "gamma", rtol=1e-3)                                  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from lmic.errors import DataError, LmicError
+from lmic.ir.problem import Objective, Problem
+from lmic.ir.svec import tril_rows_cols
+from lmic.solution import Solution
+
+__all__ = [
+    "PointResult",
+    "SupResult",
+    "SweepResult",
+    "decide",
+    "precondition",
+    "maximize",
+    "sweep",
+    "parse_grid",
+    "add_cli_options",
+    "run_cli",
+]
+
+#: outcomes of one point
+OUTCOMES = ("feasible", "infeasible", "undecided")
+
+Progress = Callable[[dict[str, Any]], None]
+
+
+@dataclass
+class PointResult:
+    """One value of the parameter and what was decided there.
+
+    Attributes
+    ----------
+    value : float
+        The parameter value.
+    outcome : {"feasible", "infeasible", "undecided"}
+    proof : str
+        How: ``certified``, ``certified (exact)``, ``infeasible-certified`` (Farkas certificate
+        verified), ``infeasible (solver)`` (no verified certificate), ``t* <= 0``, or the reason
+        nothing was decided.
+    status, verdict : str
+        The status and verdict of the attempt that decided (or of the last attempt).
+    objective : float or None
+        The theorem's objective at the point (grids keep the objective; bisection drops it).
+    rel_margin : float or None
+        Smallest relative LMI margin the certifier found (``lambda_min / term scale``).
+    attempts : list of str
+        One line per solve tried (``scaled fixed-margin: optimal, certified`` ...).
+    bind_s, solve_s, certify_s : float
+    derived : dict
+        The derived quantities at a feasible point (scalars only, for the report).
+    """
+
+    value: float
+    outcome: str
+    proof: str
+    status: str = ""
+    verdict: str = ""
+    objective: float | None = None
+    rel_margin: float | None = None
+    attempts: list[str] = field(default_factory=list)
+    bind_s: float = 0.0
+    solve_s: float = 0.0
+    certify_s: float = 0.0
+    derived: dict[str, float] = field(default_factory=dict)
+    x: np.ndarray | None = field(default=None, repr=False)
+    farkas_radius: float | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able form (without the point ``x``)."""
+        return {
+            "value": self.value,
+            "outcome": self.outcome,
+            "proof": self.proof,
+            "status": self.status,
+            "verdict": self.verdict,
+            "objective": self.objective,
+            "rel_margin": self.rel_margin,
+            "derived": self.derived,
+            "farkas_radius": self.farkas_radius,
+            "attempts": self.attempts,
+            "bind_s": self.bind_s,
+            "solve_s": self.solve_s,
+            "certify_s": self.certify_s,
+        }
+
+
+@dataclass
+class SupResult:
+    """The supremum of a parameter, as far as certificates go.
+
+    Attributes
+    ----------
+    lower : float or None
+        Largest value with a certified point (``None``: none found).
+    upper : float or None
+        Smallest value tried above ``lower`` that was not certified (``None``: none found, the
+        parameter was feasible up to the end of its domain or of the search).
+    upper_kind : str
+        ``infeasible-certified``, ``infeasible (solver)``, ``t* <= 0``, ``undecided`` or ``none``.
+    upper_proven : float or None
+        Smallest value with a verified infeasibility certificate (may be above ``upper``).
+    converged : bool
+        ``upper - lower <= max(xtol, rtol * |upper|)``.
+    """
+
+    theorem: str
+    param: str
+    lower: float | None
+    upper: float | None
+    upper_kind: str
+    upper_proven: float | None
+    converged: bool
+    xtol: float
+    rtol: float
+    iterations: int
+    points: list[PointResult]
+    backend: str
+    plan_s: float
+    total_s: float
+    message: str = ""
+    domain: tuple[float, float] = (-math.inf, math.inf)
+
+    @property
+    def width(self) -> float | None:
+        """``upper - lower`` (``None`` if either is missing)."""
+        if self.lower is None or self.upper is None:
+            return None
+        return self.upper - self.lower
+
+    @property
+    def estimate(self) -> float | None:
+        """Midpoint of ``[lower, upper]`` (or ``lower`` alone)."""
+        if self.lower is None:
+            return None
+        return self.lower if self.upper is None else 0.5 * (self.lower + self.upper)
+
+    def exit_code(self) -> int:
+        """0 a certified lower bound, 3 every value tried proven infeasible, 1 otherwise."""
+        if self.lower is not None:
+            return 0
+        if self.points and all(p.outcome == "infeasible" for p in self.points):
+            return 3
+        return 1
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``--json`` object."""
+        from lmic import __version__
+
+        binds = [p.bind_s for p in self.points]
+        return {
+            "lmic": __version__,
+            "mode": "maximize",
+            "theorem": self.theorem,
+            "param": self.param,
+            "backend": self.backend,
+            "lower": self.lower,
+            "upper": self.upper,
+            "upper_kind": self.upper_kind,
+            "upper_proven": self.upper_proven,
+            "estimate": self.estimate,
+            "width": self.width,
+            "converged": self.converged,
+            "tolerance": {"xtol": self.xtol, "rtol": self.rtol},
+            "domain": list(self.domain),
+            "iterations": self.iterations,
+            "evaluations": len(self.points),
+            "message": self.message,
+            "points": [p.to_dict() for p in self.points],
+            "timings": _timings(self.plan_s, binds, self.points, self.total_s),
+            "exit_code": self.exit_code(),
+        }
+
+
+@dataclass
+class SweepResult:
+    """Every grid point, and the best certified one.
+
+    ``best`` is the certified point with the best objective (``min``/``max`` theorems) or, for a
+    feasibility theorem, the largest relative margin.
+    """
+
+    theorem: str
+    param: str
+    sense: str
+    points: list[PointResult]
+    best: PointResult | None
+    backend: str
+    plan_s: float
+    total_s: float
+
+    def exit_code(self) -> int:
+        """0 some point certified, 3 every point proven infeasible, 1 otherwise."""
+        if self.best is not None:
+            return 0
+        if self.points and all(p.outcome == "infeasible" for p in self.points):
+            return 3
+        return 1
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``--json`` object."""
+        from lmic import __version__
+
+        return {
+            "lmic": __version__,
+            "mode": "sweep",
+            "theorem": self.theorem,
+            "param": self.param,
+            "backend": self.backend,
+            "sense": self.sense,
+            "best": None if self.best is None else self.best.to_dict(),
+            "points": [p.to_dict() for p in self.points],
+            "timings": _timings(self.plan_s, [p.bind_s for p in self.points], self.points, self.total_s),
+            "exit_code": self.exit_code(),
+        }
+
+
+def _kind(pt: PointResult) -> str:
+    """What a non-certified point is: ``infeasible-certified``, ``infeasible (local)``,
+    ``infeasible (solver)``, ``t* <= 0`` or ``undecided``."""
+    if pt.outcome != "infeasible":
+        return "undecided" if pt.outcome == "undecided" else "feasible"
+    for prefix, kind in (
+        ("infeasible-certified", "infeasible-certified"),
+        ("infeasible (local)", "infeasible (local)"),
+        ("infeasible (solver)", "infeasible (solver)"),
+        ("t* =", "t* <= 0"),
+    ):
+        if pt.proof.startswith(prefix):
+            return kind
+    return "infeasible (solver)"
+
+
+def _timings(plan_s: float, binds: list[float], points: list[PointResult], total_s: float) -> dict[str, float]:
+    n = max(len(binds), 1)
+    return {
+        "plan_s": plan_s,
+        "bind_s_mean": sum(binds) / n,
+        "bind_s_max": max(binds, default=0.0),
+        "solve_s": sum(p.solve_s for p in points),
+        "certify_s": sum(p.certify_s for p in points),
+        "total_s": total_s,
+        # what analysing the template again at every point would have cost in addition
+        "saved_by_rebinding_s": plan_s * max(len(points) - 1, 0),
+    }
+
+
+# --------------------------------------------------------------------------------------------
+# one point
+
+
+def _feasibility(problem: Problem) -> Problem:
+    return replace(problem, objective=Objective("feasibility", np.zeros(problem.n + 1)))
+
+
+def _zero_objective(problem: Problem) -> Problem:
+    """Same constraints, objective ``min 0``: strict constraints get the fixed margin."""
+    return replace(problem, objective=Objective("min", np.zeros(problem.n + 1)))
+
+
+def precondition(problem: Problem, x_ref: np.ndarray, floor: float = 1e-12) -> tuple[Problem, list[np.ndarray]]:
+    """Each LMI ``F`` replaced by the congruence ``D F D``, ``D = diag(F(x_ref))^-1/2``.
+
+    A congruence with a positive diagonal ``D`` keeps exactly the same feasible ``x`` (strict and
+    non-strict); it only equilibrates the blocks for the solver. Diagonal entries below
+    ``floor * max`` are clipped. Returns the scaled problem and the ``D`` of every LMI (a dual
+    ``Z`` of the scaled LMI is ``D Z D`` for the original one).
+
+    Examples
+    --------
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> q, ds = precondition(p, np.array([4.0]))
+    >>> float(q.lmis[0].matrix([4.0])[0, 0]), float(ds[0][0])
+    (1.0, 0.5)
+    """
+    lmis, scales = [], []
+    for lmi in problem.lmis:
+        diag = np.abs(np.diag(lmi.matrix(x_ref)))
+        top = float(diag.max()) if diag.size else 0.0
+        if not np.isfinite(top) or top <= 0:
+            d = np.ones(lmi.dim)
+        else:
+            d = 1.0 / np.sqrt(np.maximum(diag, floor * top))
+        i, j = tril_rows_cols(lmi.dim)
+        lmis.append(replace(lmi, coeffs=sp.diags(d[i] * d[j]) @ lmi.coeffs))
+        scales.append(d)
+    return replace(problem, lmis=lmis), scales
+
+
+def _unscale_duals(sol: Solution, scales: list[np.ndarray]) -> None:
+    """Map the LMI duals / Farkas blocks of a preconditioned solve back: ``Z -> D Z D``."""
+    for holder in (sol.duals, sol.farkas):
+        if not holder or holder.get("lmis") is None:
+            continue
+        mats = list(holder["lmis"])
+        for k, d in enumerate(scales[: len(mats)]):
+            if mats[k] is not None:
+                Z = np.asarray(mats[k], dtype=float)
+                mats[k] = d[:, None] * Z * d[None, :]
+        holder["lmis"] = mats
+
+
+def _scalar_derived(cert: Any) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for item in getattr(cert, "derived", None) or []:
+        v = item.get("value")
+        if isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(float(v)):
+            out[item["name"]] = float(v)
+    return out
+
+
+def _rel_margin(cert: Any) -> float | None:
+    vals = [r.get("rel_margin") for r in getattr(cert, "lmis", None) or []]
+    vals = [float(v) for v in vals if isinstance(v, int | float) and math.isfinite(float(v))]
+    return min(vals) if vals else None
+
+
+def _exact_rescue(problem: Problem, sol: Solution, cert: Any) -> Any | None:
+    """An exact proof at a point the float certificate rejected only for its tiny margins.
+
+    Returns the exact certificate when every LMI and row is proven exactly and every derived
+    quantity and check holds; ``None`` otherwise.
+    """
+    from lmic.certify import certify
+
+    if sol.x is None or cert.verdict != "rejected":
+        return None
+    if any(r.get("min_eig") is None or r["min_eig"] <= 0 for r in cert.lmis):
+        return None  # a negative eigenvalue in float: an exact proof will not help
+    if not all(c.get("ok") for c in cert.checks) or not all(d.get("ok") for d in cert.derived):
+        return None
+    if cert.objective is not None and not cert.objective.get("ok", True):
+        return None
+    try:
+        exact = certify(problem, sol, exact=True)
+    except LmicError:
+        return None
+    return exact if exact.exact and exact.exact.get("proven") else None
+
+
+def _attempt(
+    label: str,
+    target: Problem,
+    judge: Problem,
+    backend: Any,
+    options: Any,
+    scales: list[np.ndarray] | None,
+    exact: bool,
+) -> tuple[str, str, Solution, Any, float, float]:
+    """Solve ``target``, certify on ``judge``; return (outcome, proof, solution, cert, times)."""
+    from lmic.api import solve_problem
+    from lmic.certify import certify
+
+    t0 = time.perf_counter()
+    try:
+        sol = solve_problem(target, backend, options)
+    except LmicError as err:
+        if "cannot take" in str(err):
+            raise
+        sol = Solution("error", message=str(err))
+    if scales is not None:
+        _unscale_duals(sol, scales)
+    if sol.x is not None and judge.objective.sense != "feasibility":
+        sol.objective = judge.objective.value(sol.x)
+    elif judge.objective.sense == "feasibility":
+        sol.objective = None
+    t1 = time.perf_counter()
+    cert = certify(judge, sol)
+    outcome, proof = "undecided", ""
+    if cert.verdict == "certified":
+        outcome, proof = "feasible", "certified"
+    elif exact:
+        rescued = _exact_rescue(judge, sol, cert)
+        if rescued is not None:
+            cert = rescued
+            outcome, proof = "feasible", "certified (exact)"
+    if outcome == "undecided":
+        if sol.status == "infeasible":
+            outcome = "infeasible"
+            proof = "infeasible-certified" if cert.verdict == "infeasible-certified" else "infeasible (solver)"
+            if sol.strategy == "max-margin" and sol.margin is not None and sol.margin > 0:
+                outcome, proof = "undecided", f"max margin t* = {sol.margin:.3g} > 0 but below the solver tolerance"
+        else:
+            proof = cert.reason or sol.message or sol.status
+    return outcome, proof, sol, cert, t1 - t0, time.perf_counter() - t1
+
+
+def decide(
+    problem: Problem,
+    backend: Any = "clarabel",
+    options: Any = None,
+    *,
+    reference: np.ndarray | None = None,
+    keep_objective: bool = False,
+    exact: bool = True,
+    value: float = math.nan,
+    scale: float | None = None,
+) -> PointResult:
+    """Decide one compiled problem: feasible (certified), infeasible, or undecided.
+
+    Attempts, until one decides: the problem preconditioned at ``reference`` (if given), then
+    preconditioned at the point that attempt returned, then as compiled, then (feasibility only)
+    the max-margin problem. A solver's infeasibility without a verified Farkas certificate does not
+    stop the attempts; it is the outcome only if nothing else decides.
+
+    Parameters
+    ----------
+    problem : Problem
+        The IR at this parameter value.
+    backend : str or Backend
+    options : SolveOptions, optional
+    reference : numpy.ndarray, optional
+        A certified point at a nearby value: the LMIs are preconditioned at it
+        (:func:`precondition`).
+    keep_objective : bool
+        Solve the theorem's own problem (grids). ``False`` drops the objective (bisection).
+    exact : bool
+        Allow the exact rescue of points with margins below the float error bound.
+    value : float
+        The parameter value (for the report).
+    scale : float, optional
+        ``||x||_inf`` of the certified points seen so far. A Farkas certificate that only
+        excludes feasible points with ``||x||_inf`` below ``100 * scale`` is reported as
+        ``infeasible (local)`` (a verified float certificate of infeasibility is quantitative:
+        it holds within a radius, see :mod:`lmic.certify.farkas`).
+
+    Returns
+    -------
+    PointResult
+
+    Examples
+    --------
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> r = decide(p)
+    >>> r.outcome, r.proof
+    ('feasible', 'certified')
+    """
+    from lmic.backends.base import SolveOptions
+
+    options = options or SolveOptions()
+    judge = problem if keep_objective else _feasibility(problem)
+    base = problem if keep_objective else _zero_objective(problem)
+    labels = (["scaled", "rescaled"] if reference is not None and problem.lmis else []) + ["plain"]
+    if not keep_objective or problem.objective.sense == "feasibility":
+        labels.append("max-margin")
+    result = PointResult(value=value, outcome="undecided", proof="")
+    fallback: dict[str, Any] | None = None
+    last_x: np.ndarray | None = None
+    for label in labels:
+        scales = None
+        if label == "scaled":
+            target, scales = precondition(base, reference)  # type: ignore[arg-type]
+        elif label == "rescaled":
+            if last_x is None:
+                continue
+            target, scales = precondition(base, last_x)
+        elif label == "plain":
+            target = base
+        else:
+            target = _feasibility(problem)
+        outcome, proof, sol, cert, solve_s, cert_s = _attempt(label, target, judge, backend, options, scales, exact)
+        result.solve_s += solve_s
+        result.certify_s += cert_s
+        if label == "scaled":
+            last_x = sol.x
+        farkas = cert.farkas or {}
+        radius = farkas.get("radius") if farkas.get("verified") else None
+        if label == "max-margin" and sol.status == "infeasible" and sol.margin is not None and sol.margin <= 0:
+            outcome, proof = "infeasible", f"t* = {sol.margin:.3g} <= 0"
+        if outcome == "infeasible" and radius is not None and math.isfinite(radius) and farkas.get("kind") == "closed":
+            proof += f" (Farkas: no feasible x with ||x||_inf < {radius:.3g})"
+            if scale is not None and radius < 100.0 * scale:
+                proof = "infeasible (local): " + proof + f"; certified points reach ||x||_inf = {scale:.3g}"
+        result.attempts.append(f"{label}: {sol.status}, {cert.verdict} -> {outcome}")
+        record = {
+            "outcome": outcome,
+            "proof": proof,
+            "status": sol.status,
+            "verdict": cert.verdict,
+            "rel_margin": _rel_margin(cert),
+            "farkas_radius": radius,
+        }
+        if outcome == "infeasible" and proof.startswith(("infeasible (solver)", "infeasible (local)", "t* =")):
+            fallback = fallback or record  # not a proof: let the next attempt decide
+            continue
+        for key, val in record.items():
+            setattr(result, key, val)
+        if outcome == "feasible":
+            result.x = sol.x
+            result.objective = sol.objective if keep_objective else None
+            result.derived = _scalar_derived(cert)
+        if outcome != "undecided":
+            return result
+    if fallback is not None:
+        for key, val in fallback.items():
+            setattr(result, key, val)
+    return result
+
+
+# --------------------------------------------------------------------------------------------
+# plans and parameters
+
+
+def _setup(theorem: str, system: Any, param: str, params: Mapping[str, Any] | None) -> tuple[Any, Any, dict, Any]:
+    """Load the system, analyse the plan once, find the parameter's declaration."""
+    from lmic.compile import plan_for
+    from lmic.system import load_system
+
+    sysobj = load_system(system)
+    overrides = dict(params or {})
+    if param in overrides:
+        raise DataError(f"-p {param}=...: the swept parameter '{param}' cannot also be fixed")
+    merged = dict(sysobj.params)
+    merged.update(overrides)
+    plan = plan_for(theorem, merged)
+    decls = {p.name: p for p in plan.template.params}
+    if param not in decls:
+        options = {o.name for o in plan.template.options}
+        numeric = ", ".join(sorted(decls)) or "none"
+        what = "a structural option, not a number" if param in options else "not a parameter"
+        raise DataError(f"theorem {plan.id}: '{param}' is {what} (numeric parameters: {numeric})")
+    return sysobj, plan, overrides, decls[param]
+
+
+def _domain(decl: Any) -> tuple[float, float, bool, bool]:
+    """(inf, sup, inf included, sup included) of a parameter's sympy domain."""
+    dom = decl.domain
+    try:
+        lo, hi = float(dom.inf), float(dom.sup)
+        lo_in = not bool(getattr(dom, "left_open", False)) and math.isfinite(lo)
+        hi_in = not bool(getattr(dom, "right_open", False)) and math.isfinite(hi)
+    except (TypeError, AttributeError):
+        return -math.inf, math.inf, False, False
+    return lo, hi, lo_in, hi_in
+
+
+def _in_domain(v: float, dom: tuple[float, float, bool, bool]) -> bool:
+    lo, hi, lo_in, hi_in = dom
+    return (v > lo or (lo_in and v == lo)) and (v < hi or (hi_in and v == hi))
+
+
+class _Evaluator:
+    """Bind, decide and record one value at a time (re-binding the cached plan)."""
+
+    def __init__(
+        self,
+        plan: Any,
+        sysobj: Any,
+        overrides: dict,
+        param: str,
+        backend: Any,
+        options: Any,
+        keep_objective: bool,
+        exact: bool,
+        progress: Progress | None,
+    ) -> None:
+        self.plan, self.sysobj, self.overrides, self.param = plan, sysobj, overrides, param
+        self.backend, self.options = backend, options
+        self.keep_objective, self.exact = keep_objective, exact
+        self.progress = progress
+        self.points: list[PointResult] = []
+        self.reference: np.ndarray | None = None
+        self.scale: float | None = None
+        self.sense = "feasibility"
+
+    def __call__(self, value: float, phase: str, **info: Any) -> PointResult:
+        from lmic.compile import bind
+
+        t0 = time.perf_counter()
+        problem = bind(self.plan, self.sysobj, {**self.overrides, self.param: float(value)})
+        bind_s = time.perf_counter() - t0
+        self.sense = problem.objective.sense
+        res = decide(
+            problem,
+            self.backend,
+            self.options,
+            reference=self.reference,
+            keep_objective=self.keep_objective,
+            exact=self.exact,
+            value=float(value),
+            scale=self.scale,
+        )
+        res.bind_s = bind_s
+        if res.outcome == "feasible" and res.x is not None:
+            self.reference = res.x
+            norm = float(np.max(np.abs(res.x))) if res.x.size else 0.0
+            self.scale = norm if self.scale is None else max(self.scale, norm)
+        self.points.append(res)
+        if self.progress is not None:
+            self.progress({"phase": phase, "value": float(value), "point": res, **info})
+        return res
+
+
+# --------------------------------------------------------------------------------------------
+# supremum by bisection
+
+
+def maximize(
+    theorem: str,
+    system: Any,
+    param: str,
+    *,
+    lo: float | None = None,
+    hi: float | None = None,
+    xtol: float = 1e-6,
+    rtol: float = 1e-5,
+    params: Mapping[str, Any] | None = None,
+    backend: Any = "clarabel",
+    options: Any = None,
+    exact: bool = True,
+    max_evals: int = 100,
+    progress: Progress | None = None,
+) -> SupResult:
+    """Supremum of a scalar parameter by bisection on certified feasibility.
+
+    Parameters
+    ----------
+    theorem : str
+        Theorem id.
+    system : path, dict or System
+    param : str
+        A numeric parameter of the theorem (e.g. ``gamma``).
+    lo, hi : float, optional
+        Bracket. Without them the search starts at the system's (or the default) value, or 1,
+        and expands (doubling) or shrinks (halving) until a certified and a non-certified value
+        enclose the supremum; the parameter's domain bounds the search.
+    xtol, rtol : float
+        Stop when ``upper - lower <= max(xtol, rtol * |upper|)``.
+    params : mapping, optional
+        Other parameter overrides (``-p k=v``).
+    backend : str or Backend
+    options : SolveOptions, optional
+    exact : bool
+        Accept exact rational proofs at points whose float margins are too small.
+    max_evals : int
+        Bound on the number of points.
+    progress : callable, optional
+        Called with ``{"phase", "value", "point", "lower", "upper", "iteration", "total"}``.
+
+    Returns
+    -------
+    SupResult
+
+    Examples
+    --------
+    >>> r = maximize("thesis.thm3_2_2", "examples/thesis.thm3_2_2.ex3_2_2.yaml", "gamma",
+    ...              rtol=1e-4)                                        # doctest: +SKIP
+    >>> round(r.lower, 3), r.upper_kind                                # doctest: +SKIP
+    (1.0, 'infeasible-certified')
+    """
+    t_start = time.perf_counter()
+    if not (xtol > 0 or rtol > 0) or xtol < 0 or rtol < 0:
+        raise LmicError("--xtol and --rtol must be non-negative and not both 0")
+    t0 = time.perf_counter()
+    sysobj, plan, overrides, decl = _setup(theorem, system, param, params)
+    plan_s = time.perf_counter() - t0
+    dom = _domain(decl)
+    for name, v in (("--lo", lo), ("--hi", hi)):
+        if v is not None and (not math.isfinite(v) or not _in_domain(v, dom)):
+            raise DataError(f"theorem {plan.id}: {name} {v:g} is outside the domain {decl.domain} of '{param}'")
+    if lo is not None and hi is not None and not lo < hi:
+        raise DataError(f"--lo {lo:g} must be below --hi {hi:g}")
+
+    state: dict[str, Any] = {"lower": None, "upper": None, "iteration": 0, "total": None}
+
+    def report(event: dict[str, Any]) -> None:
+        if progress is not None:
+            progress({**event, **state})
+
+    ev = _Evaluator(plan, sysobj, overrides, param, backend, options, False, exact, report)
+    lower: float | None = None
+    upper: float | None = None
+    upper_pt: PointResult | None = None
+    message = ""
+
+    def feasible(v: float, phase: str) -> bool:
+        nonlocal lower, upper, upper_pt
+        pt = ev(v, phase)
+        if pt.outcome == "feasible":
+            if lower is None or v > lower:
+                lower = v
+        elif upper is None or v < upper:
+            upper, upper_pt = v, pt
+        state["lower"], state["upper"] = lower, upper
+        return pt.outcome == "feasible"
+
+    dlo, dhi, dlo_in, dhi_in = dom
+
+    def up(v: float, k: int) -> float:
+        step = abs(v) if v != 0 else 1.0
+        cand = v + step * (2.0**k - 1.0) if v > 0 else v + step * 2.0 ** (k - 1)
+        if cand >= dhi:
+            cand = dhi if dhi_in else 0.5 * (v + dhi) if math.isfinite(dhi) else cand
+        return cand
+
+    def down(v: float, k: int) -> float:
+        cand = v / 2.0**k if v > 0 else v - (abs(v) or 1.0) * (2.0**k - 1.0)
+        if v > 0 and k > 40:
+            cand = 0.0
+        if cand <= dlo:
+            cand = dlo if dlo_in else 0.5 * (v + dlo) if math.isfinite(dlo) else cand
+        return cand
+
+    # -- bracket ---------------------------------------------------------------------------
+    if lo is not None:
+        if not feasible(lo, "bracket"):
+            message = f"no certified point at --lo {lo:g}"
+    if hi is not None and (lo is None or lower is not None):
+        if feasible(hi, "bracket"):
+            message = f"--hi {hi:g} is certified: the supremum is at or above the bracket"
+    if lo is None and hi is None:
+        start = sysobj.params.get(param, decl.default)
+        x0 = float(start) if isinstance(start, int | float) and float(start) != 0 else 1.0
+        if not _in_domain(x0, dom):
+            x0 = 0.5 * (dlo + dhi) if math.isfinite(dlo) and math.isfinite(dhi) else (dlo + 1.0)
+        feasible(x0, "bracket")
+    if not message:
+        if lower is not None and upper is None:  # expand upwards
+            k, base = 1, lower
+            while upper is None and len(ev.points) < max_evals:
+                cand = up(base, k)
+                if cand <= lower or (ev.points and cand == ev.points[-1].value):
+                    message = f"'{param}' is certified up to the end of its domain ({lower:g})"
+                    break
+                feasible(cand, "bracket")
+                k += 1
+        elif lower is None and upper is not None:  # shrink downwards
+            k, base = 1, upper
+            while lower is None and len(ev.points) < max_evals:
+                cand = down(base, k)
+                if cand >= upper or (ev.points and cand == ev.points[-1].value):
+                    message = f"no certified value of '{param}' found down to the end of its domain"
+                    break
+                feasible(cand, "bracket")
+                k += 1
+        if lower is None and not message:
+            message = f"no certified value of '{param}' found"
+        elif upper is None and not message:
+            message = f"no upper bound found for '{param}' within {max_evals} points"
+
+    # -- bisection ---------------------------------------------------------------------------
+    def target(a: float, b: float) -> float:
+        return max(xtol, rtol * max(abs(a), abs(b)))
+
+    iterations = 0
+    if lower is not None and upper is not None and upper > lower:
+        width, tgt = upper - lower, target(lower, upper)
+        state["total"] = max(0, math.ceil(math.log2(width / tgt))) if width > tgt else 0
+        while upper - lower > target(lower, upper) and len(ev.points) < max_evals:
+            iterations += 1
+            state["iteration"] = iterations
+            feasible(0.5 * (lower + upper), "bisect")
+    converged = lower is not None and upper is not None and upper - lower <= target(lower, upper)
+    if lower is not None and upper is not None and not converged and not message:
+        message = f"stopped after {len(ev.points)} points (--max-evals) before the tolerance"
+    proven = [p.value for p in ev.points if _kind(p) == "infeasible-certified" and (lower is None or p.value > lower)]
+    upper_kind = "none" if upper_pt is None else _kind(upper_pt)
+    return SupResult(
+        theorem=plan.id,
+        param=param,
+        lower=lower,
+        upper=upper,
+        upper_kind=upper_kind,
+        upper_proven=min(proven) if proven else None,
+        converged=converged,
+        xtol=xtol,
+        rtol=rtol,
+        iterations=iterations,
+        points=ev.points,
+        backend=str(getattr(backend, "label", backend)),
+        plan_s=plan_s,
+        total_s=time.perf_counter() - t_start,
+        message=message,
+        domain=(dlo, dhi),
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# grids
+
+
+def parse_grid(spec: str) -> tuple[str, list[float]]:
+    """``PARAM=a:b:n`` (linear) or ``PARAM=log:a:b:n`` (geometric) -> (name, values).
+
+    Numbers are read with ``float`` (nothing is evaluated); ``n >= 1``; a geometric grid needs
+    ``a`` and ``b`` of the same sign and non-zero.
+
+    >>> parse_grid("eps=0.5:1.5:3")
+    ('eps', [0.5, 1.0, 1.5])
+    >>> parse_grid("eps=0.5")
+    Traceback (most recent call last):
+    ...
+    lmic.errors.DataError: --sweep 'eps=0.5': write PARAM=a:b:n or PARAM=log:a:b:n
+    """
+    bad = DataError(f"--sweep {spec!r}: write PARAM=a:b:n or PARAM=log:a:b:n")
+    if "=" not in spec:
+        raise bad
+    name, rest = (s.strip() for s in spec.split("=", 1))
+    if not name.isidentifier():
+        raise DataError(f"--sweep {spec!r}: '{name}' is not a parameter name")
+    parts = [s.strip() for s in rest.split(":")]
+    scale = "linear"
+    if parts and parts[0].lower() == "log":
+        scale, parts = "log", parts[1:]
+    if len(parts) != 3:
+        raise bad
+    try:
+        a, b = float(parts[0]), float(parts[1])
+        n = int(parts[2])
+    except ValueError:
+        raise bad from None
+    if not (math.isfinite(a) and math.isfinite(b)):
+        raise DataError(f"--sweep {spec!r}: the ends must be finite numbers")
+    if n < 1 or n > 10000:
+        raise DataError(f"--sweep {spec!r}: the number of points must be between 1 and 10000")
+    if n == 1:
+        return name, [a]
+    if scale == "log":
+        if a == 0 or b == 0 or (a > 0) != (b > 0):
+            raise DataError(f"--sweep {spec!r}: a geometric grid needs non-zero ends of the same sign")
+        values = np.geomspace(a, b, n)
+    else:
+        values = np.linspace(a, b, n)
+    return name, [float(np.format_float_positional(v, precision=12, unique=True, trim="-")) for v in values]
+
+
+def sweep(
+    theorem: str,
+    system: Any,
+    param: str,
+    values: Sequence[float],
+    *,
+    params: Mapping[str, Any] | None = None,
+    backend: Any = "clarabel",
+    options: Any = None,
+    exact: bool = True,
+    progress: Progress | None = None,
+) -> SweepResult:
+    """Solve and certify the theorem at every value of ``param`` (a re-bound cached plan).
+
+    Each point is the theorem's own problem (objective kept) decided by :func:`decide`; the best
+    certified point is reported (objective for ``min``/``max``, relative margin for feasibility).
+
+    Examples
+    --------
+    >>> r = sweep("qib.thm2", "examples/qib.thm2.flexible-joint.yaml", "alpha",
+    ...           [1e-3, 1.0])                                         # doctest: +SKIP
+    >>> [p.outcome for p in r.points]                                  # doctest: +SKIP
+    ['infeasible', 'infeasible']
+    """
+    t_start = time.perf_counter()
+    t0 = time.perf_counter()
+    sysobj, plan, overrides, decl = _setup(theorem, system, param, params)
+    plan_s = time.perf_counter() - t0
+    dom = _domain(decl)
+    for v in values:
+        if not _in_domain(float(v), dom):
+            raise DataError(f"theorem {plan.id}: {param} = {v:g} is outside its domain {decl.domain}")
+    total = len(values)
+
+    def report(event: dict[str, Any]) -> None:
+        if progress is not None:
+            progress({**event, "total": total})
+
+    ev = _Evaluator(plan, sysobj, overrides, param, backend, options, True, exact, report)
+    for k, v in enumerate(values):
+        ev(float(v), "sweep", iteration=k + 1)
+    certified = [p for p in ev.points if p.outcome == "feasible"]
+    best: PointResult | None = None
+    sense = ev.sense
+    if certified:
+        if sense in ("min", "max") and all(p.objective is not None for p in certified):
+            pick = min if sense == "min" else max
+            best = pick(certified, key=lambda p: float(p.objective))  # type: ignore[arg-type]
+        else:
+            best = max(certified, key=lambda p: -math.inf if p.rel_margin is None else p.rel_margin)
+    return SweepResult(
+        theorem=plan.id,
+        param=param,
+        sense=sense,
+        points=ev.points,
+        best=best,
+        backend=str(getattr(backend, "label", backend)),
+        plan_s=plan_s,
+        total_s=time.perf_counter() - t_start,
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# command line (options added to ``lmic solve`` by a small hook in lmic/commands/solve.py)
+
+
+def add_cli_options(p: argparse.ArgumentParser) -> None:
+    """``--maximize PARAM [--lo a --hi b --xtol t --rtol r --max-evals k]`` and ``--sweep P=a:b:n``."""
+    g = p.add_argument_group("supremum and sweep (a theorem's scalar parameter)")
+    g.add_argument(
+        "--maximize", metavar="PARAM", default=None, help="supremum of PARAM by bisection on certified feasibility"
+    )
+    g.add_argument("--lo", type=float, default=None, help="lower end of the bracket (certified)")
+    g.add_argument("--hi", type=float, default=None, help="upper end of the bracket (not certified)")
+    g.add_argument("--xtol", type=float, default=1e-6, help="absolute tolerance on PARAM (default 1e-6)")
+    g.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance on PARAM (default 1e-5)")
+    g.add_argument("--max-evals", type=int, default=100, help="at most this many points (default 100)")
+    g.add_argument(
+        "--sweep",
+        metavar="PARAM=a:b:n",
+        default=None,
+        help="grid over PARAM (linear, or log:a:b:n geometric); best certified point",
+    )
+    g.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _fmt(v: Any, digits: int = 7) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.{digits}g}"
+    return str(v)
+
+
+class _Bar:
+    """A rich progress bar on stderr (silent when stderr is not a terminal)."""
+
+    def __init__(self, title: str, enabled: bool) -> None:
+        from rich.console import Console
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+        console = Console(stderr=True)
+        self.progress = Progress(
+            SpinnerColumn(),
+            TextColumn("[bold]{task.description}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TimeElapsedColumn(),
+            TextColumn("{task.fields[info]}"),
+            console=console,
+            transient=False,
+            disable=not (enabled and console.is_terminal),
+        )
+        self.task = self.progress.add_task(title, total=None, info="")
+
+    def __enter__(self) -> _Bar:
+        self.progress.__enter__()
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.progress.__exit__(*exc)
+
+    def __call__(self, ev: dict[str, Any]) -> None:
+        pt: PointResult = ev["point"]
+        mark = {"feasible": "[green]certified", "infeasible": "[red]infeasible"}.get(pt.outcome, "[yellow]undecided")
+        if ev["phase"] == "sweep":
+            info = f"{_fmt(pt.value)}: {mark}[/]"
+            self.progress.update(self.task, total=ev.get("total"), completed=ev.get("iteration", 0), info=info)
+            return
+        lo, hi = ev.get("lower"), ev.get("upper")
+        info = f"[{_fmt(lo)}, {_fmt(hi)}]  last {_fmt(pt.value)}: {mark}[/]"
+        desc = "bracketing" if ev["phase"] == "bracket" else "bisection"
+        self.progress.update(
+            self.task, description=desc, total=ev.get("total"), completed=ev.get("iteration", 0), info=info
+        )
+
+
+def run_cli(args: argparse.Namespace) -> int:
+    """Run ``lmic solve THEOREM SYSTEM --maximize P`` or ``--sweep P=a:b:n``; return the exit code."""
+    from lmic.commands._common import parse_params, print_json
+    from lmic.commands.solve import solve_options
+
+    if args.maximize and args.sweep:
+        raise LmicError("give --maximize or --sweep, not both")
+    if args.system is None:
+        raise LmicError("--maximize and --sweep need THEOREM SYSTEM (a theorem and its system file)")
+    if getattr(args, "output", None):
+        raise LmicError("-o is not available with --maximize / --sweep (use --json for the full record)")
+    if getattr(args, "exact", False):
+        sys.stderr.write("lmic: note: exact proofs are used automatically where float margins are too small\n")
+    params = parse_params(args.param)
+    opts = solve_options(args)
+    show = not args.json and not args.no_progress
+    if args.maximize:
+        with _Bar(f"sup {args.maximize}", show) as bar:
+            res = maximize(
+                args.target,
+                args.system,
+                args.maximize,
+                lo=args.lo,
+                hi=args.hi,
+                xtol=args.xtol,
+                rtol=args.rtol,
+                params=params,
+                backend=args.backend,
+                options=opts,
+                max_evals=args.max_evals,
+                progress=bar,
+            )
+        if args.json:
+            print_json(res.to_dict())
+        else:
+            _print_sup(res)
+        return res.exit_code()
+    name, values = parse_grid(args.sweep)
+    with _Bar(f"sweep {name}", show) as bar:
+        sw = sweep(
+            args.target, args.system, name, values, params=params, backend=args.backend, options=opts, progress=bar
+        )
+    if args.json:
+        print_json(sw.to_dict())
+    else:
+        _print_sweep(sw)
+    return sw.exit_code()
+
+
+def _print_sup(r: SupResult) -> None:
+    from rich.console import Console
+
+    out = Console(highlight=False, soft_wrap=True)
+    out.print(f"theorem    {r.theorem}   sup {r.param} (bisection on certified feasibility, backend {r.backend})")
+    tol = f"xtol {r.xtol:g}, rtol {r.rtol:g}"
+    if r.lower is None:
+        out.print(f"[red]no certified value of {r.param}[/]: {r.message}")
+    else:
+        out.print(f"[bold]sup {r.param} in [{_fmt(r.lower, 10)}, {_fmt(r.upper, 10)}][/]   ({tol})")
+        lower_pt = next((p for p in r.points if p.value == r.lower and p.outcome == "feasible"), None)
+        how = lower_pt.proof if lower_pt else "certified"
+        out.print(f"  lower    {_fmt(r.lower, 10)}  {how}")
+        if r.upper is not None:
+            kind = {"undecided": "not certified (neither certified nor proven infeasible)"}.get(
+                r.upper_kind, r.upper_kind
+            )
+            out.print(f"  upper    {_fmt(r.upper, 10)}  {kind}")
+        if r.upper_proven is not None and r.upper_proven != r.upper:
+            out.print(f"  proven infeasible from {_fmt(r.upper_proven, 10)}")
+    if r.message:
+        out.print(f"  note     {r.message}")
+    binds = [p.bind_s for p in r.points]
+    out.print(
+        f"  {r.iterations} bisection steps, {len(r.points)} points, {r.total_s:.2f} s "
+        f"(analysis once {r.plan_s * 1e3:.0f} ms, re-bind {1e3 * sum(binds) / max(len(binds), 1):.1f} ms a point, "
+        f"solve {sum(p.solve_s for p in r.points):.2f} s, certify {sum(p.certify_s for p in r.points):.2f} s)"
+    )
+
+
+def _print_sweep(r: SweepResult) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    out = Console(highlight=False, soft_wrap=True)
+    table = Table(title=f"{r.theorem}: sweep of {r.param} (backend {r.backend})")
+    for col in (r.param, "outcome", "status", "verdict", "objective", "rel. margin", "how", "bind ms", "solve s"):
+        table.add_column(col)
+    for p in r.points:
+        star = " *" if p is r.best else ""
+        table.add_row(
+            _fmt(p.value) + star,
+            p.outcome,
+            p.status,
+            p.verdict,
+            _fmt(p.objective),
+            _fmt(p.rel_margin, 3),
+            p.proof[:60],
+            f"{1e3 * p.bind_s:.1f}",
+            f"{p.solve_s:.3f}",
+        )
+    out.print(table)
+    if r.best is None:
+        out.print(f"no certified point on the grid of {r.param}")
+    else:
+        what = (
+            "objective " + _fmt(r.best.objective)
+            if r.sense in ("min", "max")
+            else "relative margin " + _fmt(r.best.rel_margin, 3)
+        )
+        out.print(f"best certified point: {r.param} = {_fmt(r.best.value)} ({what})")
+    binds = [p.bind_s for p in r.points]
+    out.print(
+        f"{len(r.points)} points, {r.total_s:.2f} s (analysis once {r.plan_s * 1e3:.0f} ms, "
+        f"re-bind {1e3 * sum(binds) / max(len(binds), 1):.1f} ms a point)"
+    )
