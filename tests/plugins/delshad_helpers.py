@@ -85,7 +85,10 @@ def cvx_min(objective, neg_strict: list, pos_scalars: list | None = None, extra:
     for s in pos_scalars or []:
         cons.append(s >= MARGIN)
     prob = cp.Problem(cp.Minimize(objective), cons)
-    prob.solve(solver=cp.CLARABEL)
+    try:
+        prob.solve(solver=cp.CLARABEL)
+    except cp.error.SolverError:
+        return "error", None
     return prob.status, (None if prob.value is None else float(prob.value))
 
 
