@@ -73,6 +73,7 @@ def _finish_gain(t, P, G, L_data, Ad, Cd):
     """``L = P^-1 G`` (or the given L) and the check ``Ad - L Cd`` Schur stable."""
     L = L_data if L_data is not None else t.derive("L", P.inv() * G, doc="observer gain L = P^-1 G (9)")
     t.check("Ad - L Cd Schur stable", schur_stable(Ad - L * Cd))
+    t.observer("luenberger", "discrete", A=Ad, C=Cd, L=L)
     return L
 
 

@@ -153,6 +153,7 @@ def _filter_lmis(t, d, psi1_rows, eps1, eps2):
 def _gain_and_check(t, d):
     L = d["L"] if d["L"] is not None else t.derive("L", d["P1"].inv() * d["G"], doc="L = P1^-1 G (26)")
     t.check("A - L C Schur stable", schur_stable(d["A"] - L * d["C"]))
+    t.observer("luenberger", "discrete", A=d["A"], C=d["C"], L=L)
 
 
 @theorem(
