@@ -114,6 +114,7 @@ class PointResult:
     derived: dict[str, float] = field(default_factory=dict)
     x: np.ndarray | None = field(default=None, repr=False)
     farkas_radius: float | None = None
+    certificate: Any = field(default=None, repr=False)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form (without the point ``x``)."""
@@ -534,6 +535,7 @@ def decide(
             "verdict": cert.verdict,
             "rel_margin": _rel_margin(cert),
             "farkas_radius": radius,
+            "certificate": cert,
         }
         if outcome == "infeasible" and proof.startswith(("infeasible (solver)", "infeasible (local)", "t* =")):
             fallback = fallback or record  # not a proof: let the next attempt decide
