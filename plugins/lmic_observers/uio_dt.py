@@ -35,6 +35,7 @@ from lmic.template import (
     STAR,
     I,
     block,
+    lambda_max,
     less_than,
     negative_definite,
     norm2,
@@ -103,6 +104,7 @@ def _gains(t, n, p, mats, consts, P, Ybar, Kbar):
     N = t.derive("N", M * A - K * C, doc="N = M A - K C")
     t.derive("L", K * (I(p) + C * E) - M * A * E, doc="L = K (I + C E) - M A E")
     t.derive("G", M * B, doc="G = M B")
+    t.derive("lambda_max_P", lambda_max(P), doc="largest eigenvalue of P (grows without bound near a sup)")
     t.observer("uio", "discrete", A=A, B=B, C=C, D1=D1, N=N, M=M, E=E, L="L", G="G")
     t.check("N Schur stable (error dynamics (7))", schur_stable(N))
     t.check("M D1 = 0 (6)", less_than(norm2(M * D1), 1e-6))

@@ -123,6 +123,9 @@ def test_thm4_1_gamma_max_by_bisection():
 
     lo, hi = bisect(feasible, 48.5, 55.0, 0.05)  # 48.5: the method of [10] in Table 2
     assert lo == pytest.approx(51.5, abs=0.1)
+    prob = compile_theorem("uio_dt.thm3_2", example(EX32), {"gamma": lo})
+    x = solve_problem(with_fixed_margin(prob), "clarabel").x
+    assert prob.environment(x)["lambda_max_P"] > 5e7  # catalogue: ~1.3e8 near the supremum
     prob = compile_theorem("uio_dt.thm3_2", example(EX32), {"gamma": 55.0})
     sol = solve_problem(with_fixed_margin(prob), "clarabel")
     assert sol.status == "infeasible"
