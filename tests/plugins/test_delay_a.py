@@ -141,6 +141,16 @@ def test_published_point_with_eps_free(tau2):
     assert r.derived["gamma_star"] == pytest.approx(0.3549, abs=2e-3)
 
 
+def test_eps_free_relaxes_the_fixed_problem():
+    # eps2, eps3 as decision variables: the fixed eps2 = eps3 = 0.1 point stays admissible
+    system, _ = _system()
+    fixed = _certified("delay_a.thm3_2", system)
+    params = {k: v for k, v in system["params"].items() if k not in ("eps2", "eps3")}
+    free = _certified("delay_a.thm3_2", {**system, "params": {**params, "eps_free": 1}})
+    assert free.objective <= fixed.objective * (1 + 1e-6)
+    assert free.variables["eps2"] > 0 and free.variables["eps3"] > 0
+
+
 def test_lambda_trend():
     # gamma* and eta* increase with lambda (catalogue 3.2, same structure in Paper A)
     system, _ = _system()

@@ -140,6 +140,23 @@ def test_cor3_19_example_and_published_point():
     assert -_lmi(cert2, "(3.14)")["min_eig"] == pytest.approx(10.49, abs=1e-2)
 
 
+def test_cor3_19_sup_g_by_bisection():
+    # catalogue 1.6 / 11.9: sup g for G = [0 0 g 0] is 48.59 with Clarabel (SCS: 47.6); the
+    # plugin takes G as data, so bisect on the data
+    system, _ = _system("thesis.cor3_19.ex3_2_2.yaml")
+
+    def feasible(g):
+        data = {**system["data"], "G": [[0, 0, g, 0]]}
+        return _outcome(solve("thesis.cor3_19", {**system, "data": data})) == "feasible"
+
+    lo, hi = 40.0, 60.0
+    assert feasible(lo) and not feasible(hi)
+    while hi - lo > 0.02:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if feasible(mid) else (lo, mid)
+    assert 0.5 * (lo + hi) == pytest.approx(48.59, abs=0.1)
+
+
 def test_thm4_1_2_linear_example_and_published_gains():
     system, pub = _system("thesis.thm4_1_2_linear.ex4_1_3.yaml")
     r = solve("thesis.thm4_1_2_linear", system)
