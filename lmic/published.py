@@ -654,10 +654,17 @@ class _Auditor:
         self._fill_from_point(claim, problem, pt)
         self.claims.append(claim)
 
-    def _published_environment(self) -> dict[str, Any]:
-        """Data, constants, the published variables and every derived quantity they determine."""
+    def _published_environment(self) -> tuple[dict[str, Any], set[str]]:
+        """What the printed numbers determine: ``(env, computed)``.
+
+        ``env`` holds the data, the constants, the published (and recovered) variables, the
+        published derived quantities that cannot be computed from those (e.g. ``Y`` without
+        ``P``), and every derived quantity computable from all of these (e.g. ``E = U + Y V``
+        from the printed ``Y``); ``computed`` names the ones lmic computed.
+        """
         from lmic.ir.expr import evaluate, names
 
+        pub = self.sysobj.published
         env: dict[str, Any] = {}
         for k, v in self.problem.data.items():
             env[k] = np.asarray(v, dtype=float) if isinstance(v, list | np.ndarray) else float(v)
@@ -666,23 +673,36 @@ class _Auditor:
             x = np.zeros(self.problem.n)
             x[var.slice] = var.pack(v)
             env[k] = var.value(x)
+        computed: set[str] = set()
         for d in self.problem.derived:
             if names(d.expr) <= set(env):
                 try:
                     env[d.name] = evaluate(d.expr, env)
-                except Exception:  # noqa: BLE001 - e.g. a singular published P: not computable
+                    computed.add(d.name)
                     continue
-        return env
+                except Exception:  # noqa: BLE001 - e.g. a singular published P: not computable
+                    pass
+            value = pub.get(d.name)
+            if value is not None and not isinstance(value, str):
+                env[d.name] = value if isinstance(value, float) else np.atleast_2d(np.asarray(value, dtype=float))
+        return env, computed
+
+    def derived_at_published(self, name: str) -> Any:
+        """The derived quantity ``name`` computed from the printed numbers (``None`` if it cannot be)."""
+        env, computed = self._published_environment()
+        return env.get(name) if name in computed else None
 
     def value_claims(self, keys: list[str], pub: Mapping[str, Any]) -> None:
         if not keys:
             return
-        at_published = self._published_environment() if self.given else {}
+        env_pub, computed_pub = self._published_environment()
+        at_published = {k: env_pub[k] for k in computed_pub}
         point_ok = any(c.kind in ("point", "partial point") and c.finding == "certified" for c in self.claims)
+        refuted = any(c.kind in ("point", "partial point") and c.finding != "certified" for c in self.claims)
         env: dict[str, Any] = {}
         where = ""
         unique = True
-        if any(k in self.derived_names and not (point_ok and k in at_published) for k in keys):
+        if any(k in self.derived_names and (refuted or k not in at_published) for k in keys):
             if self.value_point is None:
                 pt = self.synthesis()
                 if pt.x is not None:
@@ -698,15 +718,15 @@ class _Auditor:
             published = pub[key]
             if key in self.const_names:
                 claim = self._compare(key, published, self.problem.data.get(key), "data-derived constant", True)
-            elif key in at_published and (point_ok or key not in env):
-                what = "the published variables" + ("" if point_ok else " (not certified)")
+            elif key in at_published and (not refuted or key not in env):
+                what = "the published numbers" + ("" if point_ok else " (not certified)")
                 claim = self._compare(key, published, at_published[key], what, True)
             elif key in env:
                 claim = self._compare(key, published, env[key], where, unique)
                 if key in at_published:
                     other = self._compare(key, published, at_published[key], "", True)
                     claim.reason += (
-                        f"; from the published variables (not certified) it is {_fmt_value(other.computed)} "
+                        f"; from the published numbers (not certified) it is {_fmt_value(other.computed)} "
                         f"(diff {other.difference:.3g})"
                     )
             else:
