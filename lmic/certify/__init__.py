@@ -30,6 +30,7 @@ __all__ = [
     "read_certificate",
     "audit_certificate",
     "AuditResult",
+    "certificate_document",
 ]
 
 

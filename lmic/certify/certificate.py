@@ -160,6 +160,17 @@ def certificate_document(
     embed_ir : bool, optional
         Embed the IR (default: unless ``system`` is given, has a path, and the problem records
         its theorem; then the audit recompiles it).
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p>0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> s = Solution("optimal", x=np.array([2.0]))
+    >>> doc = certificate_document(p, s, certify(p, s))
+    >>> doc["theorem"], doc["ir"]["embedded"] is not None, doc["certificate"]["verdict"]
+    (None, True, 'certified')
     """
     meta = problem.meta or {}
     theorem_id = meta.get("theorem")

@@ -186,6 +186,12 @@ class Certificate:
     tolerances : dict
     x : list of float or None
     time_s : float
+
+    Examples
+    --------
+    >>> c = Certificate("certified", exact={"proven": True})
+    >>> c.ok, c.label, c.min_margin
+    (True, 'certified (exact)', None)
     """
 
     verdict: str
