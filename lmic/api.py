@@ -277,10 +277,12 @@ def solve(
     problem, theorem, compile_s = load_target(target, system, params)
     name = target if isinstance(target, str) else ("<problem>" if isinstance(target, Problem) else os.fspath(target))
     spec = backend.label if isinstance(backend, Backend) else str(backend)
+    step_opts = lambda step: options  # noqa: E731 - identity unless auto
     if spec.split(":")[0].lower() == "auto":
-        from lmic.backends.auto import route
+        from lmic.backends.auto import route, step_options
 
-        chain = route(problem)
+        chain: list[str | Backend] = list(route(problem))
+        step_opts = lambda step: step_options(str(step), options)  # noqa: E731
     else:
         chain = [backend]
     attempts: list[dict[str, Any]] = []
@@ -289,7 +291,7 @@ def solve(
     certify_s = 0.0
     used = spec
     for k, step in enumerate(chain):
-        sol = solve_problem(problem, step, options)
+        sol = solve_problem(problem, step, step_opts(step))
         t0 = time.perf_counter()
         cert = certify_solution(problem, sol, exact=exact)
         certify_s += time.perf_counter() - t0
