@@ -45,7 +45,7 @@ def psi1_value(Q: np.ndarray, gamma_d: float) -> float:
     0.6753
     """
     lmax, lmin = lambda_max(Q), lambda_min(Q)
-    return (-lmax + np.sqrt(lmax**2 + lmin**2 / gamma_d**2)) / (gamma_d + 2.0)
+    return float((-lmax + np.sqrt(lmax**2 + lmin**2 / gamma_d**2)) / (gamma_d + 2.0))
 
 
 def _gain(t, n, p, P, fixed: bool):
