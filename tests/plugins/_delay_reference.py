@@ -1,8 +1,9 @@
 """Helpers of the delay_a / delay_b tests (loaded by path, not a test module).
 
 * :func:`restrict` fixes some decision variables of a compiled IR at given values (a published
-  point) and returns the IR in the remaining ones, so a published ``P1, P2, Upsilon`` can be
-  audited with the theorem's own LMIs (``min alpha + eps1``, ``min rho``);
+  point, through :func:`lmic.published.fix_variables`) and returns the IR in the remaining
+  ones, so a published ``P1, P2, Upsilon`` can be audited with the theorem's own LMIs
+  (``min alpha + eps1``, ``min rho``);
 * :func:`reference` is an independent CVXPY implementation of Paper A/B Theorems 3.1, 3.2 / 4.1,
   written block by block from ``thesis_catalogue.md`` sections 2-3 (not from the plugin).
 """
@@ -11,9 +12,9 @@ from __future__ import annotations
 
 import cvxpy as cp
 import numpy as np
-import scipy.sparse as sp
 
-from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+from lmic.ir.problem import LinearConstraints, Objective, Problem
+from lmic.published import fix_variables
 
 MARGIN = 1e-7  # the catalogue's strict margin
 
@@ -21,56 +22,34 @@ MARGIN = 1e-7  # the catalogue's strict margin
 def restrict(problem: Problem, values: dict, objective: dict | None = None, lmis=None) -> Problem:
     """``problem`` with the variables in ``values`` fixed; ``objective`` maps names to weights.
 
-    LMIs left without a free variable must hold at the fixed point (checked) and are dropped; so
-    are linear rows. ``lmis`` (names) keeps only those LMIs. The fixed values join the IR's data,
-    so derived quantities (``L = P1^-1 Upsilon``) and checks still evaluate.
+    The substitution is lmic's own :func:`lmic.published.fix_variables`; on top of it, LMIs left
+    without a free variable must hold at the fixed point (checked) and are dropped, and so are
+    linear rows without a free variable; ``lmis`` (names) keeps only those LMIs.
     """
-    x_fixed = np.zeros(problem.n)
-    for v in problem.variables:
-        if v.name in values:
-            x_fixed[v.slice] = v.pack(values[v.name])
-    free, keep, offset = [], [], 0
-    for v in problem.variables:
-        if v.name not in values:
-            free.append(Variable(v.name, v.kind, v.shape, offset, v.blocks, v.sign))
-            keep.extend(range(v.offset, v.offset + v.size))
-            offset += v.size
-    keep = np.array(keep, dtype=int)
-
-    def reduce(coeffs):
-        C = sp.csc_matrix(coeffs)
-        c0 = C[:, [0]] + sp.csc_matrix(C[:, 1:] @ x_fixed).reshape(-1, 1)
-        return sp.hstack([c0, C[:, 1 + keep]], format="csc")
-
+    fixed, _, _ = fix_variables(problem, values)
     kept = []
-    for lmi in problem.lmis:
+    for lmi in fixed.lmis:
         if lmis is not None and lmi.name not in lmis:
             continue
-        coeffs = reduce(lmi.coeffs)
-        if coeffs[:, 1:].nnz == 0:
-            eig = np.linalg.eigvalsh(LMI(lmi.name, lmi.dim, coeffs, lmi.strict).matrix(np.zeros(offset)))
+        if lmi.coeffs[:, 1:].nnz == 0:
+            eig = np.linalg.eigvalsh(lmi.matrix(np.zeros(fixed.n)))
             assert eig[0] > 0, f"fixed point violates '{lmi.name}' (lambda_min {eig[0]:g})"
             continue
-        kept.append(LMI(lmi.name, lmi.dim, coeffs, lmi.strict, lmi.relation, lmi.block_sizes))
-    rows = reduce(problem.linear.A).tocsr()
+        kept.append(lmi)
+    rows = fixed.linear.A.tocsr()
     live = [i for i in range(rows.shape[0]) if rows[i, 1:].nnz]
     linear = LinearConstraints(
         rows[live],
-        [problem.linear.kinds[i] for i in live],
-        [problem.linear.strict[i] for i in live],
-        [problem.linear.names[i] for i in live],
+        [fixed.linear.kinds[i] for i in live],
+        [fixed.linear.strict[i] for i in live],
+        [fixed.linear.names[i] for i in live],
     )
-    c = np.zeros(1 + offset)
+    c = np.zeros(1 + fixed.n)
     for name, weight in (objective or {}).items():
-        var = next(v for v in free if v.name == name)
-        c[1 + var.offset] = weight
-    data = dict(problem.data)
-    for v in problem.variables:
-        if v.name in values:
-            data[v.name] = v.value(x_fixed)  # a float for a scalar, an array otherwise
+        c[1 + fixed.variable(name).offset] = weight
     return Problem(
-        free, kept, linear, Objective("min" if objective else "feasibility", c),
-        data, problem.derived, problem.checks, dict(problem.meta),
+        fixed.variables, kept, linear, Objective("min" if objective else "feasibility", c),
+        fixed.data, fixed.derived, fixed.checks, fixed.meta,
     )
 
 
