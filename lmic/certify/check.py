@@ -303,6 +303,21 @@ def lmi_report(lmi: LMI, x: np.ndarray, tol: Tolerances, *, inaccurate: bool = F
     k = int(np.max(np.diff(C.indptr))) if C.nnz else 0
     err_rel = 10.0 * (k + d + 2) * _U
     out: dict[str, Any] = {"name": lmi.name, "dim": d, "strict": bool(lmi.strict)}
+    if d == 0:  # an empty LMI holds vacuously
+        inf = float("inf")
+        out.update(
+            min_eig=inf,
+            max_eig=-inf,
+            max_abs=0.0,
+            scale=0.0,
+            min_margin=inf,
+            rel_margin=inf,
+            float_err=0.0,
+            threshold=None,
+            ok=True,
+            note="empty LMI",
+        )
+        return out
     if not np.all(np.isfinite(F)):
         out.update(
             min_eig=float("nan"),
