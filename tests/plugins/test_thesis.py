@@ -58,6 +58,9 @@ def test_lyapunov_published_P_and_solve():
     system, pub = _system("thesis.lyapunov.ex2_3_2.yaml")
     prob, x, cert = _certify_point("thesis.lyapunov", system, {"P": pub["P"]})
     assert cert.verdict == "certified", cert.reason
+    # catalogue 10: "certificate valid, exact": an exact rational proof of both LMIs
+    exact = certify(prob, Solution("feasible", x=x), exact=True)
+    assert exact.label == "certified (exact)", exact.exact
     # catalogue 1.1: eig(P) = {0.3552, 0.4237, 0.7607}, eig(A^T P + P A) = {-1.6706, -1.5606, -1.2290}
     assert _lmi(cert, "P > 0")["min_eig"] == pytest.approx(0.3552, abs=1e-4)
     assert -_lmi(cert, "(2.9)")["min_eig"] == pytest.approx(-1.2290, abs=1e-4)
