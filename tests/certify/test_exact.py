@@ -196,3 +196,17 @@ def test_benchmark_size_90_is_fast_and_proved():
     M = np.block([[-P + 2 * w * beta * I, X, X], [X.T, P - 2 * w * I, Z], [X.T, Z, -P]])
     assert np.allclose(prob.lmis[0].matrix(x), -M, atol=1e-12)
     _ = tril_rows_cols  # the storage convention is what exact_matrix reads
+
+
+def test_int64_limb_path_agrees_with_python_ints():
+    # coefficients spread over 60 decades, some zeros; a small point takes the int64-limb path,
+    # the same point with a 2^45 larger numerator and denominator the python-int path
+    rng = np.random.default_rng(5)
+    for _ in range(10):
+        data = rng.standard_normal((21, 6)) * 10.0 ** rng.integers(-30, 30, size=(21, 6))
+        data[rng.random((21, 6)) < 0.3] = 0.0
+        lmi = LMI("r", 6, sp.csc_matrix(data))
+        pt = round_point(rng.standard_normal(5) * 10.0 ** rng.integers(-3, 3, size=5), int(rng.integers(0, 40)))
+        big = type(pt)([v << 45 for v in pt.num], pt.den << 45)
+        assert max(map(abs, big.num + [big.den])) >= 2**62
+        assert exact_matrix(lmi, pt) == exact_matrix(lmi, big)
