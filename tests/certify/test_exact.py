@@ -200,14 +200,14 @@ def test_benchmark_size_90_is_fast_and_proved():
 
 def test_int64_limb_path_agrees_with_python_ints():
     # coefficients spread over 60 decades, some zeros; a small point takes the int64-limb path,
-    # the same point with a 2^45 larger numerator and denominator the python-int path
+    # the same point with a 2^62 larger numerator and denominator the python-int path
     rng = np.random.default_rng(5)
     for _ in range(10):
         data = rng.standard_normal((21, 6)) * 10.0 ** rng.integers(-30, 30, size=(21, 6))
         data[rng.random((21, 6)) < 0.3] = 0.0
         lmi = LMI("r", 6, sp.csc_matrix(data))
         pt = round_point(rng.standard_normal(5) * 10.0 ** rng.integers(-3, 3, size=5), int(rng.integers(0, 40)))
-        big = type(pt)([v << 45 for v in pt.num], pt.den << 45)
+        big = type(pt)([v << 62 for v in pt.num], pt.den << 62)
         assert max(map(abs, big.num + [big.den])) >= 2**62
         small = exact_matrix(lmi, pt)
-        assert exact_matrix(lmi, big) == [[v << 45 for v in row] for row in small]  # same scale c
+        assert exact_matrix(lmi, big) == [[v << 62 for v in row] for row in small]  # same scale c
