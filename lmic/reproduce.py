@@ -11,7 +11,8 @@ says how lmic computes the quantity (``compute:``), one of::
                           value of a value claim
     solve: {}             the theorem on the file (objective kept); with derived: NAME,
                           variable: NAME or objective: true (else the outcome only)
-    at_published: NAME    a derived quantity computed from the printed numbers (not certified)
+    at_published: NAME    a derived quantity computed from the printed numbers (not certified),
+                          compared with the printed NAME (or published_key: KEY)
     maximize: PARAM       supremum by bisection (lmic.sweep.maximize); rtol, lo, hi
     sweep: P=a:b:n        grid (lmic.sweep.sweep): certified if some point is, else infeasible
     gain: KEY             the printed gain KEY through another theorem's fixed_KEY variant
@@ -377,8 +378,11 @@ def _compute(runner: _Runner, row: Row) -> tuple[str, Any, str, str]:
         if value is None:
             return "not reproducible", None, "-", "not computable from the printed numbers"
         value = _scalar(value)
-        pub = auditor.sysobj.published.get(str(c["at_published"]))
-        claim = auditor._compare(str(c["at_published"]), pub, value, "the published numbers", True)
+        key = str(c.get("published_key", c["at_published"]))
+        pub = auditor.sysobj.published.get(key)
+        if pub is None:
+            return "not reproducible", value, _fmt(value), f"{row.file} publishes no '{key}'"
+        claim = auditor._compare(key, pub, value, "the published numbers", True)
         return claim.finding, value, _fmt(value), claim.reason
     if "maximize" in c:
         from lmic.sweep import maximize
