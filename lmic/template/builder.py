@@ -239,8 +239,9 @@ class Template:
     ) -> sympy.MatrixSymbol:
         """A data matrix of symbolic shape ``rows x cols`` (a column vector when ``cols=1``).
 
-        ``default`` (a number ``c`` meaning ``c I``/``c * ones``-free identity scaling for square
-        matrices, or a callable ``f(values) -> array``) makes the data optional.
+        ``default`` makes the data optional: a number ``c`` means ``c`` times the (possibly
+        rectangular) identity, a callable ``f(values, rows, cols) -> array`` computes it from the
+        other inputs (``values`` maps data and parameter names to numbers / arrays).
         """
         self._claim(name)
         sym = sympy.MatrixSymbol(name, rows, cols)
