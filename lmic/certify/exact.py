@@ -289,6 +289,39 @@ def _dominant(N) -> tuple[bool, int]:
     return True, -1
 
 
+def _inverse_cholesky(S: np.ndarray) -> np.ndarray | None:
+    """``L^-1`` for the float Cholesky factor ``S = L L^T`` (``None`` if it breaks down).
+
+    Up to d = 400 this runs as a numpy loop of vector operations: multithreaded LAPACK on
+    these small matrices spends far more CPU on its thread pool (tens of milliseconds on a
+    busy machine) than on the arithmetic.
+    """
+    d = S.shape[0]
+    if d > 400:
+        L, info = sla.lapack.dpotrf(S, lower=1, clean=1)
+        if info != 0:
+            return None
+        Linv, info = sla.lapack.dtrtri(L, lower=1)
+        return None if info != 0 else np.tril(Linv)
+    A = np.array(S, dtype=float)
+    for j in range(d):
+        piv = A[j, j]
+        if not piv > 0:
+            return None
+        r = math.sqrt(piv)
+        A[j, j] = r
+        col = A[j + 1 :, j] / r
+        A[j + 1 :, j] = col
+        A[j + 1 :, j + 1 :] -= np.outer(col, col)
+    L = np.tril(A)
+    X = np.zeros_like(L)
+    for i in range(d):
+        X[i, i] = 1.0 / L[i, i]
+        if i:
+            X[i, :i] = -(L[i, :i] @ X[:i, :i]) / L[i, i]
+    return X
+
+
 def _congruence(M: list[list[int]]) -> tuple[bool, str]:
     """Step 1 of :func:`prove_pd`: ``W M W^T`` diagonally dominant for a triangular ``W``."""
     flint = _flint()
@@ -300,14 +333,10 @@ def _congruence(M: list[list[int]]) -> tuple[bool, str]:
         if np.any(~np.isfinite(Mf)) or np.any(diag <= 0):
             return False, "a diagonal entry is not positive"
         s = 1.0 / np.sqrt(diag)
-        # LAPACK directly: small matrices, no gufunc or threading overhead
-        L, info = sla.lapack.dpotrf(Mf * s[:, None] * s[None, :], lower=1, clean=1)
-        if info != 0:
+        Linv = _inverse_cholesky(Mf * s[:, None] * s[None, :])
+        if Linv is None:
             return False, "float Cholesky failed (not numerically positive definite)"
-        Linv, info = sla.lapack.dtrtri(L, lower=1)
-        if info != 0:
-            return False, "float Cholesky factor is singular"
-        W = np.tril(Linv) * s[None, :]
+        W = Linv * s[None, :]
         # scale every row to ~2^50 and round to integers (row scaling keeps the congruence)
         rmax = np.max(np.abs(W), axis=1)
         expo = 50 - np.ceil(np.log2(rmax)).astype(int)
