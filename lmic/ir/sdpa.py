@@ -54,10 +54,10 @@ Examples
 
 from __future__ import annotations
 
-import itertools
 import json
 import math
 import os
+import re
 from pathlib import Path
 from typing import Any
 
@@ -73,6 +73,33 @@ __all__ = ["read_sdpa", "write_sdpa", "sdpa_text"]
 _SEPARATORS = str.maketrans({",": " ", "(": " ", ")": " ", "{": " ", "}": " "})
 _FIELDS = "'matno blkno i j value'"
 _LMIC_TAG = "* lmic:"
+# the number syntax of C's strtol / strtod (Python and numpy also take '1_000', non-ASCII digits)
+_INT_RE = re.compile(r"[+-]?[0-9]+\Z")
+_FLOAT_RE = re.compile(
+    r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\Z|[+-]?(?:nan|inf|infinity)\Z",
+    re.IGNORECASE,
+)
+_WS = r"[^\S\n]"  # white space within a line
+_ENTRY = (
+    rf"{_WS}*(?:(?:[+-]?[0-9]+{_WS}+){{4}}"
+    rf"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?{_WS}*)?"
+)
+# the first line that is neither blank nor a well-formed finite entry (after separators)
+_BAD_ENTRY = re.compile(rf"^(?!{_ENTRY}$).*$", re.MULTILINE)
+
+
+def _int(tok: str) -> int:
+    """``int(tok)`` for C-style integer syntax only (ValueError otherwise)."""
+    if not _INT_RE.match(tok):
+        raise ValueError(tok)
+    return int(tok)
+
+
+def _float(tok: str) -> float:
+    """``float(tok)`` for C-style decimal syntax only (ValueError otherwise)."""
+    if not _FLOAT_RE.match(tok):
+        raise ValueError(tok)
+    return float(tok)
 
 
 class _Header:
@@ -98,7 +125,7 @@ class _Header:
         """The integer starting a line (the rest of the line is a free annotation)."""
         lineno, toks = self.next_line(what)
         try:
-            return lineno, int(toks[0])
+            return lineno, _int(toks[0])
         except ValueError:
             raise self.fail(lineno, f"expected {what}, got '{toks[0]}'") from None
 
@@ -124,16 +151,35 @@ class _Header:
         return out
 
 
-def _is_number(tok: str) -> bool:
+def _diagnose(line: str) -> str:
+    """What is wrong with one entry line (a line :data:`_BAD_ENTRY` found)."""
+    toks = line.translate(_SEPARATORS).split()
+    if len(toks) != 5:
+        return f"expected 5 fields {_FIELDS}, got {len(toks)}"
+    for tok in toks[:4]:
+        try:
+            v = _int(tok)
+        except ValueError:
+            return f"index '{tok}' is not an integer"
+        if abs(v) >= 2**63:
+            return f"index '{tok}' is out of range"
     try:
-        float(tok)
+        value = _float(toks[4])
     except ValueError:
-        return False
-    return True
+        return f"value '{toks[4]}' is not a number"
+    if not math.isfinite(value):
+        return f"value {toks[4]} is not finite"
+    return f"malformed entry {line.strip()!r}"  # pragma: no cover - the regex and this agree
+
+
+def _is_number(tok: str) -> bool:
+    return bool(_FLOAT_RE.match(tok))
 
 
 def _source_and_text(path_or_text: str | os.PathLike[str]) -> tuple[str, str]:
-    if isinstance(path_or_text, str) and ("\n" in path_or_text or "\r" in path_or_text):
+    if isinstance(path_or_text, str) and (
+        "\n" in path_or_text or "\r" in path_or_text or not path_or_text.strip()
+    ):
         return "<sdpa text>", path_or_text
     source = os.fspath(path_or_text)
     try:
@@ -167,7 +213,8 @@ def read_sdpa(path_or_text: str | os.PathLike[str]) -> Problem:
     Parameters
     ----------
     path_or_text : str or path-like
-        A file path, or the file's text itself (a ``str`` containing a line break).
+        A file path, or the file's text itself (a ``str`` containing a line break; an empty
+        or blank ``str`` is text too).
 
     Returns
     -------
@@ -218,59 +265,50 @@ def read_sdpa(path_or_text: str | os.PathLike[str]) -> Problem:
     line_nb, nblocks = head.first_int("nBlocks (the number of blocks)")
     if nblocks < 0:
         raise head.fail(line_nb, f"nBlocks = {nblocks} is negative")
-    sizes_l = head.numbers(nblocks, "block sizes", int)
+    sizes_l = head.numbers(nblocks, "block sizes", _int)
     for lineno, s in sizes_l:
         if s == 0:
             raise head.fail(lineno, "a block size of 0")
     sizes = np.array([s for _, s in sizes_l], dtype=np.int64)
-    c_l = head.numbers(m, "entries of the objective vector c", float)
+    c_l = head.numbers(m, "entries of the objective vector c", _float)
     c = np.array([v for _, v in c_l], dtype=float)
     bad = np.flatnonzero(~np.isfinite(c))
     if bad.size:
         raise head.fail(c_l[bad[0]][0], f"c[{bad[0] + 1}] = {c[bad[0]]} is not finite")
 
-    # the entries: one line each, parsed in bulk
+    # the entries: one per line, validated by one regular-expression pass, parsed in bulk
     start = head.pos
-    fields = [ln.translate(_SEPARATORS).split() for ln in lines[start:]]
-    counts = np.fromiter(map(len, fields), dtype=np.int64, count=len(fields))
-    wrong = np.flatnonzero((counts != 0) & (counts != 5))
-    if wrong.size:
-        k = int(wrong[0])
-        raise IRError(
-            f"{source}: line {start + k + 1}: expected 5 fields {_FIELDS}, got {counts[k]}"
-        )
-    linenos = np.flatnonzero(counts) + start + 1
-    flat = np.array(list(itertools.chain.from_iterable(fields)), dtype=str).reshape(-1, 5)
+    body_lines = lines[start:]
+    body = "\n".join(body_lines).translate(_SEPARATORS)
+    bad = _BAD_ENTRY.search(body)
+    if bad:
+        k = body.count("\n", 0, bad.start())
+        raise IRError(f"{source}: line {start + k + 1}: {_diagnose(bad.group(0))}")
+    toks = body.split()
+    rows = len(toks) // 5
 
-    def failing_line(col: slice, conv: Any, what: str) -> IRError:
-        for r in range(flat.shape[0]):
-            for tok in flat[r, col]:
-                try:
-                    conv(tok)
-                except ValueError:
-                    return IRError(
-                        f"{source}: line {linenos[r]}: {what} '{tok}' is not "
-                        f"{'an integer' if conv is int else 'a number'}"
-                    )
-        return IRError(f"{source}: malformed entries")  # pragma: no cover
+    def lineno(r: int) -> int:
+        """Line number of the ``r``-th entry (blank lines are allowed between entries)."""
+        if rows == len(body_lines):
+            return start + r + 1
+        nonblank = [i for i, ln in enumerate(body_lines) if ln.strip()]
+        return start + nonblank[r] + 1
 
     try:
-        idx = flat[:, :4].astype(np.int64)
-    except (ValueError, OverflowError):
-        raise failing_line(slice(0, 4), int, "index") from None
-    try:
-        val = flat[:, 4].astype(float)
-    except ValueError:
-        raise failing_line(slice(4, 5), float, "value") from None
-    matno, blkno, ii, jj = idx.T
+        matno, blkno, ii, jj = (np.array(toks[k::5], dtype=np.int64) for k in range(4))
+    except OverflowError:
+        r = next(r for r in range(rows) if any(abs(int(t)) >= 2**63 for t in toks[5 * r : 5 * r + 4]))
+        entry = " ".join(toks[5 * r : 5 * r + 5])
+        raise IRError(f"{source}: line {lineno(r)}: {_diagnose(entry)}") from None
+    val = np.array(toks[4::5], dtype=float)
 
     def check(mask: np.ndarray, msg: Any) -> None:
         hits = np.flatnonzero(mask)
         if hits.size:
             r = int(hits[0])
-            raise IRError(f"{source}: line {linenos[r]}: {msg(r)}")
+            raise IRError(f"{source}: line {lineno(r)}: {msg(r)}")
 
-    check(~np.isfinite(val), lambda r: f"value {flat[r, 4]} is not finite")
+    check(~np.isfinite(val), lambda r: f"value {toks[5 * r + 4]} is not finite")
     check((matno < 0) | (matno > m), lambda r: f"matrix number {matno[r]} out of range 0..{m}")
     check(
         (blkno < 1) | (blkno > nblocks),
@@ -303,9 +341,9 @@ def read_sdpa(path_or_text: str | os.PathLike[str]) -> Problem:
             d = int(dup[np.argmax(conflict)])
             a, b = sorted((int(order[d]), int(order[d + 1])))
             raise IRError(
-                f"{source}: line {linenos[b]}: entry (matno {matno[b]}, block {blkno[b]}, "
+                f"{source}: line {lineno(b)}: entry (matno {matno[b]}, block {blkno[b]}, "
                 f"{lo[b] + 1}, {hi[b] + 1}) given again with a different value "
-                f"(first on line {linenos[a]})"
+                f"(first on line {lineno(a)})"
             )
         keep = np.ones(len(val), dtype=bool)
         keep[order[dup + 1]] = False

@@ -222,7 +222,7 @@ def small_problem(**overrides) -> Problem:
 
 
 @given(problems())
-@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 def test_random_problems_round_trip_exactly(p):
     d = problem_to_dict(p)
     assert_same_problem(p, problem_from_dict(d))
@@ -233,7 +233,7 @@ def test_random_problems_round_trip_exactly(p):
 
 
 @given(problems())
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 def test_random_problems_validate_against_the_schema(p):
     jsonschema.Draft202012Validator(json.loads(SCHEMA_FILE.read_text())).validate(
         json.loads(problem_to_json(p)))
