@@ -1071,6 +1071,8 @@ def _print_sup(r: SupResult) -> None:
     from rich.console import Console
 
     out = Console(highlight=False, soft_wrap=True)
+    if not out.is_terminal:
+        out.width = 160
     out.print(f"theorem    {r.theorem}   sup {r.param} (bisection on certified feasibility, backend {r.backend})")
     tol = f"xtol {r.xtol:g}, rtol {r.rtol:g}"
     if r.lower is None:
@@ -1102,6 +1104,8 @@ def _print_sweep(r: SweepResult) -> None:
     from rich.table import Table
 
     out = Console(highlight=False, soft_wrap=True)
+    if not out.is_terminal:
+        out.width = 160
     table = Table(title=f"{r.theorem}: sweep of {r.param} (backend {r.backend})")
     for col in (r.param, "outcome", "status", "verdict", "objective", "rel. margin", "how", "bind ms", "solve s"):
         table.add_column(col)
