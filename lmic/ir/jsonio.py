@@ -525,8 +525,6 @@ def problem_from_dict(d: Any, source: str = "<dict>") -> Problem:
         )
         if var.kind != "blockdiag" and var.blocks:
             raise IRError(f"{source}: {where}.blocks: only a blockdiag variable has blocks")
-        if var.kind == "blockdiag" and not var.blocks:
-            raise IRError(f"{source}: {where}.blocks: a blockdiag variable needs its block sizes")
         if var.offset != offset:
             raise IRError(f"{source}: {where}.offset: {var.offset}, expected {offset}")
         offset += var.size
