@@ -33,8 +33,10 @@ Examples
 --------
 >>> parse_grid("alpha=log:1e-3:1:4")
 ('alpha', [0.001, 0.01, 0.1, 1.0])
->>> r = maximize("thesis.thm3_2_2", {"data": {"A": [[-1.0]], "B": [[0.0]], "C": [[1.0]]}},
-...              "gamma", rtol=1e-3)                                  # doctest: +SKIP
+>>> r = maximize("thesis.thm3_2_2", "examples/thesis.thm3_2_2.ex3_2_2.yaml", "gamma",
+...              rtol=1e-4)                                           # doctest: +SKIP
+>>> round(r.lower, 4), r.converged                                    # doctest: +SKIP
+(0.9997, True)
 """
 
 from __future__ import annotations
@@ -700,10 +702,10 @@ def maximize(
 
     Examples
     --------
-    >>> r = maximize("thesis.thm3_2_2", "examples/thesis.thm3_2_2.ex3_2_2.yaml", "gamma",
-    ...              rtol=1e-4)                                        # doctest: +SKIP
-    >>> round(r.lower, 3), r.upper_kind                                # doctest: +SKIP
-    (1.0, 'infeasible-certified')
+    >>> r = maximize("uio_dt.thm4_1", "examples/uio_dt.thm4_1.flexible_joint.yaml", "gamma",
+    ...              rtol=1e-3)                                        # doctest: +SKIP
+    >>> round(r.lower, 1), next(p.proof for p in r.points if p.value == r.lower)  # doctest: +SKIP
+    (51.5, 'certified (exact)')
     """
     t_start = time.perf_counter()
     if not (xtol > 0 or rtol > 0) or xtol < 0 or rtol < 0:
