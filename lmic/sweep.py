@@ -808,6 +808,8 @@ def maximize(
         while upper - lower > target(lower, upper) and len(ev.points) < max_evals:
             iterations += 1
             state["iteration"] = iterations
+            # remaining halvings (the relative target moves with the bracket)
+            state["total"] = iterations - 1 + max(1, math.ceil(math.log2((upper - lower) / target(lower, upper))))
             feasible(0.5 * (lower + upper), "bisect")
     converged = lower is not None and upper is not None and upper - lower <= target(lower, upper)
     if lower is not None and upper is not None and not converged and not message:
