@@ -70,6 +70,14 @@ def _dim_value(expr: Any, dims: Mapping[sympy.Symbol, int]) -> int | None:
     return int(v) if v.is_Integer else None
 
 
+def _in_domain(value: float, domain: sympy.Set) -> bool:
+    """Whether ``value`` lies in ``domain`` (integer sets are decided on integral values)."""
+    verdict = domain.contains(sympy.Float(value))
+    if verdict not in (sympy.true, sympy.false) and float(value).is_integer():
+        verdict = domain.contains(sympy.Integer(int(value)))
+    return verdict == sympy.true
+
+
 def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | None = None) -> Inputs:
     """Validate data and parameters against the template and compute the constants.
 
@@ -108,7 +116,7 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
         value = float(value)
         if not np.isfinite(value):
             raise DataError(f"{where}: parameter '{p.name}' is {value}")
-        if not p.domain.contains(sympy.Float(value)):
+        if not _in_domain(value, p.domain):
             raise DataError(f"{where}: parameter {p.name} = {value:g} is outside its domain {p.domain}")
         out.params[p.name] = value
         out.values[p.name] = value
@@ -141,6 +149,11 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
         if d.default is None:
             shape = " x ".join(str(s) for s in d.shape)
             raise DataError(f"{where}: missing data '{d.name}' ({shape})" + (f": {d.doc}" if d.doc else ""))
+        for s in d.shape:  # a dimension only absent optional data would fix is 0
+            s = sympy.sympify(s)
+            if isinstance(s, sympy.Symbol) and s not in out.dims:
+                out.dims[s] = 0
+                origin[s] = f"absent optional data {d.name}"
         r, c = (_dim_value(s, out.dims) for s in d.shape)
         if r is None or c is None:
             raise DataError(f"{where}: cannot size the default of data '{d.name}' (dimensions unknown)")
@@ -177,6 +190,9 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
     for c in t.consts:
         try:
             value = c.fn(dict(out.values))
+        except DataError as err:
+            msg = str(err)
+            raise DataError(msg if msg.startswith(f"theorem {tid}") else f"{where}: {msg}") from None
         except LmicError:
             raise
         except Exception as err:
@@ -196,6 +212,16 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
             if not np.all(np.isfinite(value)):
                 raise DataError(f"{where}: constant '{c.name}' is not finite for this data")
         out.values[c.name] = value
+    for req in t.requirements:
+        try:
+            ok = bool(req.predicate(dict(out.values)))
+        except LmicError:
+            raise
+        except Exception as err:
+            why = f"{type(err).__name__}: {err}"
+            raise DataError(f"{where}: requirement '{req.name}' cannot be checked: {why}") from None
+        if not ok:
+            raise DataError(f"{where}: requirement '{req.name}' fails" + (f" ({req.doc})" if req.doc else ""))
     return out
 
 
@@ -493,9 +519,33 @@ class _Binder:
             )
 
     # -- linear forms ----------------------------------------------------------------------
+    def _trace_row(self, terms: list[Term]) -> np.ndarray:
+        """Row of ``trace(sum of terms)``: ``trace(L V R)`` is linear in ``V`` with weights ``(R L)^T``."""
+        row = np.zeros(1 + self.n)
+        for term in terms:
+            c = self.coef(term.coef)
+            if term.var is None or self.vars[term.var].kind == "scalar":
+                M = self.product(term.left)
+                value = float(np.trace(M)) if M is not None else None
+                if value is None:
+                    raise TemplateError(f"theorem {self.tid}: trace of an identity of unknown size in '{term.text}'")
+                row[0 if term.var is None else 1 + self.vars[term.var].offset] += c * value
+                continue
+            var = self.vars[term.var]
+            bi, bj, bk, vr = self.basis(term.var, term.transposed)
+            vc = var.shape[0] if term.transposed else var.shape[1]
+            L, R = self.product(term.left), self.product(term.right)
+            Lm = np.eye(vr) if L is None else L
+            Rm = np.eye(vc) if R is None else R
+            RL = Rm @ Lm  # (vc x vr); trace(L E_ij R) = (R L)[j, i]
+            np.add.at(row, 1 + var.offset + bk, c * RL[bj, bi])
+        return row
+
     def linear_row(self, form: LinearForm) -> np.ndarray:
         row = np.zeros(1 + self.n)
         row[0] = self.coef(form.const) if form.const != 0 else 0.0
+        for coef, terms in form.traces:
+            row += self.coef(coef) * self._trace_row(terms)
         for coef, (name, kind, i, j) in form.terms:
             c = self.coef(coef)
             var = self.vars[name]
@@ -523,6 +573,19 @@ class _Binder:
             kinds.append(kind)
             strict.append(is_strict)
             names.append(name)
+        for decl in plan.template.variables:  # element-wise signs of matrix variables
+            if decl.kind == "scalar" or decl.sign == "free":
+                continue
+            var = self.vars[decl.name]
+            flip = -1.0 if decl.sign in ("negative", "nonpositive") else 1.0
+            rel = {"positive": "> 0", "nonnegative": ">= 0", "negative": "< 0", "nonpositive": "<= 0"}[decl.sign]
+            for k in range(var.size):
+                row = np.zeros(1 + self.n)
+                row[1 + var.offset + k] = flip
+                rows.append(row)
+                kinds.append("ge")
+                strict.append(decl.sign in ("positive", "negative"))
+                names.append(f"{decl.name}[{k}] {rel}")
         A = sp.csr_matrix(np.array(rows)) if rows else sp.csr_matrix((0, 1 + self.n))
         linear = LinearConstraints(A, kinds, strict, names)
         sense, form = plan.objective

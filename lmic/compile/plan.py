@@ -108,6 +108,8 @@ class LinearForm:
 
     const: sympy.Expr
     terms: list[tuple[sympy.Expr, tuple[str, str, int, int]]] = field(default_factory=list)
+    #: ``coef * trace(expression)`` parts: the expression expanded into terms
+    traces: list[tuple[sympy.Expr, list[Term]]] = field(default_factory=list)
 
 
 @dataclass
@@ -323,6 +325,17 @@ class _Analyser:
         self._check_names(expr)
         form = LinearForm(sympy.Integer(0))
         for mono in sympy.Add.make_args(expr):
+            traces = [a for a in mono.atoms(Trace) if not isinstance(a.arg, MatrixSymbol) or not self._has_var(a)]
+            if traces:
+                scalar_var = any(s in self.scalar_vars for s in mono.free_symbols)
+                if len(traces) > 1 or mono.atoms(MatrixElement) or scalar_var:
+                    raise TemplateError(f"{self.t.theorem_id}: {where}: '{mono}' is not linear")
+                indep, dep = mono.as_independent(traces[0], as_Add=False)
+                if dep != traces[0]:
+                    raise TemplateError(f"{self.t.theorem_id}: {where}: '{mono}' is not linear")
+                self.where = f"{where}, trace({traces[0].arg})"
+                form.traces.append((indep, self.terms(traces[0].arg)))
+                continue
             atoms = [a for a in mono.atoms(MatrixElement, Trace) if self._has_var(a)]
             svars = [s for s in mono.free_symbols if s in self.scalar_vars]
             if len(atoms) + len(svars) == 0:

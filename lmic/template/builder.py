@@ -43,6 +43,7 @@ __all__ = [
     "DerivedDecl",
     "CheckDecl",
     "ObserverDecl",
+    "RequireDecl",
 ]
 
 _SIGNS = ("free", "positive", "nonnegative", "negative", "nonpositive")
@@ -53,6 +54,9 @@ _DOMAINS = {
     "nonpositive": sympy.Interval(-sympy.oo, 0),
     "unit": sympy.Interval(0, 1),
     "real": sympy.Interval(-sympy.oo, sympy.oo),
+    "integer": sympy.S.Integers,
+    "natural": sympy.S.Naturals,
+    "natural0": sympy.S.Naturals0,
 }
 
 
@@ -144,6 +148,15 @@ class DerivedDecl:
 
 
 @dataclass
+class RequireDecl:
+    """A hypothesis of the theorem on its data, checked before compiling."""
+
+    name: str
+    predicate: Callable[[Mapping[str, Any]], bool]
+    doc: str = ""
+
+
+@dataclass
 class ObserverDecl:
     """How the designed observer runs, for simulation: a model name and role -> IR name."""
 
@@ -201,6 +214,7 @@ class Template:
         self.derived: list[DerivedDecl] = []
         self.checks: list[CheckDecl] = []
         self.observer_decl: ObserverDecl | None = None
+        self.requirements: list[RequireDecl] = []
         self._names: set[str] = set()
 
     # -- helpers ---------------------------------------------------------------------------
@@ -254,7 +268,8 @@ class Template:
         self, name: str, *, default: float | None = None, domain: Any = "real", doc: str = ""
     ) -> sympy.Symbol:
         """A scalar parameter; ``domain`` is a sympy set or one of ``positive``, ``nonnegative``,
-        ``negative``, ``nonpositive``, ``unit`` ([0, 1]), ``real``."""
+        ``negative``, ``nonpositive``, ``unit`` ([0, 1]), ``real``, ``integer``, ``natural``
+        (1, 2, ...), ``natural0`` (0, 1, ...)."""
         self._claim(name)
         if isinstance(domain, str):
             if domain not in _DOMAINS:
@@ -306,13 +321,13 @@ class Template:
         """A symmetric ``n x n`` decision matrix."""
         return self._var(name, "symmetric", (n, n), doc=doc)
 
-    def full(self, name: str, rows: Any, cols: Any, doc: str = "") -> sympy.MatrixSymbol:
-        """A full ``rows x cols`` decision matrix."""
-        return self._var(name, "full", (rows, cols), doc=doc)
+    def full(self, name: str, rows: Any, cols: Any, sign: str = "free", doc: str = "") -> sympy.MatrixSymbol:
+        """A full ``rows x cols`` decision matrix; ``sign`` constrains every entry (element-wise)."""
+        return self._var(name, "full", (rows, cols), sign=sign, doc=doc)
 
-    def diagonal(self, name: str, n: Any, doc: str = "") -> sympy.MatrixSymbol:
-        """A diagonal ``n x n`` decision matrix."""
-        return self._var(name, "diagonal", (n, n), doc=doc)
+    def diagonal(self, name: str, n: Any, sign: str = "free", doc: str = "") -> sympy.MatrixSymbol:
+        """A diagonal ``n x n`` decision matrix; ``sign`` constrains every diagonal entry."""
+        return self._var(name, "diagonal", (n, n), sign=sign, doc=doc)
 
     def blockdiag(self, name: str, sizes: Any, doc: str = "") -> sympy.MatrixSymbol:
         """A block-diagonal decision matrix with symmetric blocks of the given sizes."""
@@ -367,6 +382,17 @@ class Template:
         if not isinstance(spec, CheckSpec):
             raise TemplateError(f"{self.theorem_id}: check '{name}' must be built with schur_stable(...) etc.")
         self.checks.append(CheckDecl(name, spec, doc))
+
+    def require(self, name: str, predicate: Callable[[Mapping[str, Any]], bool], doc: str = "") -> None:
+        """A hypothesis on the data (e.g. ``lambda_min(Q) = T``), checked before compiling.
+
+        ``predicate(values)`` gets data, parameters and constants by name and returns True when the
+        hypothesis holds; otherwise compilation stops with one line naming the theorem, the
+        system file and ``name`` (and ``doc``).
+        """
+        if not callable(predicate):
+            raise TemplateError(f"{self.theorem_id}: requirement '{name}' needs a callable predicate")
+        self.requirements.append(RequireDecl(name, predicate, doc))
 
     def observer(self, model: str, time: str, doc: str = "", **roles: Any) -> None:
         """Declare the observer the theorem designs, for ``lmic simulate``.
