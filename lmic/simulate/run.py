@@ -521,6 +521,14 @@ def _diverged(where: str, which: str, t: float, detail: str = "") -> SimulationD
     )
 
 
+class _NonFinite(Exception):
+    """Raised inside the integrator's right-hand side when a value stops being finite."""
+
+    def __init__(self, time: float, which: str) -> None:
+        super().__init__(time, which)
+        self.time, self.which = time, which
+
+
 def _noise(spec: SimulationSpec, count: int, p: int) -> np.ndarray:
     if spec.noise_std is None:
         return np.zeros((count, p))
@@ -577,10 +585,24 @@ def _ivp(
         return BLOWUP - float(np.max(np.abs(s)))
 
     blowup.terminal = True  # type: ignore[attr-defined]
-    with np.errstate(all="ignore"):
-        sol = solve_ivp(
-            rhs, span, s0, method=spec.method, t_eval=t_eval, events=blowup, rtol=1e-7, atol=1e-9, max_step=max_step
-        )
+
+    def guarded(t: float, s: np.ndarray) -> np.ndarray:
+        # a NaN derivative must never reach the integrator: its step-size control can loop
+        # forever on NaN error estimates
+        d = rhs(t, s)
+        if not np.all(np.isfinite(d)) or not np.all(np.isfinite(s)):
+            bad_plant = not (np.all(np.isfinite(d[:n])) and np.all(np.isfinite(s[:n])))
+            raise _NonFinite(float(t), "plant" if bad_plant else "observer")
+        return d
+
+    try:
+        with np.errstate(all="ignore"):
+            sol = solve_ivp(
+                guarded, span, s0, method=spec.method, t_eval=t_eval, events=blowup, rtol=1e-7, atol=1e-9,
+                max_step=max_step,
+            )  # fmt: skip
+    except _NonFinite as err:
+        raise _diverged(spec.where, err.which, err.time) from None
     if sol.status == 1:  # the blow-up event fired
         tb = float(sol.t_events[0][0])
         sb = sol.y_events[0][0]
@@ -601,7 +623,8 @@ def _continuous(obs: Observer, spec: SimulationSpec, fn: _Functions) -> Trajecto
     last = grid.size - 1
 
     def v(t: float) -> np.ndarray:
-        return noise[min(int(t / spec.dt), last)]
+        k = int(t / spec.dt) if np.isfinite(t) else last
+        return noise[min(max(k, 0), last)]
 
     def y_of(x: np.ndarray, u: np.ndarray, t: float) -> np.ndarray:
         return obs.output(x, fn.h(x, u, t)) + v(t)
@@ -655,7 +678,9 @@ def _sampled(obs: Sampled, spec: SimulationSpec, fn: _Functions) -> Trajectory:
             raise _diverged(spec.where, "plant" if _blown(x) else "observer", tk)
         held = obs.correction(z, yk, uk, tk, fn.h)
         delta = float(rng.uniform(lo, hi)) if hi > lo else hi
-        t_next = min(tk + delta, T)
+        t_next = tk + delta
+        if t_next >= T - 1e-9 * max(1.0, T):  # accumulated rounding must not leave a sliver
+            t_next = T
         intervals.append(t_next - tk)
         end = grid.size if t_next >= T else int(np.searchsorted(grid, t_next, side="left"))
         pts = grid[gi:end]
