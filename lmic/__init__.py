@@ -4,10 +4,88 @@ Theorems are written once, symbolically (:mod:`lmic.template`); they compile wit
 numbers into an intermediate representation (:mod:`lmic.ir`), solve on interchangeable
 backends (:mod:`lmic.backends`) and are checked by an independent certifier
 (:mod:`lmic.certify`).
+
+Examples
+--------
+>>> import lmic
+>>> result = lmic.solve("thesis.lyapunov", {"data": {"A": [[-1.0, 2.0], [0.0, -3.0]]}})
+>>> result.verdict
+'certified'
+>>> result.values["P"].shape
+(2, 2)
+>>> lmic.theorem("qib.thm1").citation
+'Wang, Song & Zhang (2015), Adv. Difference Equ. 2015:307, Theorem 1'
 """
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 __version__ = "0.1.0"
 
-__all__ = ["__version__"]
+__all__ = ["__version__", "solve", "theorem", "theorems", "compile_theorem"]
+
+if TYPE_CHECKING:  # pragma: no cover
+    from lmic.api import Result
+    from lmic.ir.problem import Problem
+    from lmic.template.theorem import Theorem
+
+
+def solve(
+    theorem: str,
+    system: Any,
+    params: dict[str, Any] | None = None,
+    backend: str = "clarabel",
+    *,
+    exact: bool = False,
+    options: Any = None,
+) -> Result:
+    """Compile, solve and certify ``theorem`` for ``system``.
+
+    Parameters
+    ----------
+    theorem : str
+        A theorem id (``lmic.theorems()`` lists them), or an ``.json`` IR / ``.dat-s`` file
+        (then ``system`` is ``None``).
+    system : path, dict, System or StateSpace
+        A system file, a dict with its keys (``data``, ``params``; numpy arrays allowed), a
+        python-control ``StateSpace`` (its ``A, B, C, D`` fill the theorem's data of those names),
+        or ``{"plant": ss, "data": {...}, "params": {...}}``.
+    params : dict, optional
+        Parameter overrides.
+    backend : str
+        ``clarabel`` (default), ``scs``, ``cvxopt``, ``sdpa``, ``cvxpy[:SOLVER]``, ``picos``, ``auto``.
+    exact : bool
+        Also prove strict LMIs in exact rational arithmetic.
+
+    Returns
+    -------
+    lmic.api.Result
+        ``.status``, ``.verdict``, ``.certificate``, ``.gains`` and ``.values`` (numpy arrays);
+        displays as a table in Jupyter.
+    """
+    from lmic.api import solve as _solve
+
+    return _solve(theorem, system, params, backend, options=options, exact=exact)
+
+
+def theorem(theorem_id: str) -> Theorem:
+    """The registered theorem ``theorem_id`` (``.latex()``, ``.template()``, ``.citation``)."""
+    from lmic.registry import get_theorem
+
+    return get_theorem(theorem_id)
+
+
+def theorems() -> list[Theorem]:
+    """Every registered theorem."""
+    from lmic.registry import list_theorems
+
+    return list_theorems()
+
+
+def compile_theorem(theorem_id: str, system: Any, params: dict[str, Any] | None = None) -> Problem:
+    """Compile a theorem for a system into the IR (:class:`lmic.ir.Problem`) without solving."""
+    from lmic.compile import compile_theorem
+    from lmic.plant import as_system
+
+    return compile_theorem(theorem_id, as_system(theorem_id, system), params)

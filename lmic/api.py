@@ -94,6 +94,33 @@ class Result:
         margins = [m.get("min_margin") for m in lmis if m.get("min_margin") is not None]
         return float(min(margins)) if margins else None
 
+    @property
+    def gains(self) -> dict[str, Any]:
+        """Derived quantities (back-substituted gains, scalars) as numpy arrays / floats."""
+        return {k: _as_numeric(v) for k, v in (self.derived or {}).items() if not isinstance(v, str)}
+
+    @property
+    def values(self) -> dict[str, Any]:
+        """Decision variables at the returned point, as numpy arrays / floats."""
+        return {k: _as_numeric(v) for k, v in (self.variables or {}).items()}
+
+    def __repr__(self) -> str:
+        objective = "" if self.objective is None else f", objective={self.objective:.6g}"
+        return (
+            f"Result({self.target!r}, backend={self.backend!r}, status={self.status!r}{objective}, "
+            f"verdict={self.verdict!r}, gains={sorted(self.gains)})"
+        )
+
+    def _repr_html_(self) -> str:
+        from lmic.display import result_html
+
+        return result_html(self)
+
+    def _repr_latex_(self) -> str:
+        from lmic.display import result_latex
+
+        return result_latex(self)
+
     def exit_code(self) -> int:
         """0 certified, 3 infeasible, 1 rejected / inaccurate / failed (DESIGN section 7)."""
         if self.verdict == "certified" and self.status in ("optimal", "feasible"):
@@ -229,6 +256,14 @@ def _values(problem: Problem, x: np.ndarray | None, certificate: Any) -> tuple[d
     return variables, derived
 
 
+def _as_numeric(value: Any) -> Any:
+    if isinstance(value, list):
+        return np.atleast_2d(np.asarray(value, dtype=float))
+    if isinstance(value, int | float):
+        return float(value)
+    return value
+
+
 def _jsonable(value: Any) -> Any:
     if isinstance(value, dict):
         return {k: _jsonable(v) for k, v in value.items()}
@@ -274,6 +309,10 @@ def solve(
     >>> r.status, round(r.objective, 6)
     ('optimal', 0.585786)
     """
+    if system is not None and not isinstance(target, Problem):
+        from lmic.plant import as_system
+
+        system = as_system(target, system)
     problem, theorem, compile_s = load_target(target, system, params)
     name = target if isinstance(target, str) else ("<problem>" if isinstance(target, Problem) else os.fspath(target))
     spec = backend.label if isinstance(backend, Backend) else str(backend)

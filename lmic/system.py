@@ -112,6 +112,10 @@ def parse_matrix(value: Any, where: str) -> np.ndarray:
     ...
     lmic.errors.DataError: B: is a flat list; write a column as [[1], [2]] or a row as [[1, 2]]
     """
+    if isinstance(value, np.ndarray):  # from the Python API
+        value = value.tolist() if value.ndim else float(value)
+    if isinstance(value, np.generic):
+        value = value.item()
     value = _number_literal(value)
     if _is_number(value):
         arr = np.array([[float(value)]])

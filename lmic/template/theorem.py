@@ -83,6 +83,16 @@ class Theorem:
 
         return theorem_latex(self, self.template(options))
 
+    def _repr_html_(self) -> str:
+        from lmic.display import theorem_html
+
+        return theorem_html(self)
+
+    def _repr_latex_(self) -> str:
+        from lmic.display import theorem_latex_block
+
+        return theorem_latex_block(self)
+
     @property
     def doc(self) -> str:
         """The build function's docstring (source, result and references)."""
