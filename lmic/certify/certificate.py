@@ -367,7 +367,12 @@ class AuditResult:
     certificate : Certificate or None
         The recomputed certificate (``None`` when the audit stopped before certifying).
     exact : bool
-        Whether the exact proof was re-run.
+        Whether an exact proof was run (always when the certificate records one).
+    theorem : str or None
+    checked : list of str
+        What was checked, in order.
+    label : str
+        The verdict as displayed: ``certified (exact)`` when an exact proof backs it.
     """
 
     ok: bool
@@ -379,6 +384,11 @@ class AuditResult:
     exact: bool = False
     theorem: str | None = None
     checked: list[str] = dataclasses.field(default_factory=list)
+    label: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.label:
+            self.label = self.verdict
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form."""
@@ -391,6 +401,7 @@ class AuditResult:
                 "message": self.message,
                 "theorem": self.theorem,
                 "exact": self.exact,
+                "label": self.label,
                 "checked": self.checked,
                 "certificate": None if self.certificate is None else self.certificate.to_dict(),
             }
@@ -510,7 +521,9 @@ def audit_certificate(path: str | os.PathLike[str], exact: bool = False) -> Audi
     path : path
         The certificate file.
     exact : bool
-        Re-run (or run) the exact rational proof.
+        Also run the exact rational proof when the file does not record one (it is reported,
+        not compared). A recorded exact proof is always re-run and compared: the recorded
+        verdict may rest on it.
 
     Returns
     -------
@@ -588,16 +601,13 @@ def audit_certificate(path: str | os.PathLike[str], exact: bool = False) -> Audi
         strategy=backend.get("strategy") or "none",
     )
     tol = Tolerances.coerce({k: v for k, v in doc["tolerances"].items() if k in Tolerances().to_dict()})
-    cert = certify(problem, solution, exact=exact, tol=tol)
+    # recompute in the recorded mode: a certificate that records an exact proof may rest on it
+    # (a strict LMI below the float threshold, proved exactly), so the proof is re-run
+    recorded_exact = recorded.get("exact") is not None
+    cert = certify(problem, solution, exact=recorded_exact, tol=tol)
     new = cert.to_dict()
     new.pop("x", None)
     rec = dict(recorded)
-    if not exact:
-        rec.pop("exact", None)
-        new.pop("exact", None)
-    elif rec.get("exact") is None:
-        rec.pop("exact", None)
-        new.pop("exact", None)
     order = [k for k in rec if k != "verdict"] + ["verdict"]
     for key in order:
         if key in ("time_s", "reason", "tolerances"):
@@ -611,20 +621,35 @@ def audit_certificate(path: str | os.PathLike[str], exact: bool = False) -> Audi
                 f"{fld} differs: recorded {_short(a)}, recomputed {_short(b)}",
                 cert,
                 theorem=theorem_id,
-                exact=exact,
+                exact=recorded_exact,
                 checked=checked,
             )
     checked.append("certificate")
+    shown = cert
     msg = f"every hash and number matches ({label}); verdict {cert.label}"
-    if exact and cert.exact is not None:
-        msg += f"; exact proof {'holds' if cert.exact['proven'] else 'not obtained: ' + cert.exact['reason']}"
+    if exact and not recorded_exact:
+        # asked for a proof the file does not record: run it, report it, compare nothing new
+        shown = certify(problem, solution, exact=True, tol=tol)
+        assert shown.exact is not None
+        if shown.exact["proven"]:
+            msg += "; exact proof (not recorded) holds: " + shown.exact["statement"]
+            if shown.verdict != cert.verdict:
+                msg += f" (with it the verdict would be {shown.label}; re-certify with --exact)"
+        else:
+            msg += "; exact proof (not recorded) not obtained: " + shown.exact["reason"]
+    elif recorded_exact and cert.exact is not None:
+        msg += "; exact proof re-run: " + ("holds" if cert.exact["proven"] else "not obtained: " + cert.exact["reason"])
+    label_out = cert.label
+    if shown is not cert and cert.verdict == "certified" and shown.label == "certified (exact)":
+        label_out = "certified (exact)"
     return AuditResult(
         ok=True,
         verdict=cert.verdict,
         recorded_verdict=recorded["verdict"],
         message=msg,
-        certificate=cert,
-        exact=exact,
+        certificate=shown,
+        exact=exact or recorded_exact,
         theorem=theorem_id,
         checked=checked,
+        label=label_out,
     )

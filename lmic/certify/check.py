@@ -50,6 +50,29 @@ derived quantities and checks
     ``strict_rel`` margin relative to its norm; ...). A failed check rejects the answer even
     when every LMI holds (e.g. an SCS "success" whose gain leaves ``A - L C`` unstable).
 
+Exact mode (``exact=True``)
+---------------------------
+The float rules above are a test; an exact proof (:func:`lmic.certify.exact.prove`) is a
+theorem, so in exact mode it decides the LMIs and the linear rows:
+
+* when the whole proof holds (every LMI and inequality row exactly, every equality row exactly
+  or within ``rel``), every LMI and row is accepted, whatever its float margin: a strict LMI
+  whose relative margin is below ``strict_rel`` (e.g. ``uio_dt.thm3_2`` near its supremum,
+  ~2e-13) is certified. The proof holds at the *recorded* rational point ``x_q``
+  (``exact.point``), which is the solver's float point itself whenever that can be proved
+  (``exact.at_x``), and otherwise a rounding or an exact projection onto the equality rows,
+  at distance ``exact.distance`` from ``x``;
+* otherwise, if ``x_q`` is the float point, each LMI or row proved on its own is accepted and
+  a strict LMI disproved exactly is rejected; elsewhere the float rules stay;
+* a non-strict LMI accepted within the float tolerance stays accepted when exactly disproved.
+
+Every LMI and row entry reports both: ``float_ok`` (the float rule), ``exact`` (``proved``,
+``disproved``, ``not proven``; ``within tolerance`` for equality rows; ``None`` outside exact
+mode), ``ok`` (the decision) and ``decided_by`` (``float`` or ``exact``). Derived quantities,
+checks and the objective are evaluated in float64 at ``x`` in either mode, and must hold; the
+exact objective at ``x_q`` is reported in ``exact.objective``. The label is
+``certified (exact)`` when the verdict is ``certified`` and the whole proof holds.
+
 Verdicts
 --------
 ``certified``            every criterion above holds at ``x`` (the solver status does not matter).
@@ -72,6 +95,17 @@ Examples
 >>> c = certify(p, Solution("optimal", x=np.array([-1e-9])))
 >>> c.verdict, c.reason
 ('rejected', "LMI 'p > 0' violated: lambda_min = -1e-09 (relative -1), needs > 0 (strict)")
+
+A strict LMI below the float threshold, decided by the exact proof:
+
+>>> q = Problem([Variable("p", "scalar", (1, 1))],
+...             [LMI("M > 0", 2, sp.csc_matrix([[1e6, 0.], [0., 0.], [1e-7, 0.]]))],
+...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+>>> certify(q, Solution("optimal", x=np.array([0.0]))).verdict
+'rejected'
+>>> c = certify(q, Solution("optimal", x=np.array([0.0])), exact=True)
+>>> c.label, c.lmis[0]["float_ok"], c.lmis[0]["exact"], c.lmis[0]["decided_by"]
+('certified (exact)', False, 'proved', 'exact')
 """
 
 from __future__ import annotations
@@ -229,8 +263,17 @@ class Certificate:
         return self.verdict
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-able form (floats, lists, dicts; non-finite floats become strings)."""
-        return _jsonable(asdict(self))
+        """JSON-able form (floats, lists, dicts; non-finite floats become strings).
+
+        Besides the fields it holds ``label`` (the verdict as displayed, e.g.
+        ``certified (exact)``).
+
+        >>> Certificate("certified", exact={"proven": True}).to_dict()["label"]
+        'certified (exact)'
+        """
+        d = asdict(self)
+        d["label"] = self.label
+        return _jsonable(d)
 
 
 # --------------------------------------------------------------------------------------------
@@ -317,7 +360,7 @@ def lmi_report(lmi: LMI, x: np.ndarray, tol: Tolerances, *, inaccurate: bool = F
             ok=True,
             note="empty LMI",
         )
-        return out
+        return _decided_by_float(out)
     if not np.all(np.isfinite(F)):
         out.update(
             min_eig=float("nan"),
@@ -331,7 +374,7 @@ def lmi_report(lmi: LMI, x: np.ndarray, tol: Tolerances, *, inaccurate: bool = F
             ok=False,
             note="F(x) is not finite",
         )
-        return out
+        return _decided_by_float(out)
     eig = np.linalg.eigvalsh(F)
     lmin, lmax = float(eig[0]), float(eig[-1])
     rel = lmin / T if T > 0 else float("-inf") if lmin < 0 else 0.0
@@ -358,7 +401,13 @@ def lmi_report(lmi: LMI, x: np.ndarray, tol: Tolerances, *, inaccurate: bool = F
         ok = lmin >= thr
         note = "" if lmin >= 0 else "holds within tolerance"
     out.update(threshold=thr, ok=bool(ok), note=note)
-    return out
+    return _decided_by_float(out)
+
+
+def _decided_by_float(entry: dict[str, Any]) -> dict[str, Any]:
+    """Record the float decision (``float_ok``); the exact proof may decide later."""
+    entry.update(float_ok=bool(entry["ok"]), exact=None, decided_by="float")
+    return entry
 
 
 def _lmi_reason(r: dict) -> str:
@@ -415,6 +464,7 @@ def _linear_reports(problem: Problem, x: np.ndarray, tol: Tolerances, inaccurate
                 "ok": bool(ok and math.isfinite(r)),
             }
         )
+        _decided_by_float(out[-1])
     return out
 
 
@@ -568,6 +618,55 @@ def _objective_report(problem: Problem, solution: Solution, x: np.ndarray, tol: 
     return entry
 
 
+def _reasons(cert: Certificate) -> list[str]:
+    """Every failed criterion, in the documented order (LMIs, rows, derived, checks, objective)."""
+    reasons: list[str] = []
+    failing = [r for r in cert.lmis if not r["ok"]]
+    if failing:
+        worst = min(failing, key=lambda r: r["rel_margin"] if math.isfinite(r["rel_margin"]) else -math.inf)
+        if worst["decided_by"] == "exact":
+            reasons.append(f"exact: LMI '{worst['name']}' {worst['note']}")
+        else:
+            reasons.append(_lmi_reason(worst))
+        if len(failing) > 1:
+            reasons[-1] += f" (and {len(failing) - 1} more LMI(s))"
+    reasons += [_linear_reason(r) for r in cert.linear if not r["ok"]]
+    reasons += [f"derived '{r['name']}' failed: {r['error']}" for r in cert.derived if not r["ok"]]
+    reasons += [_check_reason(r) for r in cert.checks if not r["ok"]]
+    if cert.objective is not None and not cert.objective["ok"]:
+        o = cert.objective
+        reasons.append(f"objective: the solver reports {o['claimed']!r}, the point gives {o['value']!r}")
+    return reasons
+
+
+def _apply_exact(cert: Certificate, ex: dict[str, Any]) -> None:
+    """Let the exact proof decide the LMIs and linear rows (rules of the module docstring).
+
+    * the whole proof holds (at ``x_q``, recorded): every LMI and row is accepted, whatever its
+      float margin;
+    * otherwise, when ``x_q`` is the float point itself, each LMI or row proved exactly is
+      accepted, and a strict LMI disproved exactly is rejected;
+    * a non-strict LMI accepted by the float tolerance stays accepted even when exactly
+      disproved (the tolerance is documented; the label then stays ``certified``).
+    """
+    whole, at_x = bool(ex["proven"]), bool(ex["at_x"])
+    for r, e in zip(cert.lmis, ex.get("lmis", []), strict=True):
+        r["exact"] = "proved" if e["proven"] else ("disproved" if e["disproved"] else "not proven")
+        if (whole or (at_x and e["proven"])) and not r["ok"]:
+            r["ok"], r["decided_by"] = True, "exact"
+            what = "positive definite" if r["strict"] else "positive semidefinite"
+            r["note"] = (
+                f"below the float threshold (relative margin {_g(r['rel_margin'])}); {what} by the exact proof at x_q"
+            )
+        elif e["disproved"] and r["strict"] and r["ok"]:
+            r["ok"], r["decided_by"] = False, "exact"
+            r["note"] = f"is not positive definite at the solver's point ({e['detail']})"
+    for r, e in zip(cert.linear, ex.get("linear", []), strict=True):
+        r["exact"] = "proved" if e["proven"] else ("within tolerance" if e["within_tolerance"] else "not proven")
+        if (whole or (at_x and e["proven"])) and not r["ok"]:
+            r["ok"], r["decided_by"] = True, "exact"
+
+
 # --------------------------------------------------------------------------------------------
 # the certifier
 
@@ -661,28 +760,12 @@ def certify(
             "achieved": min(strict_eigs) if strict_eigs else None,
         }
 
-    reasons: list[str] = []
-    failing = [r for r in cert.lmis if not r["ok"]]
-    if failing:
-        worst = min(failing, key=lambda r: r["rel_margin"] if math.isfinite(r["rel_margin"]) else -math.inf)
-        reasons.append(_lmi_reason(worst))
-        if len(failing) > 1:
-            reasons[-1] += f" (and {len(failing) - 1} more LMI(s))"
-    reasons += [_linear_reason(r) for r in cert.linear if not r["ok"]]
-    reasons += [f"derived '{r['name']}' failed: {r['error']}" for r in cert.derived if not r["ok"]]
-    reasons += [_check_reason(r) for r in cert.checks if not r["ok"]]
-    if cert.objective is not None and not cert.objective["ok"]:
-        o = cert.objective
-        reasons.append(f"objective: the solver reports {o['claimed']!r}, the point gives {o['value']!r}")
-
     if exact:
         from lmic.certify.exact import prove
 
         cert.exact = prove(problem, x, inaccurate=inaccurate, tol=tolr, min_eigs=[r["min_eig"] for r in cert.lmis])
-        # an exact disproof of a strict LMI rejects; a non-strict LMI the float test accepted
-        # within tolerance stays accepted (the exact block says it is not proven)
-        if any(e["disproved"] and e["strict"] for e in cert.exact.get("lmis", [])):
-            reasons.insert(0, "exact: " + cert.exact["reason"])
+        _apply_exact(cert, cert.exact)
+    reasons = _reasons(cert)
 
     if reasons:
         cert.verdict, cert.reason = "rejected", reasons[0]
@@ -697,6 +780,12 @@ def certify(
         if inaccurate:
             cert.reason += " (despite the solver's 'inaccurate' status)"
         if cert.exact is not None:
-            cert.reason += "; exact proof: " + ("yes" if cert.exact["proven"] else cert.exact["reason"])
+            rescued = [r["name"] for r in cert.lmis + cert.linear if r["decided_by"] == "exact"]
+            if cert.exact["proven"]:
+                cert.reason += "; exact proof: " + cert.exact["statement"]
+            else:
+                cert.reason += "; exact proof: " + cert.exact["reason"]
+            if rescued:
+                cert.reason += f"; below the float threshold but proved exactly: {', '.join(repr(n) for n in rescued)}"
     cert.time_s = time.perf_counter() - t0
     return cert

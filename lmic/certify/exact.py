@@ -3,15 +3,34 @@
 What is proved
 --------------
 The IR stores its coefficients as float64 numbers; every float is a dyadic rational, so the
-LMI ``F(x) = F0 + sum_k x_k F_k`` the IR denotes has exact rational coefficients. The point
-``x`` is rounded to a dyadic rational point ``x_q = N / 2^K`` (one common denominator ``2^K``;
-``K`` is chosen from the float margins so that rounding cannot destroy them, and raised to the
-bits of the float ``x`` itself when needed). Then ``F(x_q)`` is built exactly: scaled by
-``2^(K - e)`` it is an integer matrix ``M`` (python ints, a :class:`flint.fmpz_mat`).
+LMI ``F(x) = F0 + sum_k x_k F_k`` the IR denotes has exact rational coefficients. So is the
+solver's float point ``x``: ``x = N / 2^K_x`` exactly, ``K_x`` the bits below the binary point
+of its finest entry. The proof is made at a rational point ``x_q = N / D`` (one common
+denominator ``D``), which is *recorded* (``point``: ``den`` and ``num`` as decimal strings):
 
-When the IR has equality rows the rounded point is projected exactly onto them
-(``x_q - A^T (A A^T)^-1 (A x_q + a0)`` in rational arithmetic, python-flint ``fmpq_mat``);
-the common denominator ``D`` is then no longer a power of two and is reported as such.
+1. first ``x_q = x`` itself (``D = 2^K_x``; ``at_x`` is true): no rounding, so the certified
+   point *is* the solver's point, and the gains derived from ``x`` are those of the certified
+   point. This costs no more than a coarse rounding (size 180: ~0.7 s either way);
+2. if that fails (or ``K_x`` exceeds :data:`FULL_BITS_MAX`, e.g. subnormal entries), ``x`` is
+   rounded to the coarser grid ``2^-K`` with ``K`` chosen from the float margins so that the
+   rounding cannot destroy them (``at_x`` false; ``distance = max |x_q - x|`` is reported).
+
+``F(x_q)`` is built exactly: scaled by ``2^(K - e)`` it is an integer matrix ``M`` (python ints,
+a :class:`flint.fmpz_mat`).
+
+When the IR has equality rows the point is projected exactly onto them
+(``x_q - A^T (A A^T)^-1 (A x_q + a0)`` in rational arithmetic, python-flint ``fmpq_mat``, over
+a maximal independent subset of the rows when they are rank deficient); the common
+denominator ``D`` is then no longer a power of two, and ``x_q != x``. An equality row that is
+still not exactly zero at ``x_q`` (rows inconsistent in exact arithmetic) is accepted within
+the documented tolerance ``|r| <= rel * s`` (``s = |a0| + sum_k |a_k x_k|``, exactly at ``x_q``)
+and listed in ``rows_within_tolerance``.
+
+A successful proof (``proven``) is the statement: *every LMI holds exactly at the rational
+point ``x_q`` (strict ones positive definite, the others positive semidefinite), every
+inequality row holds exactly, and every equality row holds exactly (or within tolerance, as
+listed)*. ``statement`` says it in one line. The objective at ``x_q`` is computed exactly and
+reported (``objective``, rounded to float64 for display).
 
 How positive definiteness is proved (:func:`prove_pd`)
 ------------------------------------------------------
@@ -32,11 +51,10 @@ How positive definiteness is proved (:func:`prove_pd`)
    has real roots ``-lambda_i``; all its coefficients are ``> 0`` iff ``M > 0`` and all are
    ``>= 0`` iff ``M >= 0``. The answer is exact either way (proved or disproved).
 
-A disproof at the *float* point itself (no rounding, ``x_q == x``) is a disproof of the solver's
-point; a disproof at a rounded point only says "not proven".
+A disproof at the *float* point itself (``x_q == x``) is a disproof of the solver's point; a
+disproof at a rounded or projected point only says "not proven".
 
-Linear inequality rows are checked exactly at ``x_q`` (``> 0`` strict, ``>= 0``), equality
-rows must be exactly zero.
+Linear inequality rows are checked exactly at ``x_q`` (``> 0`` strict, ``>= 0``).
 
 Examples
 --------
@@ -45,8 +63,12 @@ Examples
 >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
 ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
 >>> r = prove(p, np.array([0.3]))
->>> r["proven"], r["denominator"]
-(True, '2^6')
+>>> r["proven"], r["at_x"], r["denominator"]
+(True, True, '2^54')
+>>> r["statement"]
+"every LMI and linear row holds exactly at the rational point x_q (exact.point), the solver's float point x itself"
+>>> prove(p, np.array([0.3]), bits=6)["point"]
+{'den': '64', 'num': ['19']}
 """
 
 from __future__ import annotations
@@ -73,12 +95,15 @@ __all__ = [
     "prove",
     "LDL_MAX_DIM",
     "CHARPOLY_MAX_DIM",
+    "FULL_BITS_MAX",
 ]
 
 #: largest dimension proved by exact LDL^T in python rationals
 LDL_MAX_DIM = 40
 #: largest dimension proved through the characteristic polynomial
 CHARPOLY_MAX_DIM = 150
+#: largest denominator exponent of the float point tried first, before a coarser rounding
+FULL_BITS_MAX = 256
 _ROUNDS = 3
 
 
@@ -485,7 +510,12 @@ def _needed_bits(problem: Problem, x: np.ndarray, min_eigs: list[float] | None =
 
 
 def _project_eq(problem: Problem, point: ExactPoint) -> tuple[ExactPoint, str]:
-    """Project ``point`` exactly onto the equality rows (``x - A^T (A A^T)^-1 (A x + a0)``)."""
+    """Project ``point`` exactly onto the equality rows (``x - A^T (A A^T)^-1 (A x + a0)``).
+
+    Rank-deficient rows are reduced to a maximal independent subset first (the pivot columns
+    of the exact reduced row echelon form of ``A^T``); the dependent rows then vanish at the
+    projection when the system is consistent in exact arithmetic.
+    """
     lin = problem.linear
     eq = [i for i, k in enumerate(lin.kinds) if k == "eq"]
     if not eq:
@@ -493,52 +523,79 @@ def _project_eq(problem: Problem, point: ExactPoint) -> tuple[ExactPoint, str]:
     flint = _flint()
     A = lin.A.tocsr()[eq].toarray()
 
-    def q(f: Fraction):
+    def q(v: float):
+        f = Fraction(float(v))
         return flint.fmpq(f.numerator, f.denominator)
 
-    Aq = flint.fmpq_mat([[q(Fraction(float(v))) for v in row[1:]] for row in A])
-    a0 = flint.fmpq_mat([[q(Fraction(float(row[0])))] for row in A])
-    xq = flint.fmpq_mat([[q(f)] for f in point.fractions()])
+    xq = flint.fmpq_mat([[flint.fmpq(v, point.den)] for v in point.num])
+    Aq = flint.fmpq_mat([[q(v) for v in row[1:]] for row in A])
+    a0 = flint.fmpq_mat([[q(row[0])] for row in A])
     res = Aq * xq + a0
     if all(v == 0 for v in res.entries()):
         return point, ""
-    G = Aq * Aq.transpose()
-    if G.rank() < len(eq):
-        return point, "the equality rows are rank deficient; no exact projection"
-    y = G.solve(res)
+    R, rank = Aq.transpose().rref()
+    if rank == 0:
+        return point, "the equality rows have no variable terms; no exact projection"
+    note = "projected exactly onto the equality rows"
+    if rank < len(eq):
+        width = R.ncols()
+        flat = R.entries()
+        pivots = []
+        for r in range(rank):
+            row = flat[r * width : (r + 1) * width]
+            pivots.append(next(c for c in range(width) if row[c] != 0))
+        Aq = flint.fmpq_mat([[q(v) for v in A[c][1:]] for c in pivots])
+        res = flint.fmpq_mat([[res[c, 0]] for c in pivots])
+        note += f" ({rank} independent of {len(eq)})"
+    y = (Aq * Aq.transpose()).solve(res)
     xp = xq - Aq.transpose() * y
     fr = [Fraction(int(v.p), int(v.q)) for v in xp.entries()]
     den = 1
     for f in fr:
         den = den * f.denominator // math.gcd(den, f.denominator)
-    return ExactPoint([int(f * den) for f in fr], den), "projected exactly onto the equality rows"
+    return ExactPoint([int(f * den) for f in fr], den), note
 
 
-def _linear_exact(problem: Problem, point: ExactPoint) -> list[dict[str, Any]]:
+def _linear_exact(problem: Problem, point: ExactPoint, rel: float) -> list[dict[str, Any]]:
+    """Every linear row exactly at ``point``; an equality row may hold within ``rel``."""
     lin = problem.linear
-    out = []
+    out: list[dict[str, Any]] = []
     if not len(lin):
         return out
     A = lin.A.tocsr()
     xs = [Fraction(1)] + point.fractions()
+    rel_q = Fraction(rel) if math.isfinite(rel) and rel >= 0 else Fraction(0)
     for i in range(len(lin)):
         lo, hi = A.indptr[i], A.indptr[i + 1]
-        r = sum(
-            (Fraction(float(v)) * xs[j] for v, j in zip(A.data[lo:hi], A.indices[lo:hi], strict=True)),
-            Fraction(0),
-        )
+        terms = [Fraction(float(v)) * xs[j] for v, j in zip(A.data[lo:hi], A.indices[lo:hi], strict=True)]
+        r = sum(terms, Fraction(0))
         kind, strict = lin.kinds[i], bool(lin.strict[i])
         ok = r == 0 if kind == "eq" else (r > 0 if strict else r >= 0)
+        within = bool(kind == "eq" and not ok and abs(r) <= rel_q * sum((abs(t) for t in terms), Fraction(0)))
         out.append(
             {
                 "name": lin.names[i],
                 "kind": kind,
                 "strict": strict,
                 "proven": bool(ok),
+                "within_tolerance": within,
                 "value": float(r),
             }
         )
     return out
+
+
+def _objective_exact(problem: Problem, point: ExactPoint) -> float | None:
+    """``c0 + c . x_q`` computed exactly, rounded to float64 (``None`` for feasibility)."""
+    obj = problem.objective
+    if obj.sense == "feasibility":
+        return None
+    c = np.asarray(obj.c, dtype=float)
+    num = sum(
+        (Fraction(float(c[1 + k])) * v for k, v in enumerate(point.num) if c[1 + k] != 0 and v != 0),
+        Fraction(0),
+    )
+    return float(Fraction(float(c[0])) + num / point.den)
 
 
 def prove(
@@ -550,7 +607,7 @@ def prove(
     bits: int | None = None,
     min_eigs: list[float] | None = None,
 ) -> dict[str, Any]:
-    """Prove every LMI and linear row of ``problem`` at a rational rounding of ``x``.
+    """Prove every LMI and linear row of ``problem`` at a rational point ``x_q`` near ``x``.
 
     Parameters
     ----------
@@ -559,11 +616,12 @@ def prove(
         The float point (length ``problem.n``).
     inaccurate : bool
         Unused by the proof itself (kept for a uniform call from :func:`certify`).
-    tol : Tolerances, optional
-        Unused (exact proofs have no tolerance); accepted for a uniform call.
+    tol : Tolerances or float, optional
+        Only its ``rel`` is used: the tolerance of an equality row that cannot be met exactly
+        (default ``1e-8``). LMIs and inequality rows are proved without tolerance.
     bits : int, optional
-        Force the denominator ``2^bits`` (default: chosen from the float margins, then the
-        bits of ``x`` itself if the first attempt does not prove everything).
+        Force the denominator ``2^bits`` (default: ``x`` itself first, then a coarser grid
+        chosen from the float margins; see the module docstring).
     min_eigs : list of float, optional
         The float ``lambda_min`` of every LMI at ``x``, when already known (saves work).
 
@@ -571,9 +629,14 @@ def prove(
     -------
     dict
         ``proven`` (all LMIs and rows), ``disproved`` (an LMI exactly fails at the float point
-        itself), ``reason``, ``denominator`` (e.g. ``"2^23"``), ``bits``, ``numerator_bits``,
-        ``rounded`` (whether ``x_q != x``), ``time_s``, ``lmis`` (``name, strict, proven,
-        disproved, method, detail, entry_bits``), ``linear``.
+        itself), ``reason``, ``statement`` (what a proof means, one line), ``point``
+        (``{"den", "num"}``: ``x_q`` as decimal strings), ``at_x`` (``x_q == x``), ``distance``
+        (``max |x_q - x|``), ``objective`` (exact at ``x_q``), ``denominator`` (e.g.
+        ``"2^23"``), ``bits``, ``numerator_bits``, ``rounded`` (``x_q != x``), ``projection``,
+        ``rows_within_tolerance``, ``attempts`` (per denominator tried: ``denominator,
+        proven, disproved``), ``time_s``, ``lmis`` (``name, strict, proven, disproved,
+        method, detail, entry_bits``), ``linear`` (``name, kind, strict, proven,
+        within_tolerance, value``).
 
     Examples
     --------
@@ -582,31 +645,64 @@ def prove(
     >>> p = Problem([Variable("p", "scalar", (1, 1))],
     ...             [LMI("p >= 0", 1, sp.csc_matrix([[0., 1.]]), strict=False)],
     ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
-    >>> prove(p, np.array([0.0]))["proven"]
-    True
+    >>> r = prove(p, np.array([0.0]))
+    >>> r["proven"], r["at_x"], r["point"]
+    (True, True, {'den': '1', 'num': ['0']})
     """
-    del inaccurate, tol
+    del inaccurate
+    rel = _rel_of(tol)
     t0 = time.perf_counter()
     x = np.asarray(x, dtype=float).ravel()
     K_full = _float_bits(x)
+    tried: list[dict[str, Any]] = []
+    result: dict[str, Any] | None = None
+    at_full: dict[str, Any] | None = None
     if bits is not None:
-        attempts = [int(bits)]
+        plan: list[int | None] = [int(bits)]
+    elif K_full <= FULL_BITS_MAX:
+        plan = [K_full, None]  # None: the coarse grid, computed only if needed
     else:
-        K = _needed_bits(problem, x, min_eigs)
-        attempts = [K_full] if K is None or K >= K_full else [K, K_full]
-    result: dict[str, Any] = {}
-    for K in attempts:
-        result = _attempt(problem, x, K, K_full)
-        if result["proven"]:
+        plan = [None, K_full]
+    for K in plan:
+        if K is None:
+            K = _needed_bits(problem, x, min_eigs)
+            if K is None or K >= K_full:
+                continue
+        attempt = _attempt(problem, x, K, K_full, rel)
+        if not attempt["proven"] and attempt["projection"]:
+            # the exact projection can move the point far (nearly dependent rows) or away from
+            # the LMIs' margins: without it, the equality rows may still hold within tolerance
+            plain = _attempt(problem, x, K, K_full, rel, project=False)
+            if plain["proven"]:
+                attempt = plain
+        tried.append({k: attempt[k] for k in ("denominator", "proven", "disproved")})
+        if K == K_full:
+            at_full = attempt
+        result = attempt
+        if attempt["proven"]:
             break
+    assert result is not None  # the plan always holds K_full or a forced K
+    if not result["proven"] and at_full is not None:
+        result = at_full  # a failure is reported at the solver's point itself (a disproof there is final)
+    result["attempts"] = tried
     result["time_s"] = time.perf_counter() - t0
     return result
 
 
-def _attempt(problem: Problem, x: np.ndarray, K: int, K_full: int) -> dict[str, Any]:
+def _rel_of(tol: Any) -> float:
+    if tol is None:
+        return 1e-8
+    if isinstance(tol, int | float) and not isinstance(tol, bool):
+        return float(tol)
+    return float(getattr(tol, "rel", 1e-8))
+
+
+def _attempt(problem: Problem, x: np.ndarray, K: int, K_full: int, rel: float, project: bool = True) -> dict[str, Any]:
     point = round_point(x, K)
-    point, proj = _project_eq(problem, point)
-    rounded = K < K_full or bool(proj)
+    proj = ""
+    if project:
+        point, proj = _project_eq(problem, point)
+    rounded = K < K_full or point.den != (1 << K) or proj.startswith("projected")
     lmis = []
     for lmi in problem.lmis:
         M = exact_matrix(lmi, point)
@@ -623,9 +719,22 @@ def _attempt(problem: Problem, x: np.ndarray, K: int, K_full: int) -> dict[str, 
                 "entry_bits": bitsz,
             }
         )
-    linear = _linear_exact(problem, point)
-    proven = all(e["proven"] for e in lmis) and all(e["proven"] for e in linear)
+    linear = _linear_exact(problem, point, rel)
+    within = [e["name"] for e in linear if e["within_tolerance"]]
+    proven = all(e["proven"] for e in lmis) and all(e["proven"] or e["within_tolerance"] for e in linear)
     disproved = any(e["disproved"] for e in lmis)
+    distance = 0.0
+    if rounded and point.num:
+        distance = max(
+            float(abs(Fraction(v, point.den) - Fraction(float(xk)))) for v, xk in zip(point.num, x, strict=True)
+        )
+    where = "the solver's float point x itself" if not rounded else f"max |x_q - x| = {distance:.3g}"
+    rows = (
+        "every LMI and linear row holds exactly"
+        if not within
+        else (f"every LMI and inequality row holds exactly, {len(within)} equality row(s) within tolerance {rel:g}")
+    )
+    statement = f"{rows} at the rational point x_q (exact.point), {where}" if proven else ""
     if proven:
         reason = f"every LMI and row proved at the rational point (denominator {point.describe()})"
     else:
@@ -637,19 +746,25 @@ def _attempt(problem: Problem, x: np.ndarray, K: int, K_full: int) -> dict[str, 
             else:
                 reason = f"LMI '{bad['name']}' not proven ({bad['detail']})"
         else:
-            row = next(e for e in linear if not e["proven"])
+            row = next(e for e in linear if not (e["proven"] or e["within_tolerance"]))
             reason = f"row '{row['name']}' not proven at the rational point (value {row['value']:.3g})"
-        if proj.startswith("the equality rows are rank"):
+        if proj and not proj.startswith("projected"):
             reason += "; " + proj
     return {
         "proven": bool(proven),
         "disproved": bool(disproved),
         "reason": reason,
+        "statement": statement,
+        "point": {"den": str(point.den), "num": [str(v) for v in point.num]},
+        "at_x": not rounded,
+        "distance": distance,
+        "objective": _objective_exact(problem, point),
         "denominator": point.describe(),
         "bits": int(K),
         "numerator_bits": max((abs(v).bit_length() for v in point.num), default=0),
         "rounded": bool(rounded),
         "projection": proj,
+        "rows_within_tolerance": within,
         "lmis": lmis,
         "linear": linear,
     }

@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
     head.add_row("checked", ", ".join(result.checked))
     head.add_row("recorded verdict", result.recorded_verdict)
     colour = "green" if code in (0, 3) else "red"
-    label = result.certificate.label if (result.ok and result.certificate) else result.verdict
+    label = result.label if result.ok else result.verdict
     head.add_row("audit", f"[{colour}]{'consistent' if result.ok else 'REJECTED'}: {label}[/{colour}]")
     if result.field:
         head.add_row("first difference", result.field)

@@ -15,6 +15,8 @@ from certify_helpers import lmi_from
 
 from lmic.certify import certify
 from lmic.certify.exact import (
+    FULL_BITS_MAX,
+    _float_bits,
     exact_float,
     exact_matrix,
     prove,
@@ -105,13 +107,44 @@ def test_ill_conditioned_matrix_needs_more_rounds_but_is_proved():
     assert r["proven"]  # by congruence rounds or by exact LDL^T
 
 
-def test_prove_uses_few_bits_for_comfortable_margins(lyapunov_point):
+def test_prove_at_the_float_point_itself_first(lyapunov_point):
     prob, x = lyapunov_point
     r = prove(prob, x)
     assert r["proven"] and not r["disproved"]
-    assert r["rounded"] and r["bits"] < 30
-    assert r["denominator"] == f"2^{r['bits']}"
+    assert r["at_x"] and not r["rounded"] and r["distance"] == 0.0
+    assert r["bits"] == _float_bits(x) and r["denominator"] == f"2^{r['bits']}"
+    den = int(r["point"]["den"])
+    assert [Fraction(int(v), den) for v in r["point"]["num"]] == [Fraction(float(v)) for v in x]
+    assert r["attempts"] == [{"denominator": r["denominator"], "proven": True, "disproved": False}]
+    assert "the solver's float point x itself" in r["statement"]
     assert all(e["method"] == "congruence" for e in r["lmis"])
+
+
+def test_forced_coarse_grid_records_the_rounded_point(lyapunov_point):
+    prob, x = lyapunov_point
+    r = prove(prob, x, bits=20)
+    assert r["proven"] and r["rounded"] and not r["at_x"]
+    assert r["denominator"] == "2^20" and r["point"]["den"] == str(2**20)
+    assert 0 < r["distance"] <= 2.0**-21
+    xq = np.array([int(v) / 2**20 for v in r["point"]["num"]])
+    assert np.max(np.abs(xq - x)) == pytest.approx(r["distance"])
+    assert "max |x_q - x| = " in r["statement"]
+
+
+def test_huge_float_denominator_tries_a_coarse_grid_first():
+    # an entry of 1e-100 needs 2^-385: beyond FULL_BITS_MAX, a margin-preserving grid goes first
+    prob = Problem(
+        [Variable("p", "scalar", (1, 1), offset=0), Variable("q", "scalar", (1, 1), offset=1)],
+        [lmi_from("diag", [np.eye(2), np.diag([1.0, 0.0]), np.diag([0.0, 1.0])])],
+        LinearConstraints.empty(2),
+        Objective("min", np.array([0.0, 1.0, 1.0])),
+    )
+    x = np.array([0.5, 1e-100])
+    assert _float_bits(x) > FULL_BITS_MAX
+    r = prove(prob, x)
+    assert r["proven"] and not r["at_x"] and r["bits"] < 20
+    assert r["distance"] == pytest.approx(1e-100)
+    assert r["objective"] == 0.5  # exact at x_q = (1/2, 0)
 
 
 def test_tiny_margin_falls_back_to_the_float_point_itself():
@@ -157,6 +190,7 @@ def test_exact_disproof_of_a_strict_lmi_rejects(monkeypatch):
     cert = certify(prob, Solution("optimal", x=x), exact=True, tol={"strict_rel": -1.0})
     assert cert.verdict == "rejected"
     assert cert.reason.startswith("exact: LMI 'p - 1 > 0' is not positive definite at the solver's point")
+    assert cert.lmis[0]["float_ok"] and not cert.lmis[0]["ok"] and cert.lmis[0]["decided_by"] == "exact"
 
 
 def test_equality_rows_are_met_exactly_by_projection():
@@ -184,7 +218,7 @@ def test_benchmark_size_90_is_fast_and_proved():
     elapsed = time.perf_counter() - t0
     assert cert.label == "certified (exact)"
     assert cert.exact["lmis"][0]["method"] == "congruence"
-    assert cert.exact["bits"] <= 30
+    assert cert.exact["at_x"]  # proved at the float point itself, no rounding
     assert elapsed < 5.0
     # the float LMI agrees with a dense evaluation of the printed block matrix
     v = prob.unpack(x)
@@ -211,3 +245,40 @@ def test_int64_limb_path_agrees_with_python_ints():
         assert max(map(abs, big.num + [big.den])) >= 2**62
         small = exact_matrix(lmi, pt)
         assert exact_matrix(lmi, big) == [[v << 62 for v in row] for row in small]  # same scale c
+
+
+def _two_variable_problem(rows: np.ndarray, names: list[str]) -> Problem:
+    return Problem(
+        [Variable("x", "scalar", (1, 1), offset=0), Variable("y", "scalar", (1, 1), offset=1)],
+        [lmi_from("diag", [np.zeros((2, 2)), np.diag([1.0, 0.0]), np.diag([0.0, 1.0])])],
+        LinearConstraints(sp.csr_matrix(rows), ["eq"] * len(rows), [False] * len(rows), names),
+        Objective("feasibility", np.zeros(3)),
+    )
+
+
+def test_rank_deficient_equality_rows_are_projected_on_an_independent_subset():
+    # x + y = 1 twice (the second row exactly twice the first): 0.3 + 0.7 != 1 in exact rationals
+    prob = _two_variable_problem(np.array([[-1.0, 1.0, 1.0], [-2.0, 2.0, 2.0]]), ["x+y=1", "2x+2y=2"])
+    assert Fraction(0.3) + Fraction(0.7) != 1
+    r = prove(prob, np.array([0.3, 0.7]))
+    assert r["proven"], r["reason"]
+    assert r["projection"] == "projected exactly onto the equality rows (1 independent of 2)"
+    assert [e["value"] for e in r["linear"]] == [0.0, 0.0] and r["rows_within_tolerance"] == []
+    assert not r["at_x"] and 0 < r["distance"] < 1e-16
+
+
+def test_equality_rows_that_cannot_be_met_exactly_hold_within_tolerance():
+    # 0.1 x + y = 1 and 0.3 x + 3 y = 3: nearly but not exactly dependent in float, so the exact
+    # projection lands on their intersection x = 0, where diag(x, y) > 0 fails; at the float
+    # point itself both rows hold within the tolerance rel = 1e-8
+    prob = _two_variable_problem(np.array([[-1.0, 0.1, 1.0], [-3.0, 0.3, 3.0]]), ["r1", "r2"])
+    x = np.array([1.0, 0.9])
+    r = prove(prob, x)
+    assert r["proven"] and r["at_x"] and r["projection"] == ""
+    assert r["rows_within_tolerance"] == ["r1", "r2"]
+    assert "2 equality row(s) within tolerance 1e-08" in r["statement"]
+    tight = prove(prob, x, tol=0.0)
+    assert not tight["proven"]
+    cert = certify(prob, Solution("feasible", x=x), exact=True)
+    assert cert.label == "certified (exact)"
+    assert [e["exact"] for e in cert.linear] == ["within tolerance", "within tolerance"]

@@ -118,7 +118,7 @@ def test_thm4_1_gamma_max_by_bisection():
     def feasible(g):
         prob = compile_theorem("uio_dt.thm3_2", example(EX32), {"gamma": g})
         sol = solve_problem(with_fixed_margin(prob), "clarabel")
-        cert = certify(prob, sol, tol={"strict_rel": 0.0}, exact=True)
+        cert = certify(prob, sol, exact=True)
         return cert.verdict == "certified" and cert.exact["proven"]
 
     lo, hi = bisect(feasible, 48.5, 55.0, 0.05)  # 48.5: the method of [10] in Table 2
@@ -136,7 +136,7 @@ def test_thm4_1_direct_min_rho_stops_early():
     """Direct min rho: a valid but early point (Clarabel ~11-12 on the example, not 51.5)."""
     r = solve("uio_dt.thm4_1", example(EX41), backend="clarabel")
     assert r.status == "optimal"
-    cert = certify(r.problem, r.solution, tol={"strict_rel": 0.0}, exact=True)
+    cert = certify(r.problem, r.solution, exact=True)
     assert cert.verdict == "certified" and cert.exact["proven"], cert.reason
     assert 5.0 < r.derived["gamma_max"] < 51.5
     assert r.derived["gamma_max"] == pytest.approx(1 / np.sqrt(r.objective), rel=1e-9)
