@@ -414,7 +414,8 @@ th, td { border: 1px solid #d5dae3; padding: 0.25rem 0.6rem; text-align: left; v
 thead th { background: #eef1f6; } table.kv th { background: #f3f5f9; font-weight: 600; }
 table.matrix td { font-family: ui-monospace, monospace; text-align: right; }
 .values { display: flex; flex-wrap: wrap; gap: 0 2.5rem; align-items: center; } .value { max-width: 100%; }
-.katex-display { margin: 0.6em 0; } .katex-display > .katex { overflow-x: auto; overflow-y: hidden; }
+.katex-display { margin: 0.6em 0; }
+.lmis .katex-display > .katex { overflow-x: auto; overflow-y: hidden; padding: 0.2em 0; }
 .lmis { font-size: 0.95rem; }
 .badge { display: inline-block; padding: 0 0.45rem; border-radius: 0.6rem; font-size: 0.85rem; font-weight: 600; }
 .badge.good { background: #d3f9d8; color: #2b8a3e; } .badge.bad { background: #ffe3e3; color: #c92a2a; }
