@@ -243,3 +243,21 @@ def test_compiled_ir_without_its_system_is_embedded(tmp_path):
     assert doc["ir"]["embedded"] is not None
     r = audit_certificate(path)
     assert r.ok and "embedded IR" in r.checked
+
+
+def test_repaired_farkas_certificate_is_recorded_and_audited(tmp_path):
+    from test_farkas import _uir_sdpa
+
+    prob, farkas = _uir_sdpa()
+    sol = Solution("infeasible", farkas=farkas, backend="sdpa")
+    path = tmp_path / "uir.json"
+    doc = write_certificate(path, prob, sol, certify(prob, sol))
+    rec = doc["certificate"]["farkas"]
+    assert doc["certificate"]["verdict"] == "infeasible-certified" and rec["repaired"]
+    assert rec["original"]["rel_residual"] > 1e-5 and len(rec["certificate"]["lmis"]) == 3
+    r = audit_certificate(path)
+    assert r.ok and r.verdict == "infeasible-certified", r.message
+    doc["certificate"]["farkas"]["certificate"]["linear"][0] *= 1.01
+    _rewrite(path, doc)
+    bad = audit_certificate(path)
+    assert not bad.ok and bad.field == "certificate.farkas.certificate.linear[0]"

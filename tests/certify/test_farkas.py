@@ -123,3 +123,96 @@ def test_backends_infeasibility_certificates_verify():
         assert sol.status == "infeasible", name
         cert = certify(prob, sol)
         assert cert.verdict == "infeasible-certified", (name, cert.reason)
+
+
+# ---- repair of inaccurate certificates -----------------------------------------------------
+
+
+def _uir_sdpa():
+    import json
+    from pathlib import Path
+
+    import yaml
+
+    from lmic.compile import compile_theorem
+
+    here = Path(__file__).parent
+    case = json.loads((here / "data" / "uir_sdpa_farkas.json").read_text())
+    system = yaml.safe_load((here.parents[1] / "examples" / case["system"]).read_text())
+    prob = compile_theorem(case["theorem"], system, params=case["params"])
+    assert prob.n == case["n"], "the recorded certificate no longer fits the compiled IR"
+    farkas = {"lmis": [np.array(Z) for Z in case["farkas"]["lmis"]], "linear": np.array(case["farkas"]["linear"])}
+    return prob, farkas
+
+
+def test_sdpa_certificate_with_residual_3e_5_is_verified_after_repair():
+    prob, farkas = _uir_sdpa()
+    raw = verify_farkas(prob, farkas, repair=False)
+    assert not raw["verified"] and raw["rel_residual"] == pytest.approx(2.76e-5, rel=1e-2)
+    assert "x[53] (mubar)" in raw["reason"]
+    r = verify_farkas(prob, farkas)
+    assert r["verified"] and r["repaired"] and r["kind"] == "closed"
+    assert r["original"]["rel_residual"] == pytest.approx(2.76e-5, rel=1e-2)
+    assert r["rel_residual"] < 1e-12 and r["g0"] < -0.1
+    assert r["radius"] > 1e10  # no feasible point with ||x||_inf below it
+    assert r["repair"]["change"] < 0.1  # a cleaned-up version of the solver's certificate
+    # the recorded repaired certificate verifies on its own, without another repair
+    again = verify_farkas(prob, r["certificate"], repair=False)
+    assert again["verified"] and again["rel_residual"] == pytest.approx(r["rel_residual"], abs=1e-15)
+    cert = certify(prob, Solution("infeasible", farkas=farkas, backend="sdpa"))
+    assert cert.verdict == "infeasible-certified" and "after repair" in cert.reason
+
+
+def test_perturbed_certificate_of_a_feasible_problem_stays_unverified():
+    # A is stable (eigenvalues -1e-3, -1): the strict Lyapunov LMIs are feasible, so no
+    # certificate exists. The certificate of the nearby unstable A (+1e-3) has a relative
+    # residual ~1e-3 here: close enough to be repaired, and the repair must fail.
+    eps = 1e-3
+    stable = np.array([[-eps, 1.0], [0.0, -1.0]])
+    near = _lyapunov_certificate(np.array([[eps, 1.0], [0.0, -1.0]]))
+    prob = lyapunov(stable)
+    raw = verify_farkas(prob, near, repair=False)
+    assert not raw["verified"] and 1e-6 < raw["rel_residual"] < 1e-2
+    r = verify_farkas(prob, near)
+    assert not r["verified"] and not r["repaired"]
+    assert r["repair"]["reason"].startswith("the repair shrank the certificate to zero")
+    assert certify(prob, Solution("infeasible", farkas=near)).verdict == "unverified"
+
+
+def test_perturbed_sdpa_certificate_does_not_pass_on_a_feasible_variant():
+    # the same SDPA multipliers against a feasible problem (every constant term made slack)
+    import dataclasses
+
+    import scipy.sparse as sp
+
+    prob, farkas = _uir_sdpa()
+    lmis = []
+    for lmi in prob.lmis:
+        C = lmi.coeffs.tolil()
+        from lmic.ir.svec import tril_rows_cols
+
+        r, c = tril_rows_cols(lmi.dim)
+        C[np.flatnonzero(r == c), 0] = 1e6  # F_i(0) = 1e6 I + ...: x = 0 is strictly feasible
+        lmis.append(dataclasses.replace(lmi, coeffs=sp.csc_matrix(C)))
+    A = prob.linear.A.tolil()
+    A[:, 0] = 1e6
+    feasible = dataclasses.replace(prob, lmis=lmis, linear=dataclasses.replace(prob.linear, A=sp.csr_matrix(A)))
+    r = verify_farkas(feasible, farkas)
+    assert not r["verified"]
+
+
+def test_certificate_far_from_one_is_not_repaired():
+    r = verify_farkas(_box_problem(), {"lmis": [np.eye(1), 2 * np.eye(1)], "linear": []})
+    assert not r["verified"] and r["repair"]["reason"].startswith("not attempted")
+
+
+def test_repair_keeps_the_multipliers_in_the_cone():
+    from lmic.certify.farkas import repair_farkas
+
+    prob, farkas = _uir_sdpa()
+    rep = repair_farkas(prob, farkas)
+    for Z in rep["certificate"]["lmis"]:
+        assert np.linalg.eigvalsh(Z)[0] > -1e-15
+    assert np.all(np.asarray(rep["certificate"]["linear"]) >= 0)  # ge rows
+    total = sum(np.trace(Z) for Z in rep["certificate"]["lmis"]) + np.sum(rep["certificate"]["linear"])
+    assert total == pytest.approx(1.0, rel=0.1)
