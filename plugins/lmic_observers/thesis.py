@@ -95,6 +95,7 @@ def thesis_thm3_2_1(t):
     t.lmi("P > 0", block(P) > 0)
     t.lmi("(3.11)", block(A.T * P + P * A - C.T * Lbar.T - Lbar * C) < 0)
     L = t.derive("L", P.inv() * Lbar, doc="observer gain L = P^-1 Lbar")
+    t.observer("luenberger", "continuous", A=A, B="B", C=C, L=L)
     Acl = A - L * C
     t.check("(3.9)", negative_definite(Acl.T * P + P * Acl), doc="original inequality")
     t.check("A - L C Hurwitz", hurwitz(Acl))
@@ -133,6 +134,7 @@ def thesis_thm3_2_2(t):
         < 0,
     )
     L = t.derive("L", P.inv() * Lbar, doc="observer gain L = P^-1 Lbar")
+    t.observer("luenberger", "continuous", A=A, B="B", C=C, L=L)
     Acl = A - L * C
     t.check(
         "(3.17)",
@@ -251,6 +253,7 @@ def _ct_uio(t, nonlinear):
     else:
         t.lmi("(4.28)", block(d11) < 0)
     M, N = _uio_gains(t, n, p, A, B, C, P, Ybar, Kbar, U, V)
+    t.observer("uio", "continuous", A=A, B=B, C=C, D1=D, N=N, M=M, E="E", L="L", G="G")
     if nonlinear:
         t.check(
             "(4.18)",
@@ -353,6 +356,7 @@ def thesis_thm4_1_3(t):
         < 0,
     )
     M, N = _uio_gains(t, n, p, A, B, C, P, Ybar, Kbar, U, V)
+    t.observer("uio", "discrete", A=A, B=B, C=C, D1=D1, N=N, M=M, E="E", L="L", G="G")
     MD = M * D
     t.check(
         "Paper C (14)",
