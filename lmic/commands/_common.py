@@ -83,6 +83,9 @@ def write_atomic(path: str | os.PathLike[str], write: Callable[[Any], None], mod
     try:
         with os.fdopen(fd, mode) as fh:
             write(fh)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the file ordinary permissions
         os.replace(tmp, target)
     except BaseException:
         if os.path.exists(tmp):

@@ -68,15 +68,23 @@ def lmi_text(decl: LmiDecl) -> str:
     return "\n".join(lines)
 
 
+def _text(name: str) -> str:
+    """A name inside ``\\text{}`` with LaTeX's special characters escaped."""
+    out = name
+    for ch in "\\&%$#_{}":
+        out = out.replace(ch, "\\" + ch)
+    return out.replace("~", r"\textasciitilde{}").replace("^", r"\textasciicircum{}")
+
+
 def theorem_latex(thm: Theorem, t: Template) -> str:
     """Every LMI and scalar constraint of a theorem as a LaTeX ``align*`` body."""
-    lines = [rf"\text{{{d.name}}}:\quad & {lmi_latex(d)}" for d in t.lmis]
-    lines += [rf"\text{{{c.name}}}:\quad & {sympy.latex(c.relation)}" for c in t.constraints]
+    lines = [rf"\text{{{_text(d.name)}}}:\quad & {lmi_latex(d)}" for d in t.lmis]
+    lines += [rf"\text{{{_text(c.name)}}}:\quad & {sympy.latex(c.relation)}" for c in t.constraints]
     sense, expr = t.objective
     if sense != "feasibility":
         lines.append(rf"\text{{{'minimise' if sense == 'min' else 'maximise'}}}:\quad & {sympy.latex(expr)}")
     for d in t.derived:
-        lines.append(rf"{d.name} &= {sympy.latex(d.expr)}")
+        lines.append(rf"{sympy.latex(d.symbol)} &= {sympy.latex(d.expr)}")
     return "\\begin{align*}\n" + " \\\\\n".join(lines) + "\n\\end{align*}"
 
 
