@@ -111,31 +111,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print_json(result.to_dict())
         return result.exit_code()
-    sol = result.solution
-    out = sys.stdout
-    out.write(f"target     {result.target}" + (f" {args.system}" if args.system else "") + "\n")
-    out.write(f"backend    {result.backend}\n")
-    status = result.status + (f" ({sol.native_status})" if sol.native_status else "")
-    out.write(f"status     {status}\n")
-    if sol.message:
-        out.write(f"message    {sol.message}\n")
-    if result.objective is not None:
-        out.write(f"objective  {result.objective:.10g}\n")
-    if sol.strategy != "none":
-        out.write(f"strict     {sol.strategy}, margin {_fmt(sol.margin)}\n")
-    cert = result.certificate_dict()
-    reason = cert.get("reason") or ""
-    out.write(f"verdict    {result.verdict}" + (f": {reason}" if reason else "") + "\n")
-    for lmi in cert.get("lmis", []):
-        ok = "ok" if lmi.get("ok") else "VIOLATED"
-        out.write(f"  LMI {lmi.get('name')}: min margin {_fmt(lmi.get('min_margin'))} {ok}\n")
-    for chk in cert.get("checks", []):
-        ok = "ok" if chk.get("ok") else "FAILED"
-        out.write(f"  check {chk.get('name')}: {_fmt(chk.get('value'))} {ok}\n")
-    for att in result.attempts:
-        out.write(f"  tried {att['backend']}: {att['status']}, {att['verdict']}\n")
-    t = result.timings
-    out.write("timings    " + ", ".join(f"{k[:-2]} {v:.3f} s" for k, v in t.items() if isinstance(v, float)) + "\n")
-    if args.output and result.certificate is not None:
-        out.write(f"wrote      {args.output}\n")
+    from lmic.commands._display import print_result
+
+    print_result(result, args.system, args.output)
     return result.exit_code()
