@@ -212,7 +212,9 @@ class Certificate:
     checks : list of dict
         ``name, kind, value, bound, ok`` (and ``error``).
     exact : dict or None
-        The exact proof (:func:`lmic.certify.exact.prove`), when requested.
+        The exact proof, when requested: of every LMI at a rational point
+        (:func:`lmic.certify.exact.prove`), or for an ``infeasible`` answer of an exact Farkas
+        certificate (:func:`lmic.certify.farkas.prove_infeasible`).
     farkas : dict or None
         The verification of an infeasibility certificate (:mod:`lmic.certify.farkas`).
     margin : dict or None
@@ -257,9 +259,10 @@ class Certificate:
 
     @property
     def label(self) -> str:
-        """The verdict, with ``(exact)`` when an exact proof backs it."""
-        if self.verdict == "certified" and self.exact and self.exact.get("proven"):
-            return "certified (exact)"
+        """The verdict, with ``(exact)`` when an exact proof backs it (``certified (exact)``,
+        ``infeasible-certified (exact)``)."""
+        if self.verdict in ("certified", "infeasible-certified") and self.exact and self.exact.get("proven"):
+            return f"{self.verdict} (exact)"
         return self.verdict
 
     def to_dict(self) -> dict[str, Any]:
@@ -722,9 +725,19 @@ def certify(
             cert.reason = "the solver reports infeasible but gave no dual (Farkas) certificate"
         else:
             cert.farkas = verify_farkas(problem, solution.farkas, tol=tolr.farkas_rel)
+            if exact:
+                from lmic.certify.farkas import prove_infeasible
+
+                cert.exact = prove_infeasible(problem, solution.farkas, cert.farkas)
             if cert.farkas["verified"]:
                 cert.verdict = "infeasible-certified"
                 cert.reason = cert.farkas["reason"]
+                if cert.exact is not None:
+                    cert.reason += "; exact proof: " + cert.exact["reason"]
+            elif cert.exact is not None and cert.exact["proven"]:
+                # the float tolerances failed but an exact certificate exists: a theorem
+                cert.verdict = "infeasible-certified"
+                cert.reason = cert.exact["reason"] + " (the float verification failed: " + cert.farkas["reason"] + ")"
             else:
                 cert.reason = "infeasibility not verified: " + cert.farkas["reason"]
         cert.time_s = time.perf_counter() - t0

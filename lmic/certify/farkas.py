@@ -63,6 +63,18 @@ the solver's original numbers (``original``). A repair is a search for a certifi
 its result is checked, not trusted: on a feasible problem nothing can pass (``tests``: a
 perturbed certificate of a nearby unstable system stays unverified).
 
+Exact certificates (:func:`prove_farkas`)
+-----------------------------------------
+A verified float certificate still has ``g_k ~ 1e-14`` instead of ``0``. :func:`prove_farkas`
+turns it into an exact one: on the certificate's face (``Z_i = V_i S_i V_i^T``, ``V_i`` the
+eigenvectors above ``1e-9`` of the largest multiplier, rounded to rationals ``2^-50``; ``y_r``
+on the rows it uses) the conditions ``g_k = 0`` are linear in ``(S_i, y)`` with exact rational
+coefficients. The rounded ``(S_i, y)`` is projected exactly onto their solution space (over an
+independent subset of the equations, python-flint), and then, exactly: every ``S_i`` is
+positive semidefinite (so is ``Z_i``), ``y_r >= 0`` on ``ge`` rows, ``g_k = 0`` for
+``k >= 1`` by construction, and ``g_0 < 0`` (closed) or ``g_0 <= 0`` with ``tau > 0``
+(strict). Nothing is left to tolerance: the problem is infeasible as stated by its IR.
+
 Examples
 --------
 >>> import numpy as np, scipy.sparse as sp
@@ -88,12 +100,24 @@ from lmic.errors import CertificateError
 from lmic.ir.problem import Problem
 from lmic.ir.svec import tril_rows_cols
 
-__all__ = ["verify_farkas", "repair_farkas", "REPAIR_MAX", "REPAIR_MAX_ENTRIES"]
+__all__ = [
+    "verify_farkas",
+    "repair_farkas",
+    "prove_farkas",
+    "prove_infeasible",
+    "REPAIR_MAX",
+    "REPAIR_MAX_ENTRIES",
+    "EXACT_MAX_ENTRIES",
+]
 
 #: a certificate is repaired only when its relative residual and violations are below this
 REPAIR_MAX = 1e-2
 #: largest Jacobian (rows x columns) a repair builds; larger certificates are not repaired
 REPAIR_MAX_ENTRIES = 20_000_000
+#: largest exact Jacobian ((1 + n) x (tril entries) x (face unknowns)) an exact proof builds
+EXACT_MAX_ENTRIES = 50_000_000
+#: bits of the rational rounding of the face bases
+_FACE_BITS = 50
 
 
 def _weights(d: int) -> np.ndarray:
@@ -511,3 +535,264 @@ def _coef_scale(problem: Problem) -> np.ndarray:
     if len(problem.linear):
         s += np.asarray(abs(problem.linear.A.tocsc()).sum(axis=0)).ravel()
     return s
+
+
+def prove_farkas(
+    problem: Problem,
+    farkas: dict[str, Any],
+    *,
+    rel_face: tuple[float, ...] = (1e-9, 1e-7, 1e-5, 1e-3),
+    keep_certificate: bool = False,
+) -> dict[str, Any]:
+    """Make a (float) Farkas certificate exact on its face and prove it (module docstring).
+
+    Parameters
+    ----------
+    problem : Problem
+    farkas : dict
+        ``{"lmis": [Z_i], "linear": y}`` in the conic-dual convention (``Z_i >= 0``), e.g. the
+        ``certificate`` :func:`verify_farkas` recorded after a repair.
+    rel_face : tuple of float
+        Eigenvalues of ``Z_i`` (and multipliers ``y_r``) above ``rel_face`` times the largest
+        multiplier span the face; tried in order. A direction the solver left with a tiny
+        weight where the exact conditions force none (a PSD coefficient that must be
+        orthogonal to ``Z_i``) makes the face too large, and the next threshold drops it.
+    keep_certificate : bool
+        Also return the exact multipliers (``exact_certificate``: ``lmis`` as lists of
+        :class:`fractions.Fraction` matrices, ``linear`` as Fractions). Large; not JSON.
+
+    Returns
+    -------
+    dict
+        ``proven`` (bool), ``kind`` (``"closed"``, ``"strict"`` or ``None``), ``reason``,
+        ``face`` (rank of every ``Z_i``, the rows used and the threshold that worked),
+        ``equations`` (independent ones),
+        ``g0`` (exact, rounded to float, for ``sum tr Z_i + sum |y_r| = 1``), ``tau`` (likewise),
+        ``denominator_bits`` (of the exact multipliers), ``time_s``.
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))],
+    ...             [LMI("p >= 0", 1, sp.csc_matrix([[0., 1.]]), strict=False),
+    ...              LMI("-1 - p >= 0", 1, sp.csc_matrix([[-1., -1.]]), strict=False)],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> r = prove_farkas(p, {"lmis": [np.eye(1), (1 + 1e-12) * np.eye(1)], "linear": []})
+    >>> r["proven"], r["kind"], r["g0"]
+    (True, 'closed', -0.5)
+    """
+    import time
+
+    t0 = time.perf_counter()
+    out: dict[str, Any] = {}
+    for rel in rel_face:
+        attempt = _prove_farkas(problem, farkas, rel, keep_certificate)
+        if attempt["face"] is not None:
+            attempt["face"]["threshold"] = rel
+        if not out or attempt["proven"]:
+            out = attempt
+        if attempt["proven"]:
+            break
+    out["time_s"] = time.perf_counter() - t0
+    return out
+
+
+def _prove_farkas(problem: Problem, farkas: dict[str, Any], rel_face: float, keep: bool) -> dict[str, Any]:
+    from fractions import Fraction
+
+    from lmic.certify.exact import _flint, prove_psd
+
+    flint = _flint()
+    mats, y = _parse(problem, farkas)
+    fail: dict[str, Any] = {"proven": False, "kind": None, "face": None, "equations": 0, "g0": None, "tau": None}
+    fail["denominator_bits"] = 0
+    lin = problem.linear
+    ge = np.array([k == "ge" for k in lin.kinds], dtype=bool)
+    strict_rows = np.asarray(lin.strict, dtype=bool) if len(y) else np.zeros(0, bool)
+    eigs = [np.linalg.eigh(Z) if Z.size else (np.zeros(0), np.zeros((0, 0))) for Z in mats]
+    top = max([float(np.max(w)) for w, _ in eigs if w.size] + [float(np.max(np.where(ge, y, np.abs(y)), initial=0))])
+    if not top > 0:
+        return dict(fail, reason="the certificate has no positive multiplier")
+    thr = rel_face * top
+    n = problem.n
+
+    def q(v: float) -> Any:
+        f = Fraction(float(v))
+        return flint.fmpq(f.numerator, f.denominator)
+
+    # unknowns: svec(S_i) with Z_i = W_i S_i W_i^T on every face (W_i = round(V_i 2^50), an
+    # integer matrix), then y on the rows used; one column of the exact Jacobian per unknown
+    columns: list[list[Any]] = []  # 1 + n fmpq per unknown: d g_k / d unknown
+    u0: list[Any] = []
+    blocks: list[tuple[int, np.ndarray, int]] = []  # (lmi index, W_i as python ints, r)
+    ranks: list[int] = []
+    for i, (lmi, (w, V)) in enumerate(zip(problem.lmis, eigs, strict=True)):
+        sel = w > thr
+        r = int(np.sum(sel))
+        ranks.append(r)
+        if not r:
+            continue
+        t = lmi.dim * (lmi.dim + 1) // 2
+        if (1 + n) * t * r * (r + 1) // 2 > EXACT_MAX_ENTRIES:
+            return dict(fail, reason=f"the face of LMI '{lmi.name}' is too large for an exact proof")
+        W = np.rint(np.ldexp(V[:, sel], _FACE_BITS)).astype(np.int64).astype(object)
+        ri, ci = tril_rows_cols(lmi.dim)
+        ia, ib = np.triu_indices(r)
+        P, Q = W[ri], W[ci]
+        # <F^(k), W E_ab W^T> over the tril storage: T[t, ab] = W[p,a] W[q,b] + W[p,b] W[q,a]
+        # (halved when a == b), times the tril weight (2 off the diagonal)
+        T = P[:, ia] * Q[:, ib] + P[:, ib] * Q[:, ia]
+        T[:, ia == ib] //= 2
+        T = T * _weights(lmi.dim).astype(np.int64).astype(object)[:, None]
+        Cq = flint.fmpq_mat([[q(v) for v in row] for row in lmi.coeffs.tocsc().T.toarray()])
+        Jl = (Cq * flint.fmpq_mat(T.tolist())).tolist()  # (1 + n) x r(r+1)/2
+        for col in range(len(ia)):
+            columns.append([Jl[k][col] for k in range(1 + n)])
+        # V diag(w) V^T = W (diag(w) 2^-100) W^T
+        scale = flint.fmpq(1, 1 << (2 * _FACE_BITS))
+        u0 += [q(float(w[sel][a])) * scale if a == b else q(0.0) for a, b in zip(ia, ib, strict=True)]
+        blocks.append((i, W, r))
+    rows = [r for r in range(len(y)) if (not ge[r]) or y[r] > thr]
+    if rows:
+        A = lin.A.tocsc()
+        Ad = A.toarray()
+        for r in rows:
+            columns.append([q(v) for v in Ad[r]])
+            u0.append(q(float(y[r])))
+    if not columns:
+        return dict(fail, reason="the certificate has an empty face")
+    m = len(columns)
+    Jall = flint.fmpq_mat([[columns[j][k] for j in range(m)] for k in range(1 + n)])
+    Jx = flint.fmpq_mat([[columns[j][k] for j in range(m)] for k in range(1, 1 + n)])
+    u = flint.fmpq_mat([[v] for v in u0])
+    res = Jx * u
+    R, rank = Jx.transpose().rref()
+    if rank and any(v != 0 for v in res.entries()):
+        width = R.ncols()
+        flat = R.entries()
+        piv = []
+        for rr in range(rank):
+            row = flat[rr * width : (rr + 1) * width]
+            piv.append(next(c for c in range(width) if row[c] != 0))
+        Ji = flint.fmpq_mat([[Jx[k, j] for j in range(m)] for k in piv])
+        ri_ = flint.fmpq_mat([[res[k, 0]] for k in piv])
+        u = u - Ji.transpose() * (Ji * Ji.transpose()).solve(ri_)
+        if any(v != 0 for v in (Jx * u).entries()):
+            return dict(
+                fail,
+                face={"ranks": ranks, "rows": len(rows)},
+                equations=rank,
+                reason="the trace conditions are inconsistent on the face in exact arithmetic",
+            )
+    uv = u.entries()
+    face = {"ranks": ranks, "rows": len(rows)}
+    # exact signs: every S_i PSD, y >= 0 on ge rows
+    k = 0
+    exact_lmis: list[Any] = [[[Fraction(0)] * lmi.dim for _ in range(lmi.dim)] for lmi in problem.lmis]
+    trace_strict = Fraction(0)
+    trace_all = Fraction(0)
+    den_bits = 0
+    for i, W, r in blocks:
+        ia, ib = np.triu_indices(r)
+        S = [[Fraction(0)] * r for _ in range(r)]
+        for a, b in zip(ia, ib, strict=True):
+            v = uv[k]
+            S[a][b] = S[b][a] = Fraction(int(v.p), int(v.q))
+            k += 1
+        den = 1
+        for row in S:
+            for f in row:
+                den = den * f.denominator // math.gcd(den, f.denominator)
+        den_bits = max(den_bits, den.bit_length())
+        Sint = [[int(f * den) for f in row] for row in S]
+        pr = prove_psd(Sint)
+        if not pr["proven"]:
+            return dict(
+                fail,
+                face=face,
+                equations=rank,
+                reason=f"the exact multiplier of LMI '{problem.lmis[i].name}' is not proved PSD ({pr['detail']})",
+            )
+        if keep:
+            Sm = np.array(S, dtype=object)
+            exact_lmis[i] = (W @ Sm @ W.T).tolist()
+        G = W.T @ W  # tr(Z_i) = tr(S W^T W)
+        tr = sum((S[a][b] * int(G[b][a]) for a in range(r) for b in range(r)), Fraction(0))
+        trace_all += tr
+        if problem.lmis[i].strict:
+            trace_strict += tr
+    yv = {}
+    for r in rows:
+        v = uv[k]
+        yv[r] = Fraction(int(v.p), int(v.q))
+        den_bits = max(den_bits, int(v.q).bit_length())
+        k += 1
+        if ge[r] and yv[r] < 0:
+            return dict(
+                fail, face=face, equations=rank, reason=f"the exact multiplier of row '{lin.names[r]}' is negative"
+            )
+    g0v = (Jall * u)[0, 0]
+    g0 = Fraction(int(g0v.p), int(g0v.q))
+    tau = trace_strict + sum((yv[r] for r in rows if ge[r] and strict_rows[r]), Fraction(0))
+    eta = trace_all + sum((abs(v) for v in yv.values()), Fraction(0))
+    base: dict[str, Any] = {"face": face, "equations": rank, "denominator_bits": den_bits}
+    if keep:
+        base["exact_certificate"] = {
+            "lmis": exact_lmis,
+            "linear": [yv.get(r, Fraction(0)) for r in range(len(y))],
+        }
+    base["g0"] = float(g0 / eta) if eta else None
+    base["tau"] = float(tau / eta) if eta else None
+    exactly = "exact Farkas certificate: g_k = 0 exactly (k >= 1), multipliers proved PSD"
+    if g0 < 0:
+        reason = f"{exactly}, g_0 = {base['g0']:.3g} < 0 (even the closed problem is infeasible)"
+        return dict(base, proven=True, kind="closed", reason=reason)
+    if g0 <= 0 and tau > 0:
+        reason = f"{exactly}, g_0 = 0 and tau = {base['tau']:.3g} > 0 (the strict problem is infeasible)"
+        return dict(base, proven=True, kind="strict", reason=reason)
+    return dict(base, proven=False, kind=None, reason=f"no exact separation: g_0 = {float(g0):.3g}")
+
+
+def prove_infeasible(problem: Problem, farkas: dict[str, Any], verification: dict[str, Any]) -> dict[str, Any]:
+    """The exact proof :func:`lmic.certify.certify` runs for an ``infeasible`` answer.
+
+    Tries the repaired certificate (when :func:`verify_farkas` repaired one), then the
+    solver's certificate in the orientation that verified (or both when none did).
+
+    Returns
+    -------
+    dict
+        :func:`prove_farkas`'s result (the first proof, or the first failure), with
+        ``source`` (``"repaired"`` or ``"solver"``) and the ``denominator`` the certificate
+        schema asks for.
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))],
+    ...             [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]])),
+    ...              LMI("-p > 0", 1, sp.csc_matrix([[0., -1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> f = {"lmis": [np.eye(1), np.eye(1)]}
+    >>> r = prove_infeasible(p, f, verify_farkas(p, f))
+    >>> r["proven"], r["kind"], r["source"]
+    (True, 'strict', 'solver')
+    """
+    mats, y = _parse(problem, farkas)
+    candidates: list[tuple[str, dict[str, Any]]] = []
+    if verification.get("repaired"):
+        candidates.append(("repaired", verification["certificate"]))
+    signs = [-1.0 if verification.get("negated") else 1.0] if verification.get("verified") else [1.0, -1.0]
+    candidates += [("solver", {"lmis": [sg * Z for Z in mats], "linear": sg * y}) for sg in signs]
+    out: dict[str, Any] = {}
+    for source, cand in candidates:
+        r = prove_farkas(problem, cand)
+        r["source"] = source
+        if not out or r["proven"]:
+            out = r
+        if r["proven"]:
+            break
+    out["denominator"] = "rational" if out["proven"] else "-"  # sizes in denominator_bits
+    return out

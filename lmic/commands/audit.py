@@ -83,7 +83,7 @@ def run(args: argparse.Namespace) -> int:
     cert = result.certificate
     if cert is not None and cert.lmis:
         t = Table(title="LMIs (recomputed)")
-        for col in ("name", "dim", "strict", "lambda_min", "relative", "ok"):
+        for col in ("name", "dim", "strict", "lambda_min", "relative", "float", "exact", "ok"):
             t.add_column(col)
         for e in cert.lmis:
             t.add_row(
@@ -92,7 +92,10 @@ def run(args: argparse.Namespace) -> int:
                 str(e["strict"]),
                 _fmt(e["min_eig"]),
                 _fmt(e["rel_margin"]),
-                "[green]yes[/green]" if e["ok"] else "[red]no[/red]",
+                "ok" if e.get("float_ok", e["ok"]) else "below threshold",
+                e.get("exact") or "-",
+                ("[green]yes[/green]" if e["ok"] else "[red]no[/red]")
+                + (" (exact)" if e.get("decided_by") == "exact" else ""),
             )
         console.print(t)
     if cert is not None and cert.checks:
@@ -106,6 +109,6 @@ def run(args: argparse.Namespace) -> int:
         e = cert.exact
         console.print(
             f"exact: {'proven' if e['proven'] else 'not proven'} (denominator {e['denominator']}, "
-            f"{e['time_s']:.3f} s) {e['reason']}"
+            f"{e['time_s']:.3f} s) {e.get('statement') or e['reason']}"
         )
     return code

@@ -261,3 +261,22 @@ def test_repaired_farkas_certificate_is_recorded_and_audited(tmp_path):
     _rewrite(path, doc)
     bad = audit_certificate(path)
     assert not bad.ok and bad.field == "certificate.farkas.certificate.linear[0]"
+
+
+def test_exact_infeasibility_certificate_is_audited(tmp_path):
+    from test_farkas import _uir_sdpa
+
+    prob, farkas = _uir_sdpa()
+    sol = Solution("infeasible", farkas=farkas, backend="sdpa")
+    plain = tmp_path / "plain.json"
+    write_certificate(plain, prob, sol, certify(prob, sol))
+    asked = audit_certificate(plain, exact=True)  # not recorded: run, reported, not compared
+    assert asked.ok and asked.label == "infeasible-certified (exact)"
+    path = tmp_path / "exact.json"
+    doc = write_certificate(path, prob, sol, certify(prob, sol, exact=True))
+    assert doc["certificate"]["label"] == "infeasible-certified (exact)"
+    r = audit_certificate(path)
+    assert r.ok and r.label == "infeasible-certified (exact)", r.message
+    doc["certificate"]["exact"]["proven"] = False
+    _rewrite(path, doc)
+    assert audit_certificate(path).field == "certificate.exact.proven"

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -216,3 +218,73 @@ def test_repair_keeps_the_multipliers_in_the_cone():
     assert np.all(np.asarray(rep["certificate"]["linear"]) >= 0)  # ge rows
     total = sum(np.trace(Z) for Z in rep["certificate"]["lmis"]) + np.sum(rep["certificate"]["linear"])
     assert total == pytest.approx(1.0, rel=0.1)
+
+
+# ---- exact Farkas certificates -------------------------------------------------------------
+
+
+def _exact_g(prob, lmis, y):
+    """g_k = sum_i <F_i^(k), Z_i> + a_k . y in Fractions, straight from the IR coefficients."""
+    from fractions import Fraction
+
+    from lmic.ir.svec import tril_rows_cols
+
+    g = [Fraction(0)] * (1 + prob.n)
+    for lmi, Z in zip(prob.lmis, lmis, strict=True):
+        C = lmi.coeffs.tocoo()
+        r, c = tril_rows_cols(lmi.dim)
+        for t, k, v in zip(C.row, C.col, C.data, strict=True):
+            i, j = int(r[t]), int(c[t])
+            g[k] += Fraction(float(v)) * Z[i][j] * (1 if i == j else 2)
+    A = prob.linear.A.tocoo()
+    for row, k, v in zip(A.row, A.col, A.data, strict=True):
+        g[k] += Fraction(float(v)) * y[row]
+    return g
+
+
+def test_exact_farkas_certificate_of_the_sdpa_answer_checks_independently():
+    from fractions import Fraction
+
+    from lmic.certify.exact import prove_psd
+    from lmic.certify.farkas import prove_farkas
+
+    prob, farkas = _uir_sdpa()
+    assert not prove_farkas(prob, farkas)["proven"]  # the solver's own certificate is too rough
+    rep = verify_farkas(prob, farkas)["certificate"]
+    r = prove_farkas(prob, rep, keep_certificate=True)
+    assert r["proven"] and r["kind"] == "closed", r["reason"]
+    assert r["g0"] == pytest.approx(-0.195, abs=1e-3)
+    ex = r["exact_certificate"]
+    g = _exact_g(prob, ex["lmis"], ex["linear"])
+    assert all(v == 0 for v in g[1:]) and g[0] < 0
+    for Z in ex["lmis"]:
+        den = 1
+        for row in Z:
+            for f in row:
+                den = den * Fraction(f).denominator // math.gcd(den, Fraction(f).denominator)
+        assert prove_psd([[int(Fraction(f) * den) for f in row] for row in Z])["proven"]
+    assert all(v >= 0 for v in ex["linear"])  # every row is 'ge'
+
+
+def test_certify_exact_labels_infeasibility_exact():
+    prob, farkas = _uir_sdpa()
+    cert = certify(prob, Solution("infeasible", farkas=farkas, backend="sdpa"), exact=True)
+    assert cert.label == "infeasible-certified (exact)"
+    assert cert.exact["source"] == "repaired" and cert.exact["kind"] == "closed"
+    homogeneous = lyapunov(UNSTABLE)
+    c2 = certify(homogeneous, Solution("infeasible", farkas=_lyapunov_certificate(UNSTABLE)), exact=True)
+    assert c2.label == "infeasible-certified (exact)" and c2.exact["kind"] == "strict"
+
+
+def test_exact_farkas_never_proves_a_feasible_problem_infeasible():
+    from lmic.certify.farkas import prove_farkas
+
+    eps = 1e-3
+    prob = lyapunov(np.array([[-eps, 1.0], [0.0, -1.0]]))
+    near = _lyapunov_certificate(np.array([[eps, 1.0], [0.0, -1.0]]))
+    assert not prove_farkas(prob, near)["proven"]
+    cert = certify(prob, Solution("infeasible", farkas=near), exact=True)
+    assert cert.verdict == "unverified" and not cert.exact["proven"]
+    # closed Lyapunov LMIs are feasible at P = 0: the strict certificate proves nothing there
+    closed = lyapunov(UNSTABLE, strict=False)
+    assert not prove_farkas(closed, _lyapunov_certificate(UNSTABLE))["proven"]

@@ -90,3 +90,23 @@ def test_bad_files_exit_2_with_one_line(tmp_path, capsys, content, needle):
 def test_missing_file_exits_2(tmp_path, capsys):
     assert main(["audit", str(tmp_path / "nope.json")]) == 2
     assert "no such certificate file" in capsys.readouterr().err
+
+
+def test_exact_decision_is_shown(tmp_path, capsys):
+    # diag(1e6, 1e-7) > 0: relative margin 1e-13, below the float threshold, proved exactly
+    prob = Problem(
+        [Variable("p", "scalar", (1, 1))],
+        [LMI("M > 0", 2, sp.csc_matrix(np.array([[1e6, 0.0], [0.0, 0.0], [1e-7, 0.0]])))],
+        LinearConstraints.empty(1),
+        Objective("feasibility", np.zeros(2)),
+    )
+    sol = Solution("optimal", x=np.array([0.0]))
+    path = tmp_path / "exact.json"
+    write_certificate(path, prob, sol, certify(prob, sol, exact=True))
+    assert main(["audit", str(path)]) == 0  # the recorded proof is re-run without --exact
+    out = capsys.readouterr().out
+    assert "consistent: certified (exact)" in out
+    assert "below" in out and "proved" in out  # the table's float and exact columns (may wrap)
+    assert main(["audit", str(path), "--json"]) == 0
+    js = json.loads(capsys.readouterr().out)
+    assert js["label"] == "certified (exact)" and js["certificate"]["lmis"][0]["decided_by"] == "exact"
