@@ -22,7 +22,9 @@ compilations of the same theorem with the same numbers hash alike.
 :func:`audit_certificate` trusts nothing in the file: it recompiles the IR from the recorded
 theorem and system file (or loads the embedded IR), checks the data and IR hashes, re-derives
 the variable values from ``x``, re-runs :func:`lmic.certify.certify` with the recorded
-tolerances, and compares every recorded number with the recomputed one. The first field that
+tolerances (and the exact proof whenever the file records one: the recorded verdict may rest
+on it, e.g. a strict LMI below the float threshold proved exactly at ``exact.point``), and
+compares every recorded number with the recomputed one. The first field that
 differs is named (``system.sha256``, ``ir.sha256``, ``solution.variables.P``,
 ``certificate.lmis[0].min_eig``, ...).
 

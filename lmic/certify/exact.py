@@ -3,8 +3,8 @@
 What is proved
 --------------
 The IR stores its coefficients as float64 numbers; every float is a dyadic rational, so the
-LMI ``F(x) = F0 + sum_k x_k F_k`` the IR denotes has exact rational coefficients. So is the
-solver's float point ``x``: ``x = N / 2^K_x`` exactly, ``K_x`` the bits below the binary point
+LMI ``F(x) = F0 + sum_k x_k F_k`` the IR denotes has exact rational coefficients. The solver's
+float point is dyadic too: ``x = N / 2^K_x`` exactly, ``K_x`` the bits below the binary point
 of its finest entry. The proof is made at a rational point ``x_q = N / D`` (one common
 denominator ``D``), which is *recorded* (``point``: ``den`` and ``num`` as decimal strings):
 
@@ -24,7 +24,9 @@ a maximal independent subset of the rows when they are rank deficient); the comm
 denominator ``D`` is then no longer a power of two, and ``x_q != x``. An equality row that is
 still not exactly zero at ``x_q`` (rows inconsistent in exact arithmetic) is accepted within
 the documented tolerance ``|r| <= rel * s`` (``s = |a0| + sum_k |a_k x_k|``, exactly at ``x_q``)
-and listed in ``rows_within_tolerance``.
+and listed in ``rows_within_tolerance``. When the projected point fails (nearly dependent rows
+can move it far), the same grid is tried without the projection, the equality rows then
+holding within that tolerance.
 
 A successful proof (``proven``) is the statement: *every LMI holds exactly at the rational
 point ``x_q`` (strict ones positive definite, the others positive semidefinite), every
