@@ -123,7 +123,9 @@ class Result:
 
     def exit_code(self) -> int:
         """0 certified, 3 infeasible, 1 rejected / inaccurate / failed (DESIGN section 7)."""
-        if self.verdict == "certified" and self.status in ("optimal", "feasible"):
+        if self.verdict == "certified" and (
+            self.status in ("optimal", "feasible") or self.problem.objective.sense == "feasibility"
+        ):  # a certified point answers a feasibility problem whatever the solver's own status
             return EXIT_CODES["certified"]
         if self.status == "infeasible" and self.verdict != "rejected":
             return EXIT_CODES["infeasible"]

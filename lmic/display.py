@@ -79,8 +79,8 @@ def theorem_html(theorem: Any, options: dict | None = None) -> str:
 def result_html(result: Any) -> str:
     """HTML: verdict (coloured), status, objective, margins per LMI, checks, gains."""
     cert = result.certificate_dict()
-    verdict = cert.get("verdict", "unverified")
-    colour = _VERDICT_COLOURS.get(verdict, "#57606a")
+    verdict = cert.get("label") or cert.get("verdict", "unverified")
+    colour = _VERDICT_COLOURS.get(cert.get("verdict", "unverified"), "#57606a")
     lmi_rows = "".join(
         f"<tr><td>{_esc(m.get('name'))}</td><td>{_fmt(m.get('min_margin'))}</td>"
         f"<td>{_fmt(m.get('rel_margin'))}</td><td>{'✓' if m.get('ok') else '✗'}</td></tr>"

@@ -74,7 +74,9 @@ def print_result(
                 f"LMI {lmi.get('dim', '')} {strict}".replace("  ", " "),
                 format_value(lmi.get("min_margin")),
                 format_value(lmi.get("rel_margin")),
-                "[green]ok[/green]" if lmi.get("ok") else "[red]VIOLATED[/red]",
+                ("[green]ok (exact)[/green]" if lmi.get("decided_by") == "exact" else "[green]ok[/green]")
+                if lmi.get("ok")
+                else "[red]VIOLATED[/red]",
             )
         for chk in cert.get("checks", []):
             t.add_row(
