@@ -59,6 +59,7 @@ class CVXOPTBackend(Backend):
 
     name: ClassVar[str] = "cvxopt"
     requires: ClassVar[dict[str, str]] = {"cvxopt": "cvxopt"}
+    full_rank: ClassVar[bool] = True
     description: ClassVar[str] = "CVXOPT interior point, native solvers.sdp (LMI form)"
     STATUS_MAP: ClassVar[dict[str, str]] = {
         "optimal": "optimal",
@@ -89,11 +90,7 @@ class CVXOPTBackend(Backend):
         eq = np.flatnonzero(kinds == "eq") if len(lin) else np.zeros(0, dtype=int)
         ge = np.flatnonzero(kinds == "ge") if len(lin) else np.zeros(0, dtype=int)
         sign = -1.0 if problem.objective.sense == "max" else 1.0
-        c = (
-            np.zeros(n)
-            if problem.objective.sense == "feasibility"
-            else sign * problem.objective.c[1:]
-        )
+        c = np.zeros(n) if problem.objective.sense == "feasibility" else sign * problem.objective.c[1:]
         Gs, hs = [], []
         for lmi in problem.lmis:
             M = (full_vec_map(lmi.dim) @ lmi.coeffs).tocsc()
@@ -111,9 +108,7 @@ class CVXOPTBackend(Backend):
         if Gs:
             kwargs["Gs"], kwargs["hs"] = Gs, hs
         t0 = time.perf_counter()
-        result = solvers.sdp(
-            cvxopt.matrix(np.asarray(c, dtype=float)), options=self._options(options), **kwargs
-        )
+        result = solvers.sdp(cvxopt.matrix(np.asarray(c, dtype=float)), options=self._options(options), **kwargs)
         solve_s = time.perf_counter() - t0
         native = str(result["status"])
         status = self.map_status(native)
@@ -135,17 +130,11 @@ class CVXOPTBackend(Backend):
 
         if status in ("optimal", "inaccurate") and result.get("x") is not None:
             sol.x = np.array(result["x"]).ravel()
-            sol.objective = (
-                float(problem.objective.value(sol.x))
-                if problem.objective.sense != "feasibility"
-                else None
-            )
+            sol.objective = float(problem.objective.value(sol.x)) if problem.objective.sense != "feasibility" else None
             if result.get("zs") is not None or result.get("zl") is not None:
                 sol.duals = duals()
             if status == "inaccurate":
-                sol.message = (
-                    "CVXOPT stopped with status 'unknown' (iteration limit or numerical trouble)"
-                )
+                sol.message = "CVXOPT stopped with status 'unknown' (iteration limit or numerical trouble)"
         elif status == "infeasible":
             sol.farkas = duals()
         elif status == "unbounded" and result.get("x") is not None:

@@ -78,9 +78,7 @@ class CVXPYBackend(Backend):
     name: ClassVar[str] = "cvxpy"
     requires: ClassVar[dict[str, str]] = {"cvxpy": "cvxpy"}
     variants: ClassVar[tuple[str, ...]] = tuple(SUBSOLVER_OPTIONS)
-    description: ClassVar[str] = (
-        "CVXPY modelling layer; cvxpy:CLARABEL (default), :SCS, :CVXOPT, :SDPA"
-    )
+    description: ClassVar[str] = "CVXPY modelling layer; cvxpy:CLARABEL (default), :SCS, :CVXOPT, :SDPA"
     STATUS_MAP: ClassVar[dict[str, str]] = {
         "optimal": "optimal",
         "optimal_inaccurate": "inaccurate",
@@ -106,6 +104,8 @@ class CVXPYBackend(Backend):
         self.solver = solver
         self.native_time_limit = solver in _NATIVE_LIMIT  # type: ignore[misc]
         self.interior_point = solver != "SCS"  # type: ignore[misc]
+        self.full_rank = solver in ("CVXOPT", "SDPA")  # type: ignore[misc]
+        self.tol_floor = 1e-6 if solver == "SCS" else 0.0  # type: ignore[misc]  # as the scs backend
 
     @property
     def label(self) -> str:

@@ -32,6 +32,7 @@ class PICOSBackend(Backend):
 
     name: ClassVar[str] = "picos"
     requires: ClassVar[dict[str, str]] = {"picos": "picos", "cvxopt": "cvxopt"}
+    full_rank: ClassVar[bool] = True
     description: ClassVar[str] = "PICOS modelling layer (solver chosen by PICOS, CVXOPT here)"
     #: PICOS reports a problem status and a primal/dual solution status; keys are
     #: "<problem status>/<primal status>"
@@ -94,8 +95,10 @@ class PICOSBackend(Backend):
             "abs_ipm_opt_tol": options.tol,
             "rel_ipm_opt_tol": options.tol,
         }
-        if options.max_iter is not None:
-            opts["max_iterations"] = int(options.max_iter)
+        # PICOS's default is no limit, which it passes to CVXOPT as maxiters = 1e6: on a problem
+        # whose iterates diverge CVXOPT then runs ~100 s into a ZeroDivisionError. CVXOPT's
+        # own default (100) is used unless the caller sets one.
+        opts["max_iterations"] = int(options.max_iter) if options.max_iter is not None else 100
         if options.time_limit is not None:
             opts["timelimit"] = int(max(1, round(options.time_limit)))
         opts.update(options.extra)

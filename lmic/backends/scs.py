@@ -71,6 +71,10 @@ class SCSBackend(Backend):
     requires: ClassVar[dict[str, str]] = {"scs": "scs"}
     native_time_limit: ClassVar[bool] = True
     interior_point: ClassVar[bool] = False
+    #: SCS is a first-order method: at 1e-8 it runs into its iteration limit on most LMI
+    #: problems (10-40 s, docs/backends.md); 1e-6 with the margin floor of the strict reduction
+    #: (10 tol) is certified where it converges
+    tol_floor: ClassVar[float] = 1e-6
     description: ClassVar[str] = "SCS first-order (ADMM), native API"
     STATUS_MAP: ClassVar[dict[str, str]] = {
         "solved": "optimal",

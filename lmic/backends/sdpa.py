@@ -77,6 +77,7 @@ class SDPABackend(Backend):
 
     name: ClassVar[str] = "sdpa"
     requires: ClassVar[dict[str, str]] = {"sdpap": "sdpa-python"}
+    full_rank: ClassVar[bool] = True
     description: ClassVar[str] = "SDPA interior point via sdpa-python (LMI form)"
     STATUS_MAP: ClassVar[dict[str, str]] = {
         "pdOPT": "optimal",
