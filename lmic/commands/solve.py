@@ -26,7 +26,14 @@ def add_solver_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tol", type=float, default=None, help="solver tolerance (default 1e-8)")
     p.add_argument("--max-iter", type=int, default=None, help="iteration limit")
     p.add_argument("--time-limit", type=float, default=None, help="seconds per solve")
-    p.add_argument("--margin", type=float, default=None, help="margin on strict LMIs of optimisation problems")
+    p.add_argument("--margin", type=float, default=None, help="absolute margin imposed on strict LMIs (fixed-margin)")
+    p.add_argument(
+        "--strict",
+        choices=("auto", "max-margin", "fixed-margin"),
+        default=None,
+        help="strict LMIs of feasibility problems: maximise the margin, impose a fixed one, or auto "
+        "(default; docs/backends.md)",
+    )
     p.add_argument("--verbose", action="store_true", help="show the solver's own output")
 
 
@@ -43,6 +50,8 @@ def solve_options(args: argparse.Namespace) -> Any:
         opts.time_limit = args.time_limit
     if getattr(args, "margin", None) is not None:
         opts.margin = args.margin
+    if getattr(args, "strict", None) is not None:
+        opts.strict = args.strict
     return opts
 
 
