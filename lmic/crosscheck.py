@@ -17,6 +17,7 @@ Examples
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -25,7 +26,11 @@ from lmic.backends.base import SolveOptions
 from lmic.errors import LmicError
 from lmic.ir.problem import Problem
 
-__all__ = ["CrosscheckReport", "crosscheck", "status_class", "DEFAULT_RTOL"]
+__all__ = ["CrosscheckReport", "crosscheck", "status_class", "DEFAULT_RTOL", "Progress"]
+
+#: ``progress(done, total, backend, row)``: called before each backend (``row`` is ``None``) and
+#: after it (``row`` is its result row)
+Progress = Callable[[int, int, str, "dict[str, Any] | None"], None]
 
 #: default tolerance on the relative objective gap (first-order solvers meet ~1e-3 here)
 DEFAULT_RTOL = 1e-3
@@ -81,11 +86,28 @@ def crosscheck(
     backends: list[str] | None = None,
     options: SolveOptions | None = None,
     rtol: float = DEFAULT_RTOL,
+    progress: Progress | None = None,
 ) -> CrosscheckReport:
     """Solve ``target`` on every backend in ``backends`` (default: every available one).
 
     Each backend's failure (unavailable, cannot take the problem) is a row with status
     ``error`` and the reason, not an exception, so one missing solver does not hide the others.
+    Every row has ``backend, status, objective, verdict, min_margin`` (the certifier's smallest
+    LMI margin), ``strategy`` and ``margin`` (how strict LMIs were reduced and the margin the
+    backend reported), ``solve_s`` and ``message``. ``progress`` (see :data:`Progress`) is
+    told about each backend before and after it runs (``lmic crosscheck`` draws a progress bar
+    with it).
+
+    Examples
+    --------
+    >>> from lmic.testing.conformance import CASES
+    >>> seen = []
+    >>> r = crosscheck(CASES["lyapunov_stable"].build(), backends=["clarabel", "scs"],
+    ...                progress=lambda done, total, name, row: seen.append((done, name, row is None)))
+    >>> seen
+    [(0, 'clarabel', True), (1, 'clarabel', False), (1, 'scs', True), (2, 'scs', False)]
+    >>> [(row["strategy"], row["verdict"]) for row in r.results]
+    [('max-margin', 'certified'), ('max-margin', 'certified')]
     """
     from lmic.backends.registry import available_backend_names
 
@@ -95,34 +117,39 @@ def crosscheck(
         raise LmicError("no backend to cross-check with")
     rows: list[dict[str, Any]] = []
     runs: list[Result] = []
-    for name in names:
+    for k, name in enumerate(names):
+        if progress is not None:
+            progress(k, len(names), name, None)
         try:
             res = solve(problem, backend=name, options=options)
         except LmicError as err:
-            rows.append(
-                {
-                    "backend": name,
-                    "status": "error",
-                    "objective": None,
-                    "verdict": "unverified",
-                    "min_margin": None,
-                    "solve_s": 0.0,
-                    "message": " ".join(str(err).split()),
-                }
-            )
-            continue
-        runs.append(res)
-        rows.append(
-            {
+            row: dict[str, Any] = {
+                "backend": name,
+                "status": "error",
+                "objective": None,
+                "verdict": "unverified",
+                "min_margin": None,
+                "strategy": None,
+                "margin": None,
+                "solve_s": 0.0,
+                "message": " ".join(str(err).split()),
+            }
+        else:
+            runs.append(res)
+            row = {
                 "backend": res.backend,
                 "status": res.status,
                 "objective": res.objective,
                 "verdict": res.verdict,
                 "min_margin": res.min_margin,
+                "strategy": res.solution.strategy,
+                "margin": res.solution.margin,
                 "solve_s": res.timings["solve_s"],
                 "message": res.solution.message,
             }
-        )
+        rows.append(row)
+        if progress is not None:
+            progress(k + 1, len(names), name, row)
     classes = {status_class(r["status"]) for r in rows}
     objectives = [r["objective"] for r in rows if r["objective"] is not None]
     gap = None

@@ -8,6 +8,8 @@ infeasible, 1 otherwise, 2 for bad input.
 from __future__ import annotations
 
 import argparse
+import contextlib
+from collections.abc import Iterator
 from typing import Any
 
 __all__ = ["register", "run"]
@@ -33,6 +35,50 @@ def _fmt(v: Any, spec: str = ".6g") -> str:
     return "-" if v is None else format(v, spec)
 
 
+@contextlib.contextmanager
+def _progress_bar(enabled: bool) -> Iterator[Any]:
+    """A rich progress bar on stderr (one step per backend, gone when done); ``None`` if off."""
+    if not enabled:
+        yield None
+        return
+    import sys
+
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    console = Console(stderr=True)
+    if not console.is_terminal:  # a log: one line per backend instead of a redrawn bar
+
+        def log(done: int, total: int, name: str, row: dict | None) -> None:
+            if row is not None:
+                sys.stderr.write(f"[{done}/{total}] {name}: {row['status']}, {row['verdict']}\n")
+                sys.stderr.flush()
+
+        yield log
+        return
+    bar = Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=console,
+        transient=True,
+    )
+    task = None
+
+    def update(done: int, total: int, name: str, row: dict | None) -> None:
+        nonlocal task
+        if task is None:
+            task = bar.add_task("crosscheck", total=total)
+        if row is None:
+            bar.update(task, completed=done, description=f"solving with {name}")
+        else:
+            bar.update(task, completed=done, description=f"{name}: {row['status']}, {row['verdict']}")
+
+    with bar:
+        yield update
+
+
 def run(args: argparse.Namespace) -> int:
     """Cross-check and print the table (or JSON)."""
     from lmic.backends.registry import get_backend
@@ -44,14 +90,16 @@ def run(args: argparse.Namespace) -> int:
     for name in names or []:
         get_backend(name)  # an unknown or missing backend is bad input (exit 2)
     params = parse_params(args.param)
-    report = crosscheck(
-        args.target,
-        system=args.system,
-        params=params or None,
-        backends=names,
-        options=solve_options(args),
-        rtol=args.rtol if args.rtol is not None else DEFAULT_RTOL,
-    )
+    with _progress_bar(enabled=not args.json) as progress:
+        report = crosscheck(
+            args.target,
+            system=args.system,
+            params=params or None,
+            backends=names,
+            options=solve_options(args),
+            rtol=args.rtol if args.rtol is not None else DEFAULT_RTOL,
+            progress=progress,
+        )
     if args.json:
         print_json(report.to_dict())
         return report.exit_code()
@@ -59,19 +107,32 @@ def run(args: argparse.Namespace) -> int:
     from rich.table import Table
 
     table = Table(title=f"crosscheck {report.target}")
-    for col in ("backend", "status", "objective", "verdict", "min margin", "time (s)"):
-        table.add_column(col, justify="right" if col in ("objective", "min margin", "time (s)") else "left")
+    with_objective = any(r["objective"] is not None for r in report.results)
+    table.add_column("backend", no_wrap=True)
+    table.add_column("status", no_wrap=True)
+    if with_objective:
+        table.add_column("objective", justify="right", no_wrap=True)
+    table.add_column("verdict", no_wrap=True)
+    table.add_column("strict: margin", no_wrap=True)
+    table.add_column("min margin", justify="right", no_wrap=True)
+    table.add_column("time (s)", justify="right", no_wrap=True)
     for r in report.results:
         colour = {"certified": "green", "infeasible-certified": "green", "rejected": "red"}.get(r["verdict"], "yellow")
-        table.add_row(
-            r["backend"],
-            r["status"],
-            _fmt(r["objective"], ".8g"),
+        strategy = r.get("strategy")
+        strict = f"{strategy}: {_fmt(r.get('margin'), '.3g')}" if strategy not in (None, "none") else "-"
+        cells = [r["backend"], r["status"]]
+        if with_objective:
+            cells.append(_fmt(r["objective"], ".8g"))
+        cells += [
             f"[{colour}]{r['verdict']}[/{colour}]",
+            strict,
             _fmt(r["min_margin"], ".3g"),
             _fmt(r["solve_s"], ".3f"),
-        )
+        ]
+        table.add_row(*cells)
     console = Console(soft_wrap=True)
+    if not console.is_terminal:
+        console.width = 160
     console.print(table)
     gap = report.max_rel_objective_gap
     verdict = "[green]agree[/green]" if report.agree else "[red]disagree[/red]"
