@@ -35,7 +35,7 @@ def solve(
     theorem: str,
     system: Any,
     params: dict[str, Any] | None = None,
-    backend: str = "clarabel",
+    backend: str | None = None,
     *,
     exact: bool = False,
     options: Any = None,
@@ -54,7 +54,8 @@ def solve(
     params : dict, optional
         Parameter overrides.
     backend : str
-        ``clarabel`` (default), ``scs``, ``cvxopt``, ``sdpa``, ``cvxpy[:SOLVER]``, ``picos``, ``auto``.
+        ``clarabel`` (the default; ``auto`` when a PSD block is too large for Clarabel), ``scs``,
+        ``cvxopt``, ``sdpa``, ``cvxpy[:SOLVER]``, ``picos``, ``auto``.
     exact : bool
         Also prove strict LMIs in exact rational arithmetic.
 

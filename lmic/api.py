@@ -280,7 +280,7 @@ def solve(
     target: str | os.PathLike[str] | Problem,
     system: Any = None,
     params: dict[str, Any] | None = None,
-    backend: str | Backend = "clarabel",
+    backend: str | Backend | None = None,
     options: SolveOptions | None = None,
     exact: bool = False,
 ) -> Result:
@@ -294,8 +294,10 @@ def solve(
     system : path, dict or System, optional
     params : dict, optional
         Parameter overrides (theorems only).
-    backend : str or Backend
-        A backend name (``"clarabel"``, ``"cvxpy:SCS"``, ``"auto"`` ...) or instance.
+    backend : str, Backend or None
+        A backend name (``"clarabel"``, ``"cvxpy:SCS"``, ``"auto"`` ...) or instance. ``None``
+        (the default) is Clarabel, the embedded default, unless Clarabel cannot take the problem
+        (a PSD block too large for its dense KKT system): then the ``auto`` route.
     options : SolveOptions, optional
     exact : bool
         Ask the certifier for an exact rational proof too.
@@ -317,6 +319,9 @@ def solve(
         system = as_system(target, system)
     problem, theorem, compile_s = load_target(target, system, params)
     name = target if isinstance(target, str) else ("<problem>" if isinstance(target, Problem) else os.fspath(target))
+    if backend is None:
+        ok = _backend("clarabel").supports(problem, explain=True)
+        backend = "clarabel" if (ok[0] if isinstance(ok, tuple) else ok) else "auto"
     spec = backend.label if isinstance(backend, Backend) else str(backend)
     step_opts = lambda step: options  # noqa: E731 - identity unless auto
     if spec.split(":")[0].lower() == "auto":

@@ -1049,7 +1049,7 @@ def run_cli(args: argparse.Namespace) -> int:
                 xtol=args.xtol,
                 rtol=args.rtol,
                 params=params,
-                backend=args.backend,
+                backend=args.backend or "clarabel",
                 options=opts,
                 max_evals=args.max_evals,
                 progress=bar,
@@ -1062,7 +1062,14 @@ def run_cli(args: argparse.Namespace) -> int:
     name, values = parse_grid(args.sweep)
     with _Bar(f"sweep {name}", show) as bar:
         sw = sweep(
-            args.target, args.system, name, values, params=params, backend=args.backend, options=opts, progress=bar
+            args.target,
+            args.system,
+            name,
+            values,
+            params=params,
+            backend=args.backend or "clarabel",
+            options=opts,
+            progress=bar,
         )
     if args.json:
         print_json(sw.to_dict())

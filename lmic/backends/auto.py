@@ -8,8 +8,10 @@ The rule (measured numbers in ``docs/backends.md``):
   fastest interior-point backend on these dense block LMIs.
 * Small problems (``sum of d_i^2 <= SMALL`` and ``n <= SMALL_N``): Clarabel alone (all solvers
   take milliseconds; Clarabel is the most accurate default).
-* Optimisation problems of larger size: CVXOPT, then Clarabel if the certificate fails (a
-  first-order solver is not accurate enough for optimal values).
+* Optimisation problems of larger size: SDPA, then CVXOPT, then Clarabel if the certificate
+  fails (a first-order solver is not accurate enough for optimal values). Backends that are not
+  installed, or cannot take the problem (Clarabel refuses PSD blocks whose dense KKT block would
+  not fit in memory), are left out of the route.
 
 :class:`AutoBackend` runs the first backend of the route; :func:`lmic.api.solve` runs the rest
 of the route when the first answer is not certified.
@@ -56,10 +58,26 @@ def route(problem: Problem) -> list[str]:
     """
     psd, n = _size(problem)
     if psd <= SMALL and n <= SMALL_N:
-        return ["clarabel"]
-    if problem.objective.sense == "feasibility" and has_strict(problem):
-        return ["scs", "cvxopt"]
-    return ["cvxopt", "clarabel"]
+        chain = ["clarabel"]
+    elif problem.objective.sense == "feasibility" and has_strict(problem):
+        chain = ["scs", "cvxopt"]
+    else:  # SDPA is the fastest interior point on large LMI-form problems (SDPLIB, docs/backends.md)
+        chain = ["sdpa", "cvxopt", "clarabel"]
+    usable = [name for name in chain if _usable(name, problem)]
+    return usable or chain
+
+
+def _usable(name: str, problem: Problem) -> bool:
+    """Installed here, and able to take the problem (Clarabel refuses PSD blocks too large for memory)."""
+    from lmic.backends.registry import get_backend
+    from lmic.errors import LmicError
+
+    try:
+        backend = get_backend(name)
+    except LmicError:
+        return False
+    ok = backend.supports(problem, explain=True)
+    return bool(ok[0] if isinstance(ok, tuple) else ok)
 
 
 def step_options(name: str, options: SolveOptions | None) -> SolveOptions:

@@ -67,7 +67,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("target", help="theorem id, or an IR (.json) / SDPA (.dat-s) file")
     p.add_argument("system", nargs="?", default=None, help="system file (with a theorem)")
     add_param_option(p)
-    p.add_argument("--backend", "-b", default="clarabel", help="backend (see 'lmic backends')")
+    p.add_argument(
+        "--backend", "-b", default=None,
+        help="backend (see 'lmic backends'); default clarabel, or auto when a PSD block is too large for it",
+    )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("-o", "--output", default=None, help="write the certificate file here")
     p.add_argument("--exact", action="store_true", help="also prove the LMIs exactly")
