@@ -64,6 +64,8 @@ def route(problem: Problem) -> list[str]:
     else:  # SDPA is the fastest interior point on large LMI-form problems (SDPLIB, docs/backends.md)
         chain = ["sdpa", "cvxopt", "clarabel"]
     usable = [name for name in chain if _usable(name, problem)]
+    if not usable:  # e.g. Clarabel cannot take a small problem on a small machine
+        usable = [name for name in ("sdpa", "cvxopt", "scs") if _usable(name, problem)]
     return usable or chain
 
 

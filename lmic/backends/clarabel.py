@@ -53,6 +53,10 @@ def kkt_bytes(problem: Problem) -> int:
     return sum(_BYTES_PER_KKT_ENTRY * (lmi.dim * (lmi.dim + 1) // 2) ** 2 for lmi in problem.lmis)
 
 
+def _size(n: float) -> str:
+    return f"{n / 2**30:.1f} GB" if n >= 2**30 else f"{n / 2**20:.1f} MB"
+
+
 def _physical_memory() -> int:
     try:
         return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
@@ -96,7 +100,7 @@ class ClarabelBackend(Backend):
             big = max(problem.lmis, key=lambda lmi: lmi.dim)
             why = (
                 f"Clarabel factors a dense block of (d(d+1)/2)^2 entries per LMI; LMI '{big.name}' "
-                f"({big.dim}x{big.dim}) needs about {need / 2**30:.0f} GB of the {have / 2**30:.0f} GB here: "
+                f"({big.dim}x{big.dim}) needs about {_size(need)} of the {_size(have)} here: "
                 "use --backend sdpa, cvxopt or auto"
             )
             return (False, why) if explain else False
