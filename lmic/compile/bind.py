@@ -453,22 +453,32 @@ class _Binder:
                     self._check_symmetric(Lw, sizes[i], where(i, i))
                 order.append((i, j, i, j))
         vals = [v for (_, _, si, sj) in order for (_, _, v) in entries[(si, sj)]]
+        v = np.concatenate(vals) if vals else np.zeros(0)
+        shape = (tril_size(d), 1 + self.n)
         key = ("lmi", lp.name, self._dims_key, tuple(order))
         structure = self.plan.cache.get(key)
-        if structure is None:
-            structure = self._lmi_structure(order, entries, sizes)
-            self.plan.cache[key] = structure
-        indptr, indices, pos, nslots = structure
-        v = np.concatenate(vals) if vals else np.zeros(0)
-        data = np.bincount(pos, weights=v, minlength=nslots + 1)[:nslots]
-        if lp.negated:
-            data = -data
-        coeffs = sp.csc_matrix((data, indices.copy(), indptr.copy()), shape=(tril_size(d), 1 + self.n))
+        if structure is None and ("seen", *key) not in self.plan.cache:
+            # first bind at these dimensions: assemble directly (a linear-time COO -> CSC);
+            # the reusable structure is built only when the same dimensions come back (sweeps)
+            self.plan.cache[("seen", *key)] = True
+            r, c = self._lmi_indices(order, entries, sizes)
+            keep = r >= 0
+            data = -v[keep] if lp.negated else v[keep]
+            coeffs = sp.csc_matrix((data, (r[keep], c[keep])), shape=shape)
+        else:
+            if structure is None:
+                structure = self._lmi_structure(order, entries, sizes)
+                self.plan.cache[key] = structure
+            indptr, indices, pos, nslots = structure
+            data = np.bincount(pos, weights=v, minlength=nslots + 1)[:nslots]
+            if lp.negated:
+                data = -data
+            coeffs = sp.csc_matrix((data, indices.copy(), indptr.copy()), shape=shape)
         coeffs.eliminate_zeros()
         return LMI(lp.name, d, coeffs, lp.strict, lp.relation, tuple(sizes))
 
-    def _lmi_structure(self, order, entries, sizes) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-        """CSC structure of an LMI and the slot of every value (dims only; cached)."""
+    def _lmi_indices(self, order, entries, sizes) -> tuple[np.ndarray, np.ndarray]:
+        """Storage row (-1: upper triangle, not stored) and IR column of every value."""
         starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
         d = int(starts[-1])
         rows_all, cols_all = [], []
@@ -484,9 +494,15 @@ class _Binder:
                 rows_all.append(srow)
                 cols_all.append(k)
         if not rows_all:
+            return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+        return np.concatenate(rows_all), np.concatenate(cols_all)
+
+    def _lmi_structure(self, order, entries, sizes) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """CSC structure of an LMI and the slot of every value (dims only; cached)."""
+        d = int(sum(sizes))
+        r, c = self._lmi_indices(order, entries, sizes)
+        if not len(r):
             return np.zeros(1 + self.n + 1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), 0
-        r = np.concatenate(rows_all)
-        c = np.concatenate(cols_all)
         valid = r >= 0
         nrows = tril_size(d)
         lin = np.where(valid, c * nrows + r, -1)
