@@ -1,23 +1,33 @@
-"""Backend benchmark: lmic (compile, lowering, solver time) against hand-written CVXPY.
+"""Backend benchmark: lmic (compile, lowering, solver time) against hand-written CVXPY, interleaved.
 
 Problems: ``qib.thm1`` on random discrete-time systems (n = 10, 20, 30, 40 by default; ``p = n/2``
-outputs, ``beta = 1e-3``) and SDPLIB control1-3. For every backend lmic's compile time, its own
-overhead (strict reduction + lowering + result mapping, ``lower_s``), the solver time and the
-certificate verdict are measured; the same LMI written by hand in CVXPY (``P`` symmetric, ``R``,
-``omega``; ``M << -eps I``, ``P >> eps I``, ``omega >= eps`` with ``eps = 1e-6``, the usual
-idiom) is timed with the same solver, and its answer is certified by lmic's certifier too.
+outputs, ``beta = 1e-3``) and SDPLIB control1-3. For every lmic backend the compile time, lmic's
+own overhead (elimination, strict reduction, lowering, result mapping and the check of a
+fixed-margin point: ``lower_s``), the solver time and the certificate verdict are measured; the
+same LMI written by hand in CVXPY (``P`` symmetric, ``R``, ``omega``; ``M << -eps I``,
+``P >> eps I``, ``omega >= eps`` with ``eps = 1e-6``, the usual idiom) is timed with the same
+solver, and its answer is certified by lmic's certifier too.
 
-Each run happens in a child process with a time limit, so one slow solver does not stop the
-table. Usage::
+By default the template of ``qib.thm1`` is analysed once in the parent process (as a session or a
+sweep does: :func:`lmic.compile.plan_for` caches it), so ``compile`` is the binding of the data;
+``--cold`` makes every run pay the analysis too (~0.5 s here).
 
-    python benchmarks/backends.py                      # everything, 300 s limit per run
-    python benchmarks/backends.py --sizes 10,20 --limit 60 --json out.json
+The machine is shared, so absolute times drift: every method runs ``--repeat`` times, the methods
+*interleaved* (one round runs each method once, in a rotated order), each run in a fresh child
+process with a time limit, and the report gives medians and, per size, the ratio of every
+method's median total time to lmic ``auto``'s (measured in the same rounds). Usage::
+
+    python benchmarks/backends.py                                 # 3 rounds, sizes 10..40
+    python benchmarks/backends.py --sizes 20,40 --repeat 5 --json out.json
+    python benchmarks/backends.py --methods lmic:auto,cvxpy:CLARABEL --sdplib ""
 
 Examples
 --------
 >>> system = random_qib_system(4, seed=0)
 >>> np.asarray(system["data"]["A"]).shape
 (4, 4)
+>>> parse_method("cvxpy:SCS"), parse_method("lmic:auto")
+(('cvxpy', 'SCS'), ('lmic', 'auto'))
 """
 
 from __future__ import annotations
@@ -25,6 +35,7 @@ from __future__ import annotations
 import argparse
 import json
 import multiprocessing
+import statistics
 import sys
 import time
 import warnings
@@ -32,10 +43,17 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["random_qib_system", "run_lmic", "run_cvxpy", "main"]
+__all__ = ["random_qib_system", "run_lmic", "run_cvxpy", "parse_method", "summarise", "main"]
 
-LMIC_BACKENDS = ["clarabel", "scs", "cvxopt", "sdpa", "auto"]
-CVXPY_SOLVERS = ["CLARABEL", "SCS", "CVXOPT", "SDPA"]
+METHODS = [
+    "lmic:auto",
+    "lmic:clarabel",
+    "lmic:scs",
+    "lmic:cvxopt",
+    "cvxpy:CLARABEL",
+    "cvxpy:SCS",
+    "cvxpy:CVXOPT",
+]
 SDPLIB = "/work/shared/sdplib"
 
 
@@ -57,11 +75,19 @@ def random_qib_system(n: int, seed: int = 0, beta: float = 1e-3) -> dict[str, An
     }
 
 
+def parse_method(spec: str) -> tuple[str, str]:
+    """``"lmic:BACKEND"`` or ``"cvxpy:SOLVER"`` as ``(kind, name)``."""
+    kind, _, name = spec.partition(":")
+    if kind not in ("lmic", "cvxpy") or not name:
+        raise ValueError(f"method '{spec}': expected lmic:BACKEND or cvxpy:SOLVER")
+    return kind, name
+
+
 def _certify(problem: Any, solution: Any) -> tuple[str, float | None]:
     from lmic.certify import certify
 
     cert = certify(problem, solution)
-    margins = [m.get("min_margin") for m in cert.lmis if m.get("min_margin") is not None]
+    margins = [m.get("rel_margin") for m in cert.lmis if m.get("rel_margin") is not None]
     return cert.verdict, (min(margins) if margins else None)
 
 
@@ -75,16 +101,19 @@ def run_lmic(target: str, backend: str, n: int, tol: float) -> dict[str, Any]:
     else:
         res = solve(f"{SDPLIB}/{target}.dat-s", backend=backend, options=SolveOptions(tol=tol))
     t = res.timings
+    rel = [m.get("rel_margin") for m in res.certificate_dict().get("lmis", []) if m.get("rel_margin") is not None]
     return {
         "status": res.status,
         "verdict": res.verdict,
-        "min_margin": res.min_margin,
+        "rel_margin": min(rel) if rel else None,
         "compile_s": t["compile_s"],
         "lower_s": t["lower_s"],
         "solve_s": t["solve_s"],
         "total_s": t["compile_s"] + t["lower_s"] + t["solve_s"],
         "objective": res.objective,
         "route": [a["backend"] for a in res.attempts] or [res.backend],
+        "strategy": res.solution.strategy,
+        "iterations": res.solution.iterations,
         "n_vars": res.problem.n,
     }
 
@@ -124,13 +153,14 @@ def run_cvxpy(solver: str, n: int, eps: float = 1e-6) -> dict[str, Any]:
         "total_s": total,
         "solve_s": getattr(stats, "solve_time", None),
         "compile_s": getattr(prob, "compilation_time", None),
+        "iterations": getattr(stats, "num_iters", None),
     }
     if P.value is not None:
         ir = compile_theorem("qib.thm1", system)
         x = ir.pack({"P": P.value, "R": R.value, "omega": float(w.value)})
-        out["verdict"], out["min_margin"] = _certify(ir, Solution("feasible", x=x))
+        out["verdict"], out["rel_margin"] = _certify(ir, Solution("feasible", x=x))
     else:
-        out["verdict"], out["min_margin"] = "unverified", None
+        out["verdict"], out["rel_margin"] = "unverified", None
     return out
 
 
@@ -165,6 +195,55 @@ def _timed(fn: Any, args: tuple, limit: float) -> dict[str, Any]:
     return out
 
 
+def _median(rows: list[dict[str, Any]], key: str) -> float | None:
+    vals = [r[key] for r in rows if isinstance(r.get(key), int | float)]
+    return statistics.median(vals) if vals else None
+
+
+def summarise(runs: list[dict[str, Any]], reference: str = "lmic:auto") -> list[dict[str, Any]]:
+    """Median times per ``(problem, method)`` and the ratio of each total to ``reference``'s.
+
+    >>> runs = [{"problem": "p", "method": "lmic:auto", "total_s": 1.0, "solve_s": 0.9, "status": "feasible"},
+    ...         {"problem": "p", "method": "cvxpy:SCS", "total_s": 3.0, "solve_s": 2.0, "status": "optimal"}]
+    >>> [(r["method"], r["ratio"]) for r in summarise(runs)]
+    [('lmic:auto', 1.0), ('cvxpy:SCS', 3.0)]
+    """
+    out: list[dict[str, Any]] = []
+    problems = list(dict.fromkeys(r["problem"] for r in runs))
+    for prob in problems:
+        mine = [r for r in runs if r["problem"] == prob]
+        ref = _median([r for r in mine if r["method"] == reference], "total_s")
+        for method in dict.fromkeys(r["method"] for r in mine):
+            rows = [r for r in mine if r["method"] == method]
+            last = rows[-1]
+            total = _median(rows, "total_s")
+            solve = _median(rows, "solve_s")
+            compile_s, lower = _median(rows, "compile_s"), _median(rows, "lower_s")
+            out.append(
+                {
+                    "problem": prob,
+                    "method": method,
+                    "runs": len(rows),
+                    "status": last.get("status"),
+                    "verdict": last.get("verdict"),
+                    "strategy": last.get("strategy"),
+                    "route": last.get("route"),
+                    "iterations": last.get("iterations"),
+                    "rel_margin": last.get("rel_margin"),
+                    "compile_s": compile_s,
+                    "lower_s": lower,
+                    "solve_s": solve,
+                    "total_s": total,
+                    "lower_pct": 100.0 * lower / solve if lower is not None and solve else None,
+                    "overhead_pct": (
+                        100.0 * (lower + compile_s) / solve if None not in (lower, compile_s) and solve else None
+                    ),
+                    "ratio": (total / ref if total is not None and ref else None),
+                }
+            )
+    return out
+
+
 def _fmt(v: Any, spec: str = ".3f") -> str:
     if v is None:
         return "-"
@@ -173,61 +252,79 @@ def _fmt(v: Any, spec: str = ".3f") -> str:
     return str(v)
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Run the benchmark and print the table."""
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--sizes", default="10,20,30,40")
-    ap.add_argument("--backends", default=",".join(LMIC_BACKENDS))
-    ap.add_argument("--cvxpy", default=",".join(CVXPY_SOLVERS), help="hand-written CVXPY solvers")
-    ap.add_argument("--sdplib", default="control1,control2,control3")
-    ap.add_argument("--limit", type=float, default=300.0, help="seconds per run")
-    ap.add_argument("--tol", type=float, default=1e-8)
-    ap.add_argument("--json", default=None, help="also write the rows to this file")
-    args = ap.parse_args(argv)
-    sizes = [int(s) for s in args.sizes.split(",") if s]
-    backends = [b for b in args.backends.split(",") if b]
-    solvers = [s for s in args.cvxpy.split(",") if s]
-    problems = [("qib", n) for n in sizes] + [(p, 0) for p in args.sdplib.split(",") if p]
-    rows = []
+def _print_table(summary: list[dict[str, Any]]) -> None:
     header = (
-        f"{'problem':10s} {'method':16s} {'status':10s} {'verdict':22s} {'margin':>9s} "
-        f"{'compile':>8s} {'lower':>8s} {'solver':>8s} {'total':>8s} {'ovh%':>6s}"
+        f"{'problem':10s} {'method':15s} {'status':11s} {'verdict':21s} {'rel.marg':>9s} {'it':>6s} "
+        f"{'compile':>8s} {'lower':>7s} {'solver':>8s} {'total':>8s} {'low%':>6s} {'ovh%':>6s} {'x auto':>7s}"
     )
     print(header)
     print("-" * len(header))
+    for r in summary:
+        method = r["method"]
+        if method.startswith("lmic:auto") and r.get("route"):
+            method += "->" + str(r["route"][-1])
+        print(
+            f"{r['problem']:10s} {method[:15]:15s} {str(r['status'])[:11]:11s} {str(r.get('verdict') or '-')[:21]:21s} "
+            f"{_fmt(r.get('rel_margin'), '.1e'):>9s} {_fmt(r.get('iterations')):>6s} {_fmt(r['compile_s']):>8s} "
+            f"{_fmt(r['lower_s']):>7s} {_fmt(r['solve_s']):>8s} {_fmt(r['total_s']):>8s} "
+            f"{_fmt(r['lower_pct'], '.1f'):>6s} {_fmt(r['overhead_pct'], '.1f'):>6s} {_fmt(r['ratio'], '.2f'):>7s}"
+        )
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the benchmark (interleaved rounds), print the medians and ratios."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--sizes", default="10,20,30,40")
+    ap.add_argument("--methods", default=",".join(METHODS), help="lmic:BACKEND and cvxpy:SOLVER, comma-separated")
+    ap.add_argument("--sdplib", default="control1,control2,control3", help="SDPLIB problems (lmic methods only)")
+    ap.add_argument("--repeat", type=int, default=3, help="interleaved rounds")
+    ap.add_argument("--limit", type=float, default=300.0, help="seconds per run")
+    ap.add_argument("--tol", type=float, default=1e-8)
+    ap.add_argument("--json", default=None, help="also write every run and the summary to this file")
+    ap.add_argument(
+        "--cold",
+        action="store_true",
+        help="do not analyse qib.thm1 in the parent first (each run then pays the cold template analysis)",
+    )
+    args = ap.parse_args(argv)
+    if not args.cold:
+        # a session or a sweep analyses the template once and re-binds (lmic.compile's plan cache);
+        # the children are forked after this and inherit the cached plan
+        from lmic.compile import compile_theorem
+
+        t0 = time.perf_counter()
+        compile_theorem("qib.thm1", random_qib_system(2))
+        print(f"qib.thm1 template analysis (once per process, not in the table): {time.perf_counter() - t0:.3f} s")
+    sizes = [int(s) for s in args.sizes.split(",") if s]
+    methods = [m for m in args.methods.split(",") if m]
+    for m in methods:
+        parse_method(m)
+    problems = [("qib", n) for n in sizes] + [(p, 0) for p in args.sdplib.split(",") if p]
+    runs: list[dict[str, Any]] = []
     for target, n in problems:
         label = f"qib n={n}" if target == "qib" else target
-        for be in backends:
-            r = _timed(run_lmic, (target, be, n, args.tol), args.limit)
-            r.update(problem=label, method=f"lmic {be}")
-            rows.append(r)
-            ovh = None
-            if r.get("solve_s"):
-                ovh = 100.0 * (r["compile_s"] + r["lower_s"]) / r["solve_s"]
-            method = f"lmic {be}" + (f"->{r['route'][-1]}" if be == "auto" and "route" in r else "")
-            print(
-                f"{label:10s} {method:16s} {r['status'][:10]:10s} {r.get('verdict', '-'):22s} "
-                f"{_fmt(r.get('min_margin'), '.2e'):>9s} {_fmt(r.get('compile_s')):>8s} "
-                f"{_fmt(r.get('lower_s')):>8s} {_fmt(r.get('solve_s')):>8s} "
-                f"{_fmt(r.get('total_s', r['wall_s'])):>8s} {_fmt(ovh, '.1f'):>6s}",
-                flush=True,
-            )
-        if target != "qib":
-            continue
-        for solver in solvers:
-            r = _timed(run_cvxpy, (solver, n), args.limit)
-            r.update(problem=label, method=f"cvxpy {solver}")
-            rows.append(r)
-            print(
-                f"{label:10s} {'cvxpy ' + solver:16s} {str(r['status'])[:10]:10s} "
-                f"{r.get('verdict', '-'):22s} {_fmt(r.get('min_margin'), '.2e'):>9s} "
-                f"{_fmt(r.get('compile_s')):>8s} {'':>8s} {_fmt(r.get('solve_s')):>8s} "
-                f"{_fmt(r.get('total_s', r['wall_s'])):>8s}",
-                flush=True,
-            )
+        todo = [m for m in methods if target == "qib" or m.startswith("lmic:")]
+        for k in range(args.repeat):
+            order = todo[k % len(todo) :] + todo[: k % len(todo)]  # rotate: no method always first
+            for method in order:
+                kind, name = parse_method(method)
+                if kind == "lmic":
+                    r = _timed(run_lmic, (target, name, n, args.tol), args.limit)
+                else:
+                    r = _timed(run_cvxpy, (name, n), args.limit)
+                r.update(problem=label, method=method, round=k)
+                runs.append(r)
+                print(
+                    f"  [{label} round {k + 1}/{args.repeat}] {method}: {r.get('status')} "
+                    f"{r.get('verdict', '')} total {_fmt(r.get('total_s', r['wall_s']))} s",
+                    file=sys.stderr,
+                    flush=True,
+                )
+    summary = summarise(runs)
+    _print_table(summary)
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump(rows, fh, indent=1, default=str)
+            json.dump({"runs": runs, "summary": summary}, fh, indent=1, default=str)
     return 0
 
 

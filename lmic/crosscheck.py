@@ -107,7 +107,7 @@ def crosscheck(
     >>> seen
     [(0, 'clarabel', True), (1, 'clarabel', False), (1, 'scs', True), (2, 'scs', False)]
     >>> [(row["strategy"], row["verdict"]) for row in r.results]
-    [('max-margin', 'certified'), ('max-margin', 'certified')]
+    [('max-margin', 'certified'), ('fixed-margin', 'certified')]
     """
     from lmic.backends.registry import available_backend_names
 

@@ -33,3 +33,23 @@ def test_status_classes():
         "agree",
         "max_rel_objective_gap",
     }
+
+
+def test_progress_callback_and_strict_columns():
+    calls = []
+    rep = crosscheck(
+        CASES["lyapunov_stable"].build(),
+        backends=["clarabel", "nope"],
+        progress=lambda done, total, name, row: calls.append(
+            (done, total, name, None if row is None else row["status"])
+        ),
+    )
+    assert calls == [
+        (0, 2, "clarabel", None),
+        (1, 2, "clarabel", "feasible"),
+        (1, 2, "nope", None),
+        (2, 2, "nope", "error"),
+    ]
+    ok, missing = rep.results
+    assert ok["strategy"] == "max-margin" and ok["margin"] > 0 and ok["min_margin"] > 0
+    assert missing["strategy"] is None and missing["margin"] is None

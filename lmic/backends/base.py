@@ -199,13 +199,33 @@ def conic_data(
     kinds = np.asarray(lin.kinds, dtype=object)
     eq_rows = np.flatnonzero(kinds == "eq") if len(lin) else np.zeros(0, dtype=int)
     ge_rows = np.flatnonzero(kinds == "ge") if len(lin) else np.zeros(0, dtype=int)
-    blocks = [lin.A[eq_rows], lin.A[ge_rows]]
+    # one COO triple for the whole stack: each block's entries are moved to their native row
+    # (storage row r goes to native row k with perm[k] = r, times scale[k]); no sparse products
+    rows, cols, vals = [], [], []
+    offset = 0
+    for block in (lin.A[eq_rows], lin.A[ge_rows]):
+        C = block.tocoo()
+        rows.append(C.row + offset)
+        cols.append(C.col)
+        vals.append(C.data)
+        offset += block.shape[0]
     for lmi in problem.lmis:
         perm, scale = psd_vec(lmi.dim)
-        blocks.append(sp.diags(scale) @ lmi.coeffs[perm])
-    M = sp.vstack(blocks, format="csc") if blocks else sp.csc_matrix((0, 1 + problem.n))
-    b = np.asarray(M[:, 0].toarray()).ravel()
-    A = (-M[:, 1:]).tocsc()
+        inverse = np.empty_like(perm)
+        inverse[perm] = np.arange(len(perm))
+        C = lmi.coeffs.tocoo()
+        native = inverse[C.row]
+        rows.append(native + offset)
+        cols.append(C.col)
+        vals.append(C.data * scale[native])
+        offset += len(perm)
+    row = np.concatenate(rows) if rows else np.zeros(0, dtype=int)
+    col = np.concatenate(cols) if cols else np.zeros(0, dtype=int)
+    val = np.concatenate(vals) if vals else np.zeros(0)
+    const = col == 0
+    b = np.zeros(offset)
+    np.add.at(b, row[const], val[const])
+    A = sp.csc_matrix((-val[~const], (row[~const], col[~const] - 1)), shape=(offset, problem.n))
     obj = problem.objective
     sign = -1.0 if obj.sense == "max" else 1.0
     if obj.sense == "feasibility":
@@ -401,7 +421,7 @@ def restore_eliminated(sol: Solution, keep: np.ndarray, problem: Problem) -> Non
     >>> from lmic.testing.conformance import lyapunov_problem
     >>> restore_eliminated(s, np.array([1]), lyapunov_problem(-np.eye(2)))
     >>> s.x.tolist(), s.info["eliminated"]
-    ([0.0, 2.0, 0.0], {'count': 2, 'variables': ['P']})
+    ([0.0, 2.0, 0.0], {'count': 2, 'variables': ['P'], 'indices': [0, 2]})
     """
 
     def expand(v: Any) -> Any:
@@ -416,7 +436,7 @@ def restore_eliminated(sol: Solution, keep: np.ndarray, problem: Problem) -> Non
         sol.info["ray"] = expand(np.asarray(sol.info["ray"], dtype=float))
     dropped = np.setdiff1d(np.arange(problem.n), keep)
     names = [v.name for v in problem.variables if np.any((dropped >= v.offset) & (dropped < v.offset + v.size))]
-    sol.info["eliminated"] = {"count": int(len(dropped)), "variables": names}
+    sol.info["eliminated"] = {"count": int(len(dropped)), "variables": names, "indices": dropped.tolist()}
 
 
 def _child(conn: Any, backend: Backend, problem: Problem, options: SolveOptions) -> None:
@@ -540,7 +560,7 @@ class Backend(ABC):
         t0 = time.perf_counter()
         try:
             kept, keep = eliminate_unused(problem, dependent=self.full_rank)
-            sol = strict.solve(kept, options, self._run)
+            sol = strict.solve(kept, options, self._run, first_order=not self.interior_point)
             if keep is not None:
                 restore_eliminated(sol, keep, problem)
         except Exception as err:  # noqa: BLE001 - a crash is a status, never a traceback

@@ -108,7 +108,25 @@ class CVXOPTBackend(Backend):
         if Gs:
             kwargs["Gs"], kwargs["hs"] = Gs, hs
         t0 = time.perf_counter()
-        result = solvers.sdp(cvxopt.matrix(np.asarray(c, dtype=float)), options=self._options(options), **kwargs)
+        opts = self._options(options)
+        # conelp's default KKT solver for SDP cones is 'qr'; 'chol' (CVXPY's choice) is 2.5x faster
+        # on qib.thm1 (n = 20: 0.53 s against 1.33 s) and needs rank [G; A] = n, which the
+        # elimination of dependent entries of x (Backend.full_rank) provides, but it is less
+        # robust: it stops 'unknown' on SDPLIB control1-3 and qap5, where 'qr' solves. So 'chol'
+        # first, 'qr' when 'chol' fails (unless extra={"kktsolver": ...} chooses one).
+        chosen = opts.pop("kktsolver", None)
+        kkt_order = [chosen] if chosen else ["chol", "qr"]
+        c_mat = cvxopt.matrix(np.asarray(c, dtype=float))
+        for k, kktsolver in enumerate(kkt_order):
+            last = k == len(kkt_order) - 1
+            try:
+                result = solvers.sdp(c_mat, kktsolver=kktsolver, options=dict(opts), **kwargs)
+            except (ValueError, ArithmeticError):
+                if last:
+                    raise
+                continue
+            if str(result["status"]) != "unknown" or last:
+                break
         solve_s = time.perf_counter() - t0
         native = str(result["status"])
         status = self.map_status(native)

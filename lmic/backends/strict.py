@@ -38,10 +38,15 @@ reduced to closed ones before lowering, and the answer is mapped back. Two reduc
     ``x`` cannot drift to infinity: SDPA fed the raw homogeneous LMI returns ``P ~ 1e17``).
     ``t* = Solution.margin`` is the problem's own number, the same on every backend. Decisions:
 
-    * solver ``optimal`` and ``t* > 10 tol``: ``feasible``;
-    * solver ``optimal`` and ``t* <= 10 tol``: ``infeasible``, with the dual of the margin
-      problem as Farkas certificate (``Z_i >= 0``, ``sum tr Z_i + sum y_strict <= 1``,
+    * solver ``optimal`` and ``t* > 10 tol``, or ``0 < t* <= 10 tol`` at a point that verifies
+      (:func:`verify_point`): ``feasible``;
+    * solver ``optimal`` and ``t* <= 0``, or ``0 < t* <= 10 tol`` with a dual that verifies as a
+      Farkas certificate: ``infeasible``, with the dual of the margin problem as Farkas
+      certificate (``Z_i >= 0``, ``sum tr Z_i + sum y_strict <= 1``,
       ``sum_i <F_i^(k), Z_i> + a_k . y = 0``, ``farkas["strict"] = True``);
+    * solver ``optimal`` and ``0 < t* <= 10 tol`` otherwise: ``inaccurate`` (undecided at this
+      tolerance: SCS at ``1e-3`` finds ``t* = 1.4e-3`` on ``nonuniform.thm1`` flexible-arm,
+      whose ``t*`` is positive);
     * solver ``inaccurate`` (e.g. Clarabel ``AlmostSolved``) and ``t* < -10 tol``:
       ``infeasible`` **only if** the dual of the margin problem, restricted to the original
       constraints, verifies as a Farkas certificate of the original problem by the certifier's
@@ -54,15 +59,21 @@ reduced to closed ones before lowering, and the answer is mapped back. Two reduc
       sign of ``t*`` alone proves nothing: an inaccurate solve is not evidence.
 
 ``auto`` (the default)
-    Feasibility problems: if the problem is *small* (:func:`is_small`: ``sum d_i^2 <=``
-    :data:`SMALL_PSD` and ``n <=`` :data:`SMALL_N`, solves of a few milliseconds), ``max-margin``
-    first: its ``t*`` is reproducible across backends (what ``lmic crosscheck`` compares) and
-    one solve decides feasibility or infeasibility; if that solve is ``inaccurate`` or an
-    ``error`` without an infeasibility decision, ``fixed-margin`` is tried and kept if its point
-    verifies. Larger problems: ``fixed-margin`` first, kept when its point is a *verified
-    strictly feasible point* (solver ``optimal`` and every LMI and row holds at ``x`` by the
-    certifier's rules, :func:`lmic.certify.check.lmi_report`); otherwise ``max-margin`` decides.
-    Optimisation problems: ``fixed-margin``.
+    Optimisation problems: ``fixed-margin``. Feasibility problems:
+
+    * *small* problems (:func:`is_small`: ``sum d_i^2 <=`` :data:`SMALL_PSD` and ``n <=``
+      :data:`SMALL_N`, solves of milliseconds) on an interior-point solver: ``max-margin``
+      first. Its ``t*`` is the problem's own number, reproducible across backends (what
+      ``lmic crosscheck`` compares), and one solve decides feasibility or infeasibility. If it
+      ends ``inaccurate`` or in an ``error`` without a decision (the supremum of the margin is
+      often approached only as ``|x| -> inf``: ``uio_dt.thm3_2`` at ``gamma = 45``, where Clarabel
+      stops ``AlmostSolved`` at ``t = -3.1`` with ``P ~ 1e8``), ``fixed-margin`` is tried and
+      kept if it decides (its point verifies, or its Farkas ray proves the original problem
+      infeasible).
+    * larger problems, and first-order solvers (SCS) at any size: ``fixed-margin`` first, kept
+      when it decides: its point is a *verified strictly feasible point* (solver ``optimal`` and
+      every LMI and row holds at ``x`` by the certifier's rules, :func:`verify_point`), or its
+      Farkas ray proves the original problem infeasible. Otherwise ``max-margin`` decides.
 
 Every attempt is listed in ``Solution.info["strict_attempts"]`` and the strategy of the
 returned answer in ``Solution.strategy``.
@@ -96,7 +107,7 @@ import scipy.sparse as sp
 
 from lmic.backends.base import SolveOptions
 from lmic.ir.problem import LinearConstraints, Objective, Problem, Variable
-from lmic.ir.svec import tril_rows_cols, tril_size
+from lmic.ir.svec import tril_size
 from lmic.solution import Solution
 
 __all__ = [
@@ -123,9 +134,11 @@ STRATEGIES = ("auto", "max-margin", "fixed-margin")
 #: default relative margin of the fixed-margin feasibility solve of a scale-free problem
 RELATIVE_MARGIN = 1e-4
 
-#: ``auto`` treats problems with ``sum d_i^2 <= SMALL_PSD`` and ``n <= SMALL_N`` as small
-SMALL_PSD = 2500
-SMALL_N = 200
+#: ``auto`` treats problems with ``sum d_i^2 <= SMALL_PSD`` and ``n <= SMALL_N`` as small: every
+#: shipped example (at most 474 and 54; Clarabel's max-margin solve <= 0.09 s); ``qib.thm1`` at
+#: n = 10 (1000 and 106) is not (max-margin 0.18 s, 15 iterations, against 6)
+SMALL_PSD = 800
+SMALL_N = 100
 
 #: name of the margin variable added by the ``max-margin`` strategy
 MARGIN_VARIABLE = "_lmic_margin_t"
@@ -173,7 +186,7 @@ def is_scale_free(problem: Problem) -> bool:
 
 
 def is_small(problem: Problem) -> bool:
-    """``sum d_i^2 <= SMALL_PSD`` and ``n <= SMALL_N`` (solves of a few milliseconds).
+    """``sum d_i^2 <= SMALL_PSD`` and ``n <= SMALL_N`` (solves of milliseconds).
 
     >>> from lmic.testing.conformance import lyapunov_problem
     >>> is_small(lyapunov_problem(-np.eye(3))), is_small(lyapunov_problem(-np.eye(40)))
@@ -183,12 +196,18 @@ def is_small(problem: Problem) -> bool:
     return psd <= SMALL_PSD and problem.n <= SMALL_N
 
 
-def plan(problem: Problem, options: SolveOptions) -> list[str]:
+def plan(problem: Problem, options: SolveOptions, first_order: bool = False) -> list[str]:
     """The reductions :func:`solve` tries, in order (``[]``: nothing is strict).
+
+    ``first_order``: the solver is a first-order method (SCS), for which ``auto`` always tries
+    ``fixed-margin`` first (a maximal margin is an optimum it approaches slowly: 1e5 iterations
+    on ``nonuniform.thm1`` chua, where the fixed-margin point takes 4500).
 
     >>> from lmic.testing.conformance import lyapunov_problem
     >>> plan(lyapunov_problem(-np.eye(40)), SolveOptions())
     ['fixed-margin', 'max-margin']
+    >>> plan(lyapunov_problem(-np.eye(2)), SolveOptions()), plan(lyapunov_problem(-np.eye(2)), SolveOptions(), True)
+    (['max-margin', 'fixed-margin'], ['fixed-margin', 'max-margin'])
     >>> plan(lyapunov_problem(-np.eye(2)), SolveOptions(strict="max-margin"))
     ['max-margin']
     """
@@ -201,20 +220,53 @@ def plan(problem: Problem, options: SolveOptions) -> list[str]:
         return ["fixed-margin"]
     if choice != "auto":
         return [choice]
-    return ["max-margin", "fixed-margin"] if is_small(problem) else ["fixed-margin", "max-margin"]
+    if is_small(problem) and not first_order:
+        return ["max-margin", "fixed-margin"]
+    return ["fixed-margin", "max-margin"]
+
+
+def _diagonal_positions(d: int) -> np.ndarray:
+    """Storage positions of the diagonal entries (column-major lower triangle).
+
+    >>> _diagonal_positions(3).tolist()
+    [0, 3, 5]
+    """
+    j = np.arange(d)
+    return j * d - j * (j - 1) // 2
 
 
 def _identity_tril(d: int) -> np.ndarray:
-    i, j = tril_rows_cols(d)
-    return (i == j).astype(float)
+    out = np.zeros(tril_size(d))
+    out[_diagonal_positions(d)] = 1.0
+    return out
 
 
 def _trace_row(lmi: Any) -> np.ndarray:
-    """``[tr F0, tr F_1, ..., tr F_n]`` of one LMI."""
-    return np.asarray(lmi.coeffs[_identity_tril(lmi.dim) > 0].sum(axis=0)).ravel()
+    """``[tr F0, tr F_1, ..., tr F_n]`` of one LMI (one pass over its entries)."""
+    C = lmi.coeffs.tocoo()
+    on_diagonal = np.zeros(C.shape[0], dtype=bool)
+    on_diagonal[_diagonal_positions(lmi.dim)] = True
+    keep = on_diagonal[C.row]
+    return np.bincount(C.col[keep], weights=C.data[keep], minlength=C.shape[1])
 
 
-def reduce(problem: Problem, options: SolveOptions, strategy: str | None = None) -> tuple[Problem, StrictInverse]:
+def _shift(lmi: Any, margin: float) -> Any:
+    """``lmi`` with ``F0 - margin I`` and not strict."""
+    C = lmi.coeffs.tocoo()
+    d = _diagonal_positions(lmi.dim)
+    coeffs = sp.csc_matrix(
+        (
+            np.concatenate([C.data, np.full(len(d), -margin)]),
+            (np.concatenate([C.row, d]), np.concatenate([C.col, np.zeros(len(d), dtype=C.col.dtype)])),
+        ),
+        shape=C.shape,
+    )
+    return replace(lmi, coeffs=coeffs, strict=False)
+
+
+def reduce(
+    problem: Problem, options: SolveOptions, strategy: str | None = None, first_order: bool = False
+) -> tuple[Problem, StrictInverse]:
     """A closed problem for one reduction, and the data to map its answer back.
 
     ``strategy`` defaults to the first step of :func:`plan`. Returns ``problem`` itself
@@ -222,7 +274,7 @@ def reduce(problem: Problem, options: SolveOptions, strategy: str | None = None)
     """
     n_rows = len(problem.linear)
     sense = problem.objective.sense
-    steps = plan(problem, options)
+    steps = plan(problem, options, first_order)
     if not steps:
         return problem, StrictInverse("none", problem.n, n_rows, sense=sense)
     strategy = strategy or steps[0]
@@ -249,14 +301,7 @@ def _fixed_margin(problem: Problem, margin: float, normalise: bool = False) -> P
         if lmi.strict:
             if normalise:  # trace F(x) <= d  <=>  d - sum_k x_k tr F_k >= 0
                 norm_rows.append(np.concatenate([[float(lmi.dim)], -_trace_row(lmi)[1:]]))
-            shift = sp.csc_matrix(
-                (
-                    -margin * _identity_tril(lmi.dim),
-                    (np.arange(tril_size(lmi.dim)), np.zeros(tril_size(lmi.dim), int)),
-                ),
-                shape=lmi.coeffs.shape,
-            )
-            lmi = replace(lmi, coeffs=(lmi.coeffs + shift).tocsc(), strict=False)
+            lmi = _shift(lmi, margin)
         lmis.append(lmi)
     lin = problem.linear
     A = lin.A.tolil(copy=True)
@@ -474,16 +519,39 @@ def invert(
     solution.info["scale_free"] = inverse.scale_free
     threshold = 10.0 * max(options.tol, 1e-12)
     if solution.status in ("optimal", "feasible") and t is not None:
-        if t <= threshold:
+        if t > threshold or (t > 0 and problem is not None and verify_point(problem, solution.x)[0]):
+            solution.status = "feasible"
+        elif t <= 0 or problem is None or _dual_verifies(duals, problem):
             solution.status = "infeasible"
-            solution.message = f"maximal margin t* = {t:.3g} <= {threshold:.1g}: the strict constraints cannot be met"
+            solution.message = f"maximal margin t* = {t:.3g} <= 0: the strict constraints cannot be met"
+            if t > 0:
+                solution.message = (
+                    f"maximal margin t* = {t:.3g} is within the tolerance of 0 and the dual of the margin "
+                    "problem proves the strict constraints infeasible"
+                )
             if duals.get("lmis") is not None:
                 solution.farkas = dict(duals, strict=True)
         else:
-            solution.status = "feasible"
+            solution.status = "inaccurate"
+            solution.message = (
+                f"maximal margin t* = {t:.3g} is positive but within {threshold:.1g} (10 tol) of 0: the point "
+                "does not verify and the dual is no Farkas certificate; a tighter tolerance decides"
+            )
     elif solution.status == "inaccurate" and t is not None and problem is not None:
         _inaccurate_max_margin(solution, t, duals, problem, options)
     return solution
+
+
+def _dual_verifies(duals: dict, problem: Problem) -> bool:
+    """Whether the max-margin dual (restricted to the original constraints) is a Farkas ray."""
+    if duals.get("lmis") is None or len(duals["lmis"]) != len(problem.lmis):
+        return False
+    from lmic.certify.farkas import verify_farkas
+
+    try:
+        return bool(verify_farkas(problem, duals).get("verified"))
+    except Exception:  # noqa: BLE001 - a malformed dual is just not a certificate
+        return False
 
 
 def _inaccurate_max_margin(solution: Solution, t: float, duals: dict, problem: Problem, options: SolveOptions) -> None:
@@ -526,7 +594,12 @@ def _attempt_record(sol: Solution) -> dict[str, Any]:
     }
 
 
-def solve(problem: Problem, options: SolveOptions, run: Callable[[Problem, SolveOptions], Solution]) -> Solution:
+def solve(
+    problem: Problem,
+    options: SolveOptions,
+    run: Callable[[Problem, SolveOptions], Solution],
+    first_order: bool = False,
+) -> Solution:
     """Solve ``problem`` through ``run`` (a closed-problem solver), strict constraints reduced.
 
     Follows :func:`plan`; see the module docstring for when a second reduction runs. The
@@ -538,7 +611,7 @@ def solve(problem: Problem, options: SolveOptions, run: Callable[[Problem, Solve
     >>> sol.status, sol.strategy, round(sol.margin, 6)
     ('feasible', 'max-margin', 0.5)
     """
-    steps = plan(problem, options)
+    steps = plan(problem, options, first_order)
     if not steps:
         return run(problem, options)
     attempts: list[Solution] = []
@@ -575,6 +648,8 @@ def _proven_infeasible(sol: Solution, problem: Problem) -> bool:
     except Exception:  # noqa: BLE001 - a malformed ray is just not a proof
         return False
     if report.get("verified"):
+        if report.get("kind") == "strict":
+            sol.farkas["strict"] = True
         sol.message = (
             f"no point with margin {sol.info.get('imposed_margin', 0):g}, and the Farkas ray "
             f"proves the original problem infeasible ({report.get('kind', '')})"

@@ -77,7 +77,8 @@ def test_solve_theorem_and_system_writes_certificate(tmp_path, capsys):
     code = main(["solve", "qib.thm1", str(QIB), "--backend", "scs", "--json", "-o", str(cert)])
     d = _json(capsys)
     assert code == 0 and d["theorem"] == "qib.thm1" and d["status"] == "feasible"
-    assert d["strict"]["strategy"] == "max-margin" and d["strict"]["margin"] > 1e-3
+    # SCS (first order) takes the fixed-margin route; the margin its point achieves is recorded
+    assert d["strict"]["strategy"] == "fixed-margin" and d["strict"]["margin"] > 1e-3
     assert "L" in d["derived"]
     assert json.loads(cert.read_text())["certificate"]["verdict"] == "certified"
 
@@ -136,3 +137,37 @@ def test_crosscheck_theorem_with_system(capsys):
     code = main(["crosscheck", "qib.thm1", str(QIB), "--backends", "clarabel,scs,cvxopt", "--json"])
     d = _json(capsys)
     assert code == 0 and d["agree"] and all(r["verdict"] == "certified" for r in d["results"])
+
+
+UIO32 = EXAMPLES / "uio_dt.thm3_2.flexible_joint.yaml"
+
+
+def test_solve_strict_option(capsys):
+    """uio_dt.thm3_2 at gamma = 45: max-margin alone is inaccurate, fixed-margin certifies."""
+    base = ["solve", "uio_dt.thm3_2", str(UIO32), "-p", "gamma=45", "--json"]
+    assert main([*base, "--strict", "max-margin"]) == 1
+    d = _json(capsys)
+    assert d["status"] == "inaccurate" and d["strict"]["strategy"] == "max-margin"
+    assert main([*base, "--strict", "fixed-margin"]) == 0
+    d = _json(capsys)
+    assert d["strict"]["strategy"] == "fixed-margin" and d["certificate"]["verdict"] == "certified"
+    assert main(base) == 0  # auto: max-margin, then fixed-margin
+    assert _json(capsys)["strict"]["strategy"] == "fixed-margin"
+
+
+def test_solve_strict_option_rejects_unknown_values(capsys):
+    with pytest.raises(SystemExit) as err:
+        main(["solve", "qib.thm1", str(QIB), "--strict", "largest"])
+    assert err.value.code == 2 and "invalid choice" in capsys.readouterr().err
+
+
+def test_crosscheck_progress_and_margins(capsys):
+    code = main(["crosscheck", "qib.thm1", str(QIB), "--backends", "clarabel,scs"])
+    captured = capsys.readouterr()
+    assert code == 0
+    # off a terminal the progress bar is one line per backend on stderr
+    assert "[1/2] clarabel: feasible, certified" in captured.err
+    assert "[2/2] scs: feasible, certified" in captured.err
+    assert "max-margin:" in captured.out and "fixed-margin:" in captured.out
+    header = next(line for line in captured.out.splitlines() if "backend" in line)
+    assert "objective" not in header  # a feasibility problem has none
