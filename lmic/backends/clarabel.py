@@ -105,6 +105,7 @@ class ClarabelBackend(Backend):
             )
             return (False, why) if explain else False
         return super().supports(problem, explain)
+
     native_time_limit: ClassVar[bool] = True
     description: ClassVar[str] = "Clarabel interior point, native API (default)"
     STATUS_MAP: ClassVar[dict[str, str]] = {
@@ -155,6 +156,11 @@ class ClarabelBackend(Backend):
         n = problem.n
         P = sp.csc_matrix((n, n))
         settings = self._settings(options)
+        if problem.objective.sense == "feasibility" and "chordal_decomposition_enable" not in options.extra:
+            # without an objective there is no optimum to get wrong (the control1 failure), and the
+            # point is verified (strict fixed-margin) and certified: decomposition is 1.45x faster on
+            # qib.thm1 (n = 30, 6.0-6.9 s against 8.8-10.3 s; its zero blocks make cliques)
+            settings.chordal_decomposition_enable = True
         t0 = time.perf_counter()
         solver = clarabel.DefaultSolver(P, data.c, data.A, data.b, cones, settings)
         result = solver.solve()

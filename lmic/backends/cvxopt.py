@@ -3,7 +3,7 @@
 ``cvxopt.solvers.sdp`` minimises ``c'x`` subject to ``Gl x + sl = hl`` (``sl >= 0``),
 ``Gs[k] x + ss[k] = hs[k]`` (``ss[k]`` PSD) and ``A x = b``: exactly the IR's LMI form, with
 ``hs[k] = F0`` and the columns of ``Gs[k]`` equal to ``-vec(F_j)`` as dense column-major
-``d*d`` vectors (:func:`lmic.backends.base.full_vec_map`, the one conversion place). Inequality
+``d*d`` vectors (:func:`lmic.backends.base.full_vec_coo`, the one conversion place). Inequality
 rows go to ``Gl``/``hl``, equalities to ``A x = b`` (``A = a``, ``b = -a0``; their multipliers
 change sign to reach the IR's convention). CVXOPT has no time limit of its own: with
 ``SolveOptions.time_limit`` the solve runs in a child process.
@@ -22,7 +22,7 @@ from typing import ClassVar
 import numpy as np
 import scipy.sparse as sp
 
-from lmic.backends.base import Backend, SolveOptions, full_vec_map
+from lmic.backends.base import Backend, SolveOptions, full_vec_coo
 from lmic.ir.problem import Problem
 from lmic.solution import Solution
 
@@ -93,9 +93,22 @@ class CVXOPTBackend(Backend):
         c = np.zeros(n) if problem.objective.sense == "feasibility" else sign * problem.objective.c[1:]
         Gs, hs = [], []
         for lmi in problem.lmis:
-            M = (full_vec_map(lmi.dim) @ lmi.coeffs).tocsc()
-            hs.append(cvxopt.matrix(M[:, 0].toarray().reshape(lmi.dim, lmi.dim, order="F")))
-            Gs.append(to_cvxopt_sparse(-M[:, 1:]))
+            row, col, val = full_vec_coo(lmi)
+            const = col == 0
+            h = np.zeros(lmi.dim * lmi.dim)
+            h[row[const]] = val[const]
+            hs.append(cvxopt.matrix(h.reshape(lmi.dim, lmi.dim, order="F")))
+            var = ~const
+            Gs.append(
+                cvxopt.spmatrix(
+                    cvxopt.matrix(-val[var]),
+                    cvxopt.matrix(row[var].astype(np.int64)),
+                    cvxopt.matrix(col[var].astype(np.int64) - 1),
+                    (lmi.dim * lmi.dim, n),
+                )
+                if var.any()
+                else cvxopt.spmatrix([], [], [], (lmi.dim * lmi.dim, n))
+            )
         kwargs: dict = {}
         if len(ge):
             Age = lin.A[ge]

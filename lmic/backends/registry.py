@@ -249,7 +249,6 @@ def get_backend(spec: str) -> Backend:
     if missing:
         pkgs = " ".join(missing)
         raise BackendUnavailable(
-            f"backend '{backend.label}' needs the Python package(s) {', '.join(missing)}: "
-            f"pip install {pkgs}"
+            f"backend '{backend.label}' needs the Python package(s) {', '.join(missing)}: pip install {pkgs}"
         )
     return backend
