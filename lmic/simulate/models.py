@@ -39,6 +39,7 @@ lmic.errors.DataError: unknown observer model 'kalman' (known: luenberger, sampl
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
@@ -64,7 +65,7 @@ def _matrix(value: Any, role: str, name: str) -> np.ndarray:
     return arr
 
 
-class Observer:
+class Observer(ABC):
     """Base class: the plant shared by every model, role checks, and the observer interface.
 
     Parameters
@@ -122,7 +123,7 @@ class Observer:
                 f"expected {shape[0]}x{shape[1]}"
             )
 
-    def _check(self) -> None:
+    def _check(self) -> None:  # noqa: B027 - optional hook, most models check their roles
         """Shapes of the model's own roles (subclasses)."""
 
     # -- the plant -------------------------------------------------------------------------
@@ -153,9 +154,9 @@ class Observer:
         """The state estimate from the observer state ``z`` and the measurement ``y``."""
         return z
 
+    @abstractmethod
     def update(self, z: Vector, y: Vector, u: Vector, t: float, f: VectorFn, h: VectorFn) -> Vector:
         """The observer's next state (discrete) or derivative (continuous)."""
-        raise NotImplementedError
 
 
 class Luenberger(Observer):
@@ -236,6 +237,10 @@ class Sampled(Observer):
     def flow(self, z: Vector, u: Vector, t: float, f: VectorFn, held: Vector) -> Vector:
         """``A xh + B u + f(xh) + held`` between samples."""
         return self.A @ z + self._bu(u) + f(z, u, t) + held
+
+    def update(self, z: Vector, y: Vector, u: Vector, t: float, f: VectorFn, h: VectorFn) -> Vector:
+        """Not used: a sampled observer runs :meth:`flow` with the :meth:`correction` held between samples."""
+        raise TypeError("a sampled observer is advanced by flow() and correction(), not update()")
 
 
 #: model name -> class
