@@ -47,6 +47,7 @@ from lmic.ir.problem import (
 from lmic.ir.svec import tril_index, tril_size
 from lmic.system import System, load_system
 from lmic.template.builder import normalise_option
+from lmic.template.convert import as_expr
 from lmic.template.totree import to_tree
 
 __all__ = ["bind", "resolve_inputs", "Inputs"]
@@ -66,7 +67,7 @@ class Inputs:
 def _dim_value(expr: Any, dims: Mapping[sympy.Symbol, int]) -> int | None:
     if isinstance(expr, int):
         return expr
-    v = sympy.sympify(sympy.sympify(expr).xreplace(dict(dims)))
+    v = as_expr(as_expr(expr).xreplace(dict(dims)))
     return int(v) if v.is_Integer else None
 
 
@@ -138,7 +139,7 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
         if d.name not in arrays:
             continue
         for axis, s in enumerate(d.shape):
-            s = sympy.sympify(s)
+            s = as_expr(s)
             if isinstance(s, sympy.Symbol) and s not in out.dims:
                 out.dims[s] = int(arrays[d.name].shape[axis])
                 origin[s] = f"{'rows' if axis == 0 else 'columns'} of {d.name}"
@@ -150,7 +151,7 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
             shape = " x ".join(str(s) for s in d.shape)
             raise DataError(f"{where}: missing data '{d.name}' ({shape})" + (f": {d.doc}" if d.doc else ""))
         for s in d.shape:  # a dimension only absent optional data would fix is 0
-            s = sympy.sympify(s)
+            s = as_expr(s)
             if isinstance(s, sympy.Symbol) and s not in out.dims:
                 out.dims[s] = 0
                 origin[s] = f"absent optional data {d.name}"

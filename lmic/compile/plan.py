@@ -47,6 +47,7 @@ from sympy.matrices.expressions.matexpr import MatrixElement
 from lmic.errors import TemplateError
 from lmic.template.blocks import STAR
 from lmic.template.builder import Template
+from lmic.template.convert import as_expr
 from lmic.template.theorem import Theorem
 
 __all__ = ["Term", "EntryPlan", "LmiPlan", "LinearForm", "Plan", "analyse"]
@@ -188,7 +189,7 @@ class _Analyser:
             return out
         if isinstance(e, MatMul):
             coeff, mats = e.as_coeff_matrices()
-            result: list[tuple[sympy.Expr, list[Any]]] = [(sympy.sympify(coeff), [])]
+            result: list[tuple[sympy.Expr, list[Any]]] = [(as_expr(coeff), [])]
             for m in mats:
                 sub = self.expand(m)
                 result = [(c1 * c2, f1 + f2) for c1, f1 in result for c2, f2 in sub]
@@ -282,7 +283,7 @@ class _Analyser:
                     for idx, s in ((i, r), (j, c)):
                         if sizes[idx] is None:
                             sizes[idx] = s
-                        elif sympy.simplify(sympy.sympify(sizes[idx]) - sympy.sympify(s)) != 0:
+                        elif sympy.simplify(as_expr(sizes[idx]) - as_expr(s)) != 0:
                             raise TemplateError(
                                 f"{self.t.theorem_id}: {self.where} has size {r}x{c}, which does not "
                                 f"fit block size {sizes[idx]} of its row/column"
@@ -297,7 +298,7 @@ class _Analyser:
                             f"{self.t.theorem_id}: {self.where}: scalar entry '{ent}' off the diagonal "
                             "(write a matrix, or 0)"
                         )
-                    expr = sympy.sympify(ent)
+                    expr = as_expr(ent)
                     self._check_names(expr)
                     terms = []
                     for part, svar in self.split_scalar(expr, str(expr)):
@@ -321,7 +322,7 @@ class _Analyser:
     # -- scalar linear forms --------------------------------------------------------------
     def linear(self, expr: Any, where: str) -> LinearForm:
         self.where = where
-        expr = sympy.expand(sympy.sympify(expr))
+        expr = sympy.expand(as_expr(expr))
         self._check_names(expr)
         form = LinearForm(sympy.Integer(0))
         for mono in sympy.Add.make_args(expr):

@@ -29,6 +29,7 @@ import sympy
 from lmic.errors import DataError, TemplateError
 from lmic.template.blocks import Block, LmiSpec
 from lmic.template.checks import CheckSpec
+from lmic.template.convert import as_expr
 
 __all__ = [
     "Template",
@@ -360,16 +361,16 @@ class Template:
 
     def minimize(self, expr: Any) -> None:
         """Minimise a scalar expression linear in the decision variables."""
-        self.objective = ("min", sympy.sympify(expr))
+        self.objective = ("min", as_expr(expr))
 
     def maximize(self, expr: Any) -> None:
         """Maximise a scalar expression linear in the decision variables."""
-        self.objective = ("max", sympy.sympify(expr))
+        self.objective = ("max", as_expr(expr))
 
     def derive(self, name: str, expr: Any, doc: str = "") -> Any:
         """A derived quantity ``name = expr`` (e.g. ``L = P^-1 G``); returns a symbol for it."""
         self._claim(name)
-        expr = sympy.sympify(expr) if not isinstance(expr, sympy.MatrixExpr) else expr
+        expr = as_expr(expr) if not isinstance(expr, sympy.MatrixExpr) else expr
         if isinstance(expr, sympy.MatrixExpr):
             sym = sympy.MatrixSymbol(name, *expr.shape)
         else:

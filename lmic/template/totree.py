@@ -30,6 +30,7 @@ from sympy.matrices.expressions import (
 
 from lmic.errors import TemplateError
 from lmic.template.blocks import STAR, Block
+from lmic.template.convert import as_expr
 
 __all__ = ["to_tree", "FUNCTIONS", "lambda_max", "lambda_min", "spectral_radius", "norm2"]
 
@@ -56,7 +57,7 @@ FUNCTIONS = {
 
 
 def _dim(v: Any, dims: Mapping[sympy.Symbol, int]) -> int:
-    val = sympy.sympify(sympy.sympify(v).xreplace(dict(dims)))
+    val = as_expr(as_expr(v).xreplace(dict(dims)))
     if not val.is_Integer:
         raise TemplateError(f"dimension {v} cannot be evaluated (unbound symbol)")
     return int(val)
@@ -143,5 +144,5 @@ def _entry_tree(ent: Any, r: int, c: int, diagonal: bool, dims: Mapping[sympy.Sy
     if isinstance(ent, sympy.MatrixExpr):
         return to_tree(ent, dims)
     if diagonal:  # a scalar on a diagonal block means scalar * I
-        return _op("mul", to_tree(sympy.sympify(ent), dims), {"eye": r})
+        return _op("mul", to_tree(as_expr(ent), dims), {"eye": r})
     raise TemplateError(f"scalar entry '{ent}' off the diagonal of a block matrix")
