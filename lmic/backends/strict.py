@@ -201,7 +201,8 @@ def plan(problem: Problem, options: SolveOptions, first_order: bool = False) -> 
 
     ``first_order``: the solver is a first-order method (SCS), for which ``auto`` always tries
     ``fixed-margin`` first (a maximal margin is an optimum it approaches slowly: 1e5 iterations
-    on ``nonuniform.thm1`` chua, where the fixed-margin point takes 4500).
+    on ``nonuniform.thm1`` chua, where the fixed-margin point takes 4500; on flexible-arm, whose
+    largest margin is tiny, it is the reverse: 57000 against 3200, docs/backends.md).
 
     >>> from lmic.testing.conformance import lyapunov_problem
     >>> plan(lyapunov_problem(-np.eye(40)), SolveOptions())
