@@ -497,7 +497,14 @@ def invert(
             if problem is not None and solution.x is not None:
                 solution.margin = achieved_margin(problem, solution.x, inverse.scale_free)
             if solution.status == "optimal":
-                solution.status = "feasible"
+                if solution.margin is not None and solution.margin <= 0:
+                    solution.status = "inaccurate"
+                    solution.message = (
+                        f"the solver's point misses the strict constraints (margin {solution.margin:.3g}); "
+                        "it met the closed ones only to its tolerance"
+                    )
+                else:
+                    solution.status = "feasible"
             elif solution.status == "infeasible":
                 solution.message = (
                     f"no point with margin {inverse.margin:g}"

@@ -163,3 +163,12 @@ def test_infeasible_problem_is_decided_by_a_verified_ray_or_by_max_margin():
     from lmic.certify.farkas import verify_farkas
 
     assert verify_farkas(unstable, {k: sol.farkas[k] for k in ("lmis", "linear")})["verified"]
+
+
+def test_fixed_margin_point_that_misses_the_strict_constraints_is_not_feasible():
+    prob = lyapunov_problem(-np.eye(1))
+    _, inv = strict.reduce(prob, SolveOptions(), "fixed-margin")
+    sol = strict.invert(Solution("optimal", x=np.array([-1e-3])), inv, SolveOptions(), prob)
+    assert sol.status == "inaccurate" and sol.margin < 0 and "misses" in sol.message
+    sol = strict.invert(Solution("optimal", x=np.array([0.5])), inv, SolveOptions(), prob)
+    assert sol.status == "feasible" and sol.margin == pytest.approx(1.0)
