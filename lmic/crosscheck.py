@@ -164,5 +164,8 @@ def crosscheck(
     )
     label = target if isinstance(target, str) else ("<problem>" if isinstance(target, Problem) else os.fspath(target))
     if system is not None:
-        label = f"{label} {os.fspath(system) if not isinstance(system, dict) else '<system>'}"
+        if isinstance(system, str | os.PathLike):
+            label = f"{label} {os.fspath(system)}"
+        else:  # a dict, a System or a plant object
+            label = f"{label} {getattr(system, 'path', None) or '<system>'}"
     return CrosscheckReport(str(label), rows, agree, gap, rtol, runs)

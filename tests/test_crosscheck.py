@@ -53,3 +53,15 @@ def test_progress_callback_and_strict_columns():
     ok, missing = rep.results
     assert ok["strategy"] == "max-margin" and ok["margin"] > 0 and ok["min_margin"] > 0
     assert missing["strategy"] is None and missing["margin"] is None
+
+
+def test_crosscheck_accepts_a_loaded_system_object():
+    from pathlib import Path
+
+    from lmic.crosscheck import crosscheck
+    from lmic.system import load_system
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "qib.thm1.flexible-joint.yaml"
+    report = crosscheck("qib.thm1", load_system(path), backends=["clarabel", "cvxopt"])
+    assert report.agree
+    assert report.target.endswith("qib.thm1.flexible-joint.yaml")
