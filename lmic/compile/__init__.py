@@ -13,7 +13,6 @@ Examples
 
 from __future__ import annotations
 
-import time
 from collections.abc import Mapping
 from typing import Any
 
@@ -69,14 +68,10 @@ def compile_theorem(
     Returns
     -------
     Problem
-        The IR; ``meta`` records the theorem, parameters, data hash and timings.
+        The IR; ``meta`` records the theorem, parameters and data hash (no timings, so that
+        compiling the same inputs twice gives the same IR and the same hash).
     """
     sysobj = load_system(system)  # type: ignore[arg-type]
     merged = dict(sysobj.params)
     merged.update(params or {})
-    t0 = time.perf_counter()
-    plan = plan_for(theorem, merged)
-    plan_s = time.perf_counter() - t0
-    prob = bind(plan, sysobj, params)
-    prob.meta["plan_s"] = plan_s
-    return prob
+    return bind(plan_for(theorem, merged), sysobj, params)

@@ -92,3 +92,19 @@ def test_trace_of_a_product_of_variables_is_rejected():
 
     with pytest.raises(TemplateError, match="product of decision variables P and Q"):
         analyse(bad)
+
+
+def test_entries_of_a_variable_in_an_objective():
+    @theorem(id="test.entries", title="t", citation="c")
+    def entries(t):
+        (n,) = t.dims("n")
+        t.data("A", n, n)
+        P = t.symmetric("P", n)
+        R = t.full("R", n, n)
+        t.minimize(P[0, 1] + 3 * R[1, 0] + sympy.Trace(P))
+
+    prob = bind(analyse(entries), {"data": {"A": A}})
+    x = np.random.default_rng(1).standard_normal(prob.n)
+    v = prob.unpack(x)
+    want = v["P"][0, 1] + 3 * v["R"][1, 0] + np.trace(v["P"])
+    assert prob.objective.value(x) == pytest.approx(want, rel=1e-12)
