@@ -30,7 +30,7 @@ import scipy.sparse as sp
 import sympy
 from sympy.matrices.expressions import Identity, MatrixSymbol, Transpose
 
-from lmic import __version__
+from lmic._version import __version__
 from lmic.compile.plan import LinearForm, LmiPlan, Plan, Term
 from lmic.errors import DataError, LmicError, TemplateError
 from lmic.ir.expr import evaluate
