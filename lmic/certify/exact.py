@@ -501,13 +501,13 @@ def _needed_bits(problem: Problem, x: np.ndarray, min_eigs: list[float] | None =
     if len(lin):
         A = lin.A.tocsr()
         r = np.asarray(A @ xx).ravel()
-        g = np.asarray(abs(A[:, 1:]) @ np.ones(problem.n)).ravel()
+        row_scale = np.asarray(abs(A[:, 1:]) @ np.ones(problem.n)).ravel()
         for i in range(len(lin)):
-            if lin.kinds[i] == "eq" or g[i] == 0:
+            if lin.kinds[i] == "eq" or row_scale[i] == 0:
                 continue
             if r[i] <= 0:
                 return None
-            need = max(need, math.ceil(math.log2(16.0 * g[i] / r[i])))
+            need = max(need, math.ceil(math.log2(16.0 * row_scale[i] / r[i])))
     return max(need, 0)
 
 

@@ -94,40 +94,39 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
     known = {p.name for p in t.params} | {o.name for o in t.options}
     for key in params:
         if key not in known:
-            expected = ", ".join(sorted(known)) or "none"
-            raise DataError(f"{where}: unknown parameter '{key}' (the theorem takes: {expected})")
+            accepted = ", ".join(sorted(known)) or "none"
+            raise DataError(f"{where}: unknown parameter '{key}' (the theorem takes: {accepted})")
     for o in t.options:
-        value = normalise_option(params.get(o.name, o.default))
-        if value != o.value:
-            raise DataError(f"{where}: option {o.name} = {value!r} does not match the analysed plan")
+        option = normalise_option(params.get(o.name, o.default))
+        if option != o.value:
+            raise DataError(f"{where}: option {o.name} = {option!r} does not match the analysed plan")
         out.params[o.name] = o.value
     for p in t.params:
+        raw: Any
         if p.name in params:
-            value = params[p.name]
-            if isinstance(value, str):
+            raw = params[p.name]
+            if isinstance(raw, str):
                 try:
-                    value = float(value)
+                    raw = float(raw)
                 except ValueError:
-                    raise DataError(f"{where}: parameter '{p.name}' = {value!r} is not a number") from None
+                    raise DataError(f"{where}: parameter '{p.name}' = {raw!r} is not a number") from None
         elif p.default is not None:
-            value = p.default
+            raw = p.default
         else:
             raise DataError(f"{where}: missing parameter '{p.name}'" + (f" ({p.doc})" if p.doc else ""))
-        value = float(value)
-        if not np.isfinite(value):
-            raise DataError(f"{where}: parameter '{p.name}' is {value}")
-        if not _in_domain(value, p.domain):
-            raise DataError(f"{where}: parameter {p.name} = {value:g} is outside its domain {p.domain}")
-        out.params[p.name] = value
-        out.values[p.name] = value
+        number = float(raw)
+        if not np.isfinite(number):
+            raise DataError(f"{where}: parameter '{p.name}' is {number}")
+        if not _in_domain(number, p.domain):
+            raise DataError(f"{where}: parameter {p.name} = {number:g} is outside its domain {p.domain}")
+        out.params[p.name] = number
+        out.values[p.name] = number
 
     # data and dimensions
     declared = {d.name for d in t.data_decls}
     for key in system.data:
         if key not in declared:
-            raise DataError(
-                f"{where}: unknown data key '{key}' (the theorem takes: {', '.join(sorted(declared))})"
-            )
+            raise DataError(f"{where}: unknown data key '{key}' (the theorem takes: {', '.join(sorted(declared))})")
     origin: dict[sympy.Symbol, str] = {}
     arrays: dict[str, np.ndarray] = {}
     for d in t.data_decls:
@@ -137,11 +136,11 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
     for d in t.data_decls:
         if d.name not in arrays:
             continue
-        for axis, s in enumerate(d.shape):
-            s = as_expr(s)
-            if isinstance(s, sympy.Symbol) and s not in out.dims:
-                out.dims[s] = int(arrays[d.name].shape[axis])
-                origin[s] = f"{'rows' if axis == 0 else 'columns'} of {d.name}"
+        for axis, size in enumerate(d.shape):
+            dim = as_expr(size)
+            if isinstance(dim, sympy.Symbol) and dim not in out.dims:
+                out.dims[dim] = int(arrays[d.name].shape[axis])
+                origin[dim] = f"{'rows' if axis == 0 else 'columns'} of {d.name}"
     # defaults for missing data
     for d in t.data_decls:
         if d.name in arrays:
@@ -149,31 +148,33 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
         if d.default is None:
             shape = " x ".join(str(s) for s in d.shape)
             raise DataError(f"{where}: missing data '{d.name}' ({shape})" + (f": {d.doc}" if d.doc else ""))
-        for s in d.shape:  # a dimension only absent optional data would fix is 0
-            s = as_expr(s)
-            if isinstance(s, sympy.Symbol) and s not in out.dims:
-                out.dims[s] = 0
-                origin[s] = f"absent optional data {d.name}"
-        r, c = (_dim_value(s, out.dims) for s in d.shape)
-        if r is None or c is None:
+        for size in d.shape:  # a dimension only absent optional data would fix is 0
+            dim = as_expr(size)
+            if isinstance(dim, sympy.Symbol) and dim not in out.dims:
+                out.dims[dim] = 0
+                origin[dim] = f"absent optional data {d.name}"
+        n_rows, n_cols = (_dim_value(size, out.dims) for size in d.shape)
+        if n_rows is None or n_cols is None:
             raise DataError(f"{where}: cannot size the default of data '{d.name}' (dimensions unknown)")
         if callable(d.default):
-            arr = np.atleast_2d(np.asarray(d.default({**out.values, **arrays}, r, c), dtype=float))
+            arr = np.atleast_2d(np.asarray(d.default({**out.values, **arrays}, n_rows, n_cols), dtype=float))
         else:
-            arr = float(d.default) * np.eye(r, c)
+            arr = float(d.default) * np.eye(n_rows, n_cols)
         arrays[d.name] = arr
     for d in t.data_decls:
         arr = arrays[d.name]
-        expected = []
-        for s in d.shape:
-            val = _dim_value(s, out.dims)
+        expected: list[int] = []
+        for size in d.shape:
+            val = _dim_value(size, out.dims)
             if val is None:
-                raise DataError(f"{where}: dimension {s} of data '{d.name}' cannot be determined")
+                raise DataError(f"{where}: dimension {size} of data '{d.name}' cannot be determined")
             expected.append(val)
         if tuple(expected) != arr.shape:
             shape_sym = " x ".join(str(s) for s in d.shape)
-            bound = ", ".join(f"{s} = {out.dims[s]} from {origin.get(s, 'defaults')}" for s in sorted(
-                (s for s in sympy.Matrix(list(d.shape)).free_symbols if s in out.dims), key=str))
+            bound = ", ".join(
+                f"{s} = {out.dims[s]} from {origin.get(s, 'defaults')}"
+                for s in sorted((s for s in sympy.Matrix(list(d.shape)).free_symbols if s in out.dims), key=str)
+            )
             raise DataError(
                 f"{where}: data '{d.name}' has shape {arr.shape[0]}x{arr.shape[1]}, expected "
                 f"{shape_sym} = {expected[0]}x{expected[1]}" + (f" ({bound})" if bound else "")
@@ -189,7 +190,7 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
     # data-derived constants, in order
     for c in t.consts:
         try:
-            value = c.fn(dict(out.values))
+            computed = c.fn(dict(out.values))
         except DataError as err:
             msg = str(err)
             raise DataError(msg if msg.startswith(f"theorem {tid}") else f"{where}: {msg}") from None
@@ -198,20 +199,21 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
         except Exception as err:
             raise DataError(f"{where}: constant '{c.name}' cannot be computed: {type(err).__name__}: {err}") from None
         if c.shape is None:
-            arr = np.asarray(value, dtype=float)
+            arr = np.asarray(computed, dtype=float)
             if arr.size != 1:
                 raise TemplateError(f"{tid}: constant '{c.name}' is declared scalar but has shape {arr.shape}")
-            value = float(arr.reshape(-1)[0])
-            if not np.isfinite(value):
-                raise DataError(f"{where}: constant '{c.name}' is {value} for this data")
+            scalar = float(arr.reshape(-1)[0])
+            if not np.isfinite(scalar):
+                raise DataError(f"{where}: constant '{c.name}' is {scalar} for this data")
+            out.values[c.name] = scalar
         else:
-            value = np.atleast_2d(np.asarray(value, dtype=float))
-            exp = tuple(_dim_value(s, out.dims) for s in c.shape)
-            if value.shape != exp:
-                raise TemplateError(f"{tid}: constant '{c.name}' has shape {value.shape}, declared {exp}")
-            if not np.all(np.isfinite(value)):
+            matrix = np.atleast_2d(np.asarray(computed, dtype=float))
+            exp = tuple(_dim_value(size, out.dims) for size in c.shape)
+            if matrix.shape != exp:
+                raise TemplateError(f"{tid}: constant '{c.name}' has shape {matrix.shape}, declared {exp}")
+            if not np.all(np.isfinite(matrix)):
                 raise DataError(f"{where}: constant '{c.name}' is not finite for this data")
-        out.values[c.name] = value
+            out.values[c.name] = matrix
     for req in t.requirements:
         try:
             ok = bool(req.predicate(dict(out.values)))
@@ -387,12 +389,10 @@ class _Binder:
                 f"theorem {self.tid}: term '{term.text}' is {out_r}x{out_c}, its block is {rows}x{cols}"
             )
         # the basis entry E_ij contributes the outer product L[:, i] R[j, :]
-        if L is None and R is None:
-            vals = np.ones(len(bi))
+        if L is None:
+            vals = np.ones(len(bi)) if R is None else R[bj, :].ravel()
         elif R is None:
             vals = L[:, bi].T.ravel()
-        elif L is None:
-            vals = R[bj, :].ravel()
         else:
             vals = (L[:, bi].T[:, :, None] * R[bj, :][:, None, :]).ravel()
         self._products[key] = vals
@@ -606,13 +606,8 @@ class _Binder:
         objective = Objective(sense, self.linear_row(form) if sense != "feasibility" else np.zeros(1 + self.n))
         t = plan.template
         derived = [NamedExpr(d.name, to_tree(d.expr, self.dims), d.doc) for d in t.derived]
-        checks = [
-            Check(c.name, c.spec.kind, to_tree(c.spec.expr, self.dims), c.spec.bound, c.doc) for c in t.checks
-        ]
-        data = {
-            k: (v.copy() if isinstance(v, np.ndarray) else float(v))
-            for k, v in self.env.items()
-        }
+        checks = [Check(c.name, c.spec.kind, to_tree(c.spec.expr, self.dims), c.spec.bound, c.doc) for c in t.checks]
+        data = {k: (v.copy() if isinstance(v, np.ndarray) else float(v)) for k, v in self.env.items()}
         meta = {
             "theorem": plan.id,
             "title": plan.theorem.title,
@@ -644,4 +639,3 @@ def bind(plan: Plan, system: Any, params: Mapping[str, Any] | None = None) -> Pr
     sysobj = load_system(system)
     inputs = resolve_inputs(plan, sysobj, params)
     return _Binder(plan, inputs).problem(sysobj)
-
