@@ -109,7 +109,6 @@ KNOWN_OVERSIZE: dict[str, str] = {
     "lmic.certify.farkas": "issue #10",
     "lmic.certify.exact": "issue #10",
     "lmic.certify.certificate": "issue #10",
-    "lmic.compile.bind": "issue #10",
     "lmic.simulate.run": "issue #10",
 }
 
