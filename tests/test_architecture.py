@@ -107,7 +107,6 @@ KNOWN_OVERSIZE: dict[str, str] = {
     "lmic.ir.jsonio": "issue #10",
     "lmic.certify.check": "issue #10",
     "lmic.certify.farkas": "issue #10",
-    "lmic.certify.exact": "issue #10",
     "lmic.certify.certificate": "issue #10",
     "lmic.simulate.run": "issue #10",
 }
