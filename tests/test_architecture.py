@@ -169,7 +169,12 @@ def _import_nodes(tree: ast.AST) -> Iterator[ast.AST]:
 
 
 def _targets(node: ast.AST, module: Module, known: Mapping[str, Module]) -> list[str]:
-    """The project modules one import statement loads by name (implicit parent-package imports aside)."""
+    """The project modules one import statement loads by name.
+
+    ``from P import x`` is an edge to the submodule ``P.x`` when there is one, else to ``P``.
+    Importing ``P.x`` also runs ``P/__init__.py`` first; that implicit parent import is not an
+    edge (every module of ``P`` has it), an explicit ``import P`` or ``from P import name`` is.
+    """
     if isinstance(node, ast.Import):
         return [a.name for a in node.names if a.name in known]
     if isinstance(node, ast.Call):
@@ -425,3 +430,15 @@ def test_unplaced_and_doubly_placed_modules_are_seen():
     assert layer_of("p.z", layers) == []
     assert layer_of("p", layers) == [1]
     assert layer_of("p.xy", layers) == []  # "p.x.*" is a package prefix, not a string prefix
+
+
+if __name__ == "__main__":  # print today's violations, to update the allowlists after a merge
+    _modules = collect_modules(_project_packages())
+    _edges = import_graph(_modules)
+    print("unplaced or doubly placed:", sorted(m for m in _modules if len(layer_of(m, LAYERS)) != 1))
+    for _c in sorted(import_cycles(_modules, _edges), key=_show):
+        print("cycle:", _show(_c))
+    for _a, _b in sorted(upward_imports(_edges, LAYERS)):
+        print(f"upward: {_a} -> {_b}  ({_modules[_a].path.relative_to(ROOT)}:{_edges[(_a, _b)]})")
+    for _m, _n in sorted(oversize_modules(_modules, MAX_LINES).items()):
+        print(f"oversize: {_m} {_n} lines")
