@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+from lmic._version import __version__
 
 __all__ = ["__version__", "solve", "theorem", "theorems", "compile_theorem"]
 

@@ -57,7 +57,7 @@ from typing import Any
 
 import numpy as np
 
-from lmic import __version__
+from lmic._version import __version__
 from lmic.certify.check import Certificate, Tolerances, _jsonable, certify
 from lmic.errors import CertificateError, LmicError
 from lmic.ir.problem import Problem
