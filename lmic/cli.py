@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import traceback
 from collections.abc import Sequence
 
 from lmic import __version__
@@ -33,6 +34,7 @@ COMMANDS = [
     "theorems",
     "backends",
     "show",
+    "check",
     "compile",
     "solve",
     "crosscheck",
@@ -56,6 +58,7 @@ def build_parser() -> argparse.ArgumentParser:
     """The full argument parser (every available sub-command)."""
     parser = _Parser(prog="lmic", description="Compile, solve and certify linear matrix inequalities.")
     parser.add_argument("--version", action="version", version=f"lmic {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show the traceback of an error (any command)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name in COMMANDS:
         try:
@@ -70,17 +73,33 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit code."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv  # accepted anywhere: lmic --debug solve ..., lmic solve ... --debug
+    argv = [a for a in argv if a != "--debug"]
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.debug = debug
     if not getattr(args, "func", None):
         parser.print_help()
         return EXIT_USAGE
     try:
         return int(args.func(args))
     except LmicError as err:
+        if debug:
+            traceback.print_exception(err)
         msg = " ".join(str(err).split())
         sys.stderr.write(f"lmic: error: {msg}\n")
         return EXIT_USAGE
+    except Exception as err:  # a bug (lmic's or a plugin's): one line; the traceback with --debug
+        if debug:
+            traceback.print_exception(err)
+        msg = " ".join(str(err).split())
+        sys.stderr.write(
+            f"lmic: internal error: {type(err).__name__}: {msg}"
+            + ("" if debug else " (run with --debug for the traceback)")
+            + "\n"
+        )
+        return EXIT_FAILED
     except KeyboardInterrupt:
         sys.stderr.write("lmic: interrupted\n")
         return EXIT_FAILED

@@ -392,13 +392,14 @@ class Template:
         ``name = expr`` for it (e.g. ``L = P^-1 R^T`` gives ``R = L^T P``). Declare it after the
         LMIs that use ``V``.
 
+        >>> from lmic.template import block, STAR
         >>> t = Template("x", {"fixed_L": 1}); n, p = t.dims("n p")
         >>> A, C = t.data("A", n, n), t.data("C", p, n)
         >>> P = t.symmetric("P", n); R = t.full("R", p, n)
         >>> t.lmi("(7)", block([[-P, A.T * P - C.T * R], [STAR, -P]]) < 0)
         >>> L = t.derive("L", P.inv() * R.T, fixes=R)
         >>> [v.name for v in t.variables], t.role("L"), t.lmis[0].spec.block.entry(0, 1)
-        (['P'], 'data', -C.T*L.T*P + A.T*P)
+        (['P'], 'data', A.T*P - C.T*(L.T*P))
         """
         if fixes is not None:
             fixed = self._fixed_variant(name, expr, fixes)

@@ -84,7 +84,7 @@ def _build_location(err: BaseException, build: Callable[..., Any]) -> str:
 
 def _hint(err: BaseException) -> str:
     text = str(err)
-    if "cannot be interpreted as an integer" in text or "Symbol" in text and "numpy" in type(err).__module__:
+    if "cannot be interpreted as an integer" in text:
         return " (numpy cannot size arrays by a dimension symbol: use I(n), 0 or data inside blocks, not numpy)"
     if isinstance(err, TypeError) and "Invalid comparison of non-real" in text:
         return " (compare a matrix with 0: write M < 0, or block([[...]]) < 0)"
@@ -151,8 +151,12 @@ class Theorem:
         t = Template(self.id, options)
         try:
             self.build(t)
-        except LmicError:
-            raise
+        except LmicError as err:
+            if self.id in str(err):
+                raise
+            where = _build_location(err, self.build)
+            at = f" at {where}" if where else ""
+            raise type(err)(f"theorem {self.id}{at}: {err}") from err
         except KeyboardInterrupt:
             raise
         except Exception as err:  # a plugin bug: name the theorem, file and line; keep one line
