@@ -468,6 +468,7 @@ class Template:
         name: str = "L",
         fixes: Any = None,
         doc: str = "",
+        **roles: Any,
     ) -> Any:
         """The observer ``x^+ = A x^ + f + L (y - C x^)`` in one call: derive, check, observer.
 
@@ -475,7 +476,7 @@ class Template:
         ``fixes`` names the eliminated variable) or an existing data / derived symbol. Adds the
         check ``A - L C Schur stable`` (``time="discrete"``) or ``A - L C Hurwitz``
         (``"continuous"``) and declares the Luenberger observer for ``lmic simulate``. Returns
-        the gain symbol.
+        the gain symbol. Extra keyword ``roles`` go to :meth:`observer` (e.g. ``B="B"``).
 
         >>> t = Template("x"); n, p = t.dims("n p")
         >>> A, C = t.data("A", n, n), t.data("C", p, n)
@@ -493,7 +494,7 @@ class Template:
             self.check(f"A - {gain} C Schur stable", schur_stable(A - L * C))
         else:
             self.check(f"A - {gain} C Hurwitz", hurwitz(A - L * C))
-        self.observer("luenberger", time, A=A, C=C, L=L)
+        self.observer("luenberger", time, A=A, C=C, L=L, **roles)
         return L
 
     def check(self, name: str, spec: CheckSpec, doc: str = "") -> None:

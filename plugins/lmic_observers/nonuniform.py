@@ -26,7 +26,7 @@ __all__ = ["THEOREMS"]
     title="Observer with nonuniformly sampled measurements, LMIs (9a)-(9b)",
     citation="Observer for Lipschitz nonlinear continuous-time systems with nonuniformly "
     "sampled measurements (conference paper, source 004), Theorem 1",
-    kind="S",
+    kind="synthesis",
     objective="feasibility; L = P^-1 L~",
     system_class="continuous time, Lipschitz sigma(H x), sampled output (intervals <= delta_bar)",
     notes="(9a) is extracted column-first; its printed (2,1) block lost a transpose (C^T L~^T). "
@@ -66,14 +66,8 @@ def nonuniform_thm1(t):
     H = t.data("H", m, n, doc="nonlinearity argument matrix, sigma(H x)")
     g = t.param("gamma", domain="nonnegative", doc="Lipschitz constant of sigma (2)")
     d = t.param("delta_bar", domain="positive", doc="upper bound on the sampling intervals")
-    fixed = t.flag("fixed_L", doc="1: L is given as data (audit), L~ = P L")
-    P = t.symmetric("P", n)
-    if fixed:
-        L = t.data("L", n, q, doc="the observer gain to audit (fixed_L = 1)")
-        Lt = P * L
-    else:
-        L = None
-        Lt = t.full("Lt", n, q, doc="L~ = P L")
+    P = t.symmetric("P", n, pd=True)
+    Lt = t.full("Lt", n, q, doc="L~ = P L")
     N1 = t.full("N1", n, n)
     N2 = t.full("N2", n, n)
     N3 = t.full("N3", m, n)
@@ -81,7 +75,6 @@ def nonuniform_thm1(t):
     LtC = Lt * C
     PG = P * G
     top = PA + A.T * P + g**2 * H.T * H - P - N1 - N1.T
-    t.lmi("P > 0", block(P) > 0)
     t.lmi(
         "(9a)",
         block(
@@ -108,8 +101,7 @@ def nonuniform_thm1(t):
         )
         < 0,
     )
-    if L is None:
-        L = t.derive("L", P.inv() * Lt, doc="observer gain L = P^-1 L~")
+    L = t.derive("L", P.inv() * Lt, doc="observer gain L = P^-1 L~", fixes=Lt)  # fixed_L: 1 -> L~ = P L
     t.check("A + L C Hurwitz", hurwitz(A + L * C))
     t.observer("sampled", "sampled", A=A, C=C, L=L)
 

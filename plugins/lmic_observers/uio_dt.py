@@ -150,8 +150,7 @@ def uio_dt_thm3_1(t):
     M = t.data("M", n, n, doc="M = I + E C (given)")
     D = t.data("D", n, q, doc="nonlinearity input matrix")
     gamma = t.param("gamma", domain="nonnegative", doc="Lipschitz constant of f")
-    P = t.symmetric("P", n)
-    t.lmi("P > 0", block(P) > 0)
+    P = t.symmetric("P", n, pd=True)
     t.lmi("(9)", _nine(n, q, P, N, M, D, gamma**2) < 0)
     t.check("N Schur stable (error dynamics (7))", schur_stable(N))
 
