@@ -71,8 +71,27 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _notes_as_lines() -> None:
+    """Show lmic's notes (e.g. unused data keys) as ``lmic: note: ...`` lines on stderr."""
+    import warnings
+
+    from lmic.system import UnusedDataNote
+
+    default = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001
+        if issubclass(category, UnusedDataNote):
+            sys.stderr.write(f"lmic: note: {message}\n")
+        else:
+            default(message, category, filename, lineno, file, line)
+
+    if getattr(warnings.showwarning, "__name__", "") != "show":
+        warnings.showwarning = show
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit code."""
+    _notes_as_lines()
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv  # accepted anywhere: lmic --debug solve ..., lmic solve ... --debug
     argv = [a for a in argv if a != "--debug"]

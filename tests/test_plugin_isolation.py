@@ -76,7 +76,7 @@ def test_backend_plugin_raising_systemexit_decides_nothing(tmp_path):
     assert "aaa" in r.stdout and "SystemExit(3)" in r.stdout
 
 
-SHADOW = '''
+SHADOW = """
 from lmic.template import theorem, block
 
 
@@ -89,7 +89,7 @@ def shadow(t):
     t.param("gamma", default=0.0)
     P = t.symmetric("P", n)
     t.lmi("P > 0", block(P) > 0)
-'''
+"""
 
 
 def test_shadowing_an_installed_id_never_changes_what_solve_certifies(tmp_path):
@@ -98,7 +98,11 @@ def test_shadowing_an_installed_id_never_changes_what_solve_certifies(tmp_path):
     assert r.returncode == 2 and "certified" not in r.stdout
     line = r.stderr.strip()
     assert "ambiguous" in line and "lmic 0.1.0" in line and "aaa-shadow 9.9" in line and "\n" not in line
-    for cmd in (["show", "qib.thm1"], ["compile", "qib.thm1", str(QIB), "-o", str(tmp_path / "ir.json")], ["check", "qib.thm1"]):
+    for cmd in (
+        ["show", "qib.thm1"],
+        ["compile", "qib.thm1", str(QIB), "-o", str(tmp_path / "ir.json")],
+        ["check", "qib.thm1"],
+    ):
         r = _lmic(site, *cmd)
         assert r.returncode == 2 and "ambiguous" in r.stderr, cmd
     assert not (tmp_path / "ir.json").exists()

@@ -76,11 +76,14 @@ def test_duplicate_id_is_ambiguous_and_refused_naming_both_providers(monkeypatch
     with pytest.raises(DataError) as err:
         reg.get("fam.x")
     msg = str(err.value)
-    assert "ambiguous" in msg and "alpha 1.2 (entry point a = pkg.a)" in msg and "beta 0.3 (entry point b = pkg.b)" in msg
+    assert (
+        "ambiguous" in msg and "alpha 1.2 (entry point a = pkg.a)" in msg and "beta 0.3 (entry point b = pkg.b)" in msg
+    )
     assert [c.id for c in reg.conflicts()] == ["fam.x"]
     # the verdict does not depend on the order the entry points come in
     reg2 = _registry_with(
-        monkeypatch, [_EP("b", [_make("fam.x")], dist=("beta", "0.3")), _EP("a", [_make("fam.x")], dist=("alpha", "1.2"))]
+        monkeypatch,
+        [_EP("b", [_make("fam.x")], dist=("beta", "0.3")), _EP("a", [_make("fam.x")], dist=("alpha", "1.2"))],
     )
     with pytest.raises(DataError, match="ambiguous"):
         reg2.get("fam.x")

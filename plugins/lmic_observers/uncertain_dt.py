@@ -265,7 +265,7 @@ def uncertain_dt_cor1(t):
     """Corollary 1 (source 001, line 283): Theorem 1 with
     ``Psi1 = [H^T H - e^{-2 beta} P1, 0, Acal; *, eps2 N^T N - P2, 0; *, *, -I]`` (Xi1, Psi2,
     Omega unchanged), ``Acal = [alpha_ij] > 0``, objective ``min eps1 - sum_ij c_ij alpha_ij``
-    with fixed weights ``c_ij > 0`` (data ``Cw``); ``L = P1^-1 G``,
+    with fixed weights ``c_ij > 0`` (data ``Cw``, all ones when omitted); ``L = P1^-1 G``,
     ``Gamma* = Acal* / sqrt(1 + eps1*)``.
 
     Readings: ``Acal > 0`` is element-wise (the paper defines its order element-wise, II-A,
@@ -284,7 +284,8 @@ def uncertain_dt_cor1(t):
     """
     d = _filter_data(t)
     n = d["n"]
-    t.data("Cw", n, n, doc="weights c_ij > 0 of the objective")
+    t.data("Cw", n, n, default=lambda v, r, c: np.ones((r, c)),
+           doc="weights c_ij > 0 of the objective (default: all ones, as in the catalogue's reference)")
     positivity = t.option("positivity", ("elementwise", "none"), "elementwise",
                           doc="Acal > 0 element-wise, or no sign constraint")
     E = t.const("E", lambda v: _positive_weights(v)[0], shape=(n, n**2), doc="Acal = E W F")
