@@ -61,8 +61,9 @@ def run(args: argparse.Namespace) -> int:
     else:
         console = Console(highlight=False, soft_wrap=True)
         table = Table(title=f"{len(thms)} theorems")
-        table.add_column("id", no_wrap=True)
-        table.add_column("kind", no_wrap=True)
+        # ids are never cut, whatever the terminal width (the other columns fold)
+        table.add_column("id", no_wrap=True, min_width=max((len(t.id) for t in thms), default=2))
+        table.add_column("kind", no_wrap=True, min_width=9)
         for col in ("title", "citation", "objective"):
             table.add_column(col, overflow="fold")
         for t in thms:
