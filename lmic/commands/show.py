@@ -56,7 +56,7 @@ def run(args: argparse.Namespace) -> int:
     d = describe(thm, t)
     c = Console(highlight=False, soft_wrap=True)
     c.print(f"[bold]{thm.id}[/bold] — {thm.title}")
-    c.print(f"{thm.citation}  (kind {thm.kind}: {thm.objective})")
+    c.print(f"{thm.citation}  ({thm.kind_word}: {thm.objective})")
     if thm.notes:
         c.print(f"[dim]{thm.notes}[/dim]")
     c.print("\n[bold]data[/bold]")
