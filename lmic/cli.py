@@ -46,6 +46,35 @@ COMMANDS = [
 ]
 
 
+#: one or two examples per command, shown at the end of ``lmic COMMAND --help`` (a command
+#: that sets its own epilog keeps it)
+EXAMPLES = {
+    "theorems": ["lmic theorems", "lmic theorems --json"],
+    "backends": ["lmic backends", "lmic backends --json"],
+    "show": ["lmic show qib.thm1", "lmic show qib.thm1 -p fixed_L=1 --latex"],
+    "check": ["lmic check qib.thm1", "lmic check my_theorems.py --strict"],
+    "compile": ["lmic compile qib.thm1 examples/qib.thm1.flexible-joint.yaml -o qib.json"],
+    "solve": [
+        "lmic solve qib.thm1 examples/qib.thm1.flexible-joint.yaml -o cert.json",
+        "lmic solve thesis.thm3_2_2 examples/thesis.thm3_2_2.ex3_2_2.yaml --maximize gamma",
+    ],
+    "crosscheck": ["lmic crosscheck qib.thm1 examples/qib.thm1.flexible-joint.yaml"],
+    "audit": ["lmic audit cert.json", "lmic audit cert.json --exact"],
+    "audit-published": ["lmic audit-published qib.thm1 examples/qib.thm1.flexible-joint.yaml"],
+    "reproduce": ["lmic reproduce --only 'qib.*'"],
+    "simulate": ["lmic simulate qib.thm1 examples/qib.thm1.flexible-joint.yaml -o sim.png"],
+    "report": ["lmic report qib.thm1 examples/qib.thm1.flexible-joint.yaml -o report.html"],
+}
+
+
+def _add_examples(sub: argparse._SubParsersAction) -> None:
+    for name, parser in sub.choices.items():
+        if parser.epilog or name not in EXAMPLES:
+            continue
+        parser.epilog = "examples:\n" + "\n".join(f"  {line}" for line in EXAMPLES[name])
+        parser.formatter_class = argparse.RawDescriptionHelpFormatter
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse that reports usage errors as one line and exit code 2."""
 
@@ -68,6 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
                 continue  # command not built yet
             raise
         module.register(sub)
+    _add_examples(sub)
     return parser
 
 
