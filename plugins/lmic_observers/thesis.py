@@ -1,8 +1,7 @@
 """Delshad, PhD thesis (Lulea), Part I: Lyapunov, Lipschitz and unknown-input observer LMIs.
 
 Source: S. S. Delshad, *Observer design for Lipschitz nonlinear systems*, PhD thesis, Lulea
-University of Technology (source file 002), Part I chapters 2-4. Catalogue:
-``thesis_catalogue.md`` sections 1.1-1.9, acceptance tests in sections 10-11.
+University of Technology, Part I chapters 2-4 (eq. (2.9), Sections 3.2 and 4.1.2).
 
 Families of results here:
 
@@ -82,7 +81,7 @@ def _luenberger_data(t):
     "The statement says 'matrices L and P'; the LMI variable is Lbar = P L.",
 )
 def thesis_thm3_2_1(t):
-    """Thesis Theorem 3.2.1 (source line 994), LMI (3.11).
+    """Thesis Theorem 3.2.1 (Section 3.2.1, linear case), LMI (3.11).
 
     ``P > 0``, ``A^T P + P A - C^T Lbar^T - Lbar C < 0``; the observer gain is
     ``L = P^-1 Lbar``. The check restates the original inequality (3.9),
@@ -108,7 +107,7 @@ def thesis_thm3_2_1(t):
     "Example 3.2.2: infeasible at gamma = 3.33 (as the thesis says); sup gamma = 0.9997.",
 )
 def thesis_thm3_2_2(t):
-    """Thesis Theorem 3.2.2 (source line 1057), LMI (3.14).
+    """Thesis Theorem 3.2.2 (Section 3.2.2, nonlinear case), LMI (3.14).
 
     ``[A^T P + P A - C^T Lbar^T - Lbar C + gamma^2 I, P; *, -I] < 0`` with ``P > 0``;
     ``L = P^-1 Lbar``. The check restates (3.17),
@@ -147,7 +146,7 @@ def thesis_thm3_2_2(t):
     notes="Example 3.2.2 does not print G; G = [0 0 3.33 0] is forced by f = [0,0,0,-3.33 sin x3].",
 )
 def thesis_cor3_19(t):
-    """Thesis Corollary [69] (source line 1100), LMI (3.19).
+    """Thesis Corollary [69] (Section 3.2.2), LMI (3.19).
 
     ``[A^T P + P A - C^T Lbar^T - Lbar C + G^T G, P; *, -I] < 0`` with ``P > 0``;
     ``L = P^-1 Lbar``. The check restates the pre-Schur inequality
@@ -263,7 +262,7 @@ def _ct_uio(t, nonlinear):
     "explicitly. U, V of (4.23) use the Moore-Penrose inverse and an exact SVD projector.",
 )
 def thesis_thm4_1_2(t):
-    """Thesis Theorem 4.1.2 (source line 1664), LMI (4.24)-(4.25).
+    """Thesis Theorem 4.1.2 (Section 4.1.2, unknown inputs issue), LMI (4.24)-(4.25).
 
     ``[d11, d12; *, -I] < 0`` with
     ``d11 = ((I+UC)A)^T P + P (I+UC)A + (VCA)^T Ybar^T + Ybar (VCA) - C^T Kbar^T - Kbar C + gamma^2 I``,
@@ -286,7 +285,7 @@ def thesis_thm4_1_2(t):
     "(the transposes are restored). Example 4.1.3 does not print D; D = e1 is forced by U, V.",
 )
 def thesis_thm4_1_2_linear(t):
-    """Thesis Remark after Theorem 4.1.2 (source line 1715), LMI (4.28), f = 0.
+    """Thesis Remark after Theorem 4.1.2 (Section 4.1.2), LMI (4.28), f = 0.
 
     ``((I+UC)A)^T P + P (I+UC)A + (VCA)^T Ybar^T + Ybar (VCA) - C^T Kbar^T - Kbar C < 0`` and
     ``P > 0``; gains as (4.26). Typo resolution: the printed ``(VCA)^T Ybar`` and ``C^T Kbar``
@@ -308,7 +307,7 @@ def thesis_thm4_1_2_linear(t):
     "Example 4.1.4 prints U with a spurious transpose. With D = D1 the LMI is feasible for every gamma.",
 )
 def thesis_thm4_1_3(t):
-    """Thesis Theorem 4.1.3 (source line 1858), LMI (4.34)-(4.35) (= Paper C Theorem 3.2).
+    """Thesis Theorem 4.1.3 (Section 4.1.2), LMI (4.34)-(4.35) (= Paper C Theorem 3.2).
 
     ``[-P + gamma^2 I, 0, d13; *, -I_q, d23; *, *, -P] < 0`` with
     ``d13 = A^T P + (UCA)^T P + (VCA)^T Ybar^T - C^T Kbar^T`` (``= N^T P``) and
