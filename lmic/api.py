@@ -149,7 +149,8 @@ class Result:
             "lmic": __version__,
             "target": self.target,
             "theorem": self.theorem,
-            "params": self.params,
+            # every parameter and option the compilation used (defaults and file values included)
+            "params": {**(self.problem.meta or {}).get("params", {}), **self.params},
             "backend": self.backend,
             "status": self.status,
             "native_status": sol.native_status,
