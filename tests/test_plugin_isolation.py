@@ -93,7 +93,14 @@ def shadow(t):
 
 
 def test_shadowing_an_installed_id_never_changes_what_solve_certifies(tmp_path):
+    clean = tmp_path / "clean"
+    clean.mkdir()
+    cert = tmp_path / "cert.json"
+    r = _lmic(clean, "solve", "qib.thm1", str(QIB), "-o", str(cert))  # written before the attack
+    assert r.returncode == 0 and cert.is_file(), r.stderr
     site = _site(tmp_path, "aaa-shadow", "9.9", {"lmic.theorems": {"aaa": "shadow_thm"}}, {"shadow_thm": SHADOW})
+    r = _lmic(site, "audit", str(cert))  # the audit does not recompile with the shadow either
+    assert r.returncode == 2 and "ambiguous" in r.stderr and "aaa-shadow 9.9" in r.stderr
     r = _lmic(site, "solve", "qib.thm1", str(QIB))
     assert r.returncode == 2 and "certified" not in r.stdout
     line = r.stderr.strip()

@@ -262,8 +262,8 @@ def theorem_changes(recorded: dict[str, Any] | None, problem: Problem) -> tuple[
     >>> rec = {"id": "a.b", "template_hash": "a", "template_parts": {"LMI (7)": "1", "derive L": "4"}}
     >>> from lmic.ir.problem import LinearConstraints, Objective, Problem
     >>> p = Problem([], [], LinearConstraints.empty(0), Objective("feasibility", [0.0]), meta=meta)
-    >>> theorem_changes(rec, p)[0]
-    'theorem a.b changed since the certificate was written (plugin or recorded parameters): LMI (7) differs; derive L removed; check c added'
+    >>> theorem_changes(rec, p)[0].split(": ", 1)[1]
+    'LMI (7) differs; derive L removed; check c added'
     """
     if not recorded or not recorded.get("template_hash"):
         return None, ""
@@ -499,7 +499,9 @@ def _rebuild(doc: dict[str, Any], base: Path) -> tuple[Problem, str | None, Audi
 
     try:
         thm = get_theorem(theorem["id"])
-    except LmicError:
+    except LmicError as err:
+        if "ambiguous" in str(err):  # two plugins offer the id: refuse rather than guess
+            raise CertificateError(str(err)) from None
         raise CertificateError(f"theorem '{theorem['id']}' is not installed here") from None
     sys_path = Path(doc["system"]["path"])
     if not sys_path.is_absolute():
