@@ -76,6 +76,7 @@ def near_miss(key: str, candidates: list[str]) -> str | None:
             best = (d, c)
     return None if best is None else best[1]
 
+
 SUPPORTED_VERSIONS = (1,)
 
 

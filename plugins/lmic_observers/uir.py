@@ -68,8 +68,7 @@ def uir_thm3_1(t):
     ``Gamma - I < 0``, ``[N^T P + P N + gamma^2 J^T J, P M; *, -Gamma] < 0``, ``P > 0``.
 
     Example: the printed observer (51) at gamma0 = 0.259 (the paper claims feasibility):
-    infeasible; by the bounded-real lemma (11) holds at these gains only for gamma < 0.0401
-   .
+    infeasible; by the bounded-real lemma (11) holds at these gains only for gamma < 0.0401.
     """
     q1, nh, n = t.dims("q1 nh n")
     N = t.data("N", q1, q1, doc="observer matrix N (given)")
