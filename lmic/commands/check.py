@@ -140,7 +140,7 @@ def _environment(t: Template, dims: dict, rng: np.random.Generator) -> dict[str,
         else:  # a square constant is taken symmetric: its symmetry is unknown without data
             env[c.name] = _random_matrix(rng, _dim(c.shape[0], dims), _dim(c.shape[1], dims), "symmetric")
     for v in t.variables:
-        r, c = _dim(v.shape[0], dims), _dim(v.shape[1], dims)
+        r, cols = _dim(v.shape[0], dims), _dim(v.shape[1], dims)
         if v.kind == "scalar":
             env[v.name] = 0.3
         elif v.kind == "blockdiag":
@@ -152,7 +152,7 @@ def _environment(t: Template, dims: dict, rng: np.random.Generator) -> dict[str,
                 k += s
             env[v.name] = M
         else:
-            env[v.name] = _random_matrix(rng, r, c, {"symmetric": "pd"}.get(v.kind, v.kind))
+            env[v.name] = _random_matrix(rng, r, cols, {"symmetric": "pd"}.get(v.kind, v.kind))
     return env
 
 
@@ -179,7 +179,7 @@ def _bilinear(t: Template) -> list[str]:
                 continue
             for coef, factors in expanded:
                 text = str(sympy.MatMul(coef, *factors)) if factors else str(coef)
-                mats = [_atom_var(f) for f in factors if _atom_var(f) in an.matrix_vars]
+                mats = [str(_atom_var(f)) for f in factors if _atom_var(f) in an.matrix_vars]
                 for mono in sympy.Add.make_args(sympy.expand(coef)):
                     svars = sorted(an.scalar_vars[s] for s in mono.free_symbols if s in an.scalar_vars)
                     powers = [
@@ -367,23 +367,24 @@ def _unused(t: Template) -> list[str]:
     used = set(in_lmis)
     for d in t.derived:
         used |= names(d.expr)
-    for c in t.checks:
-        used |= names(c.spec.expr)
+    for chk in t.checks:
+        used |= names(chk.spec.expr)
     if t.observer_decl is not None:
         used |= set(t.observer_decl.roles.values())
-    for fn in [c.fn for c in t.consts] + [r.predicate for r in t.requirements] + [d.default for d in t.data_decls]:
+    opaque: list[Any] = [k.fn for k in t.consts] + [r.predicate for r in t.requirements]
+    for fn in opaque + [dd.default for dd in t.data_decls]:
         if callable(fn):
             used |= _code_strings(fn)
     out = []
-    for d in t.data_decls:
-        if d.name not in used:
-            out.append(f"data '{d.name}' is declared but not used")
+    for dd in t.data_decls:
+        if dd.name not in used:
+            out.append(f"data '{dd.name}' is declared but not used")
     for p in t.params:
         if p.name not in used:
             out.append(f"parameter '{p.name}' is declared but not used")
-    for c in t.consts:
-        if c.name not in used:
-            out.append(f"constant '{c.name}' is declared but not used")
+    for k in t.consts:
+        if k.name not in used:
+            out.append(f"constant '{k.name}' is declared but not used")
     for v in t.variables:
         if v.name not in in_lmis:
             out.append(f"decision variable '{v.name}' appears in no LMI, constraint or objective")

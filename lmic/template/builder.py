@@ -582,20 +582,21 @@ class Template:
         lmic.errors.TemplateError: theorem demo.x: LMI '(1)' uses MatrixSymbol 'B', which is not declared ...
         """
         declared = self._declared()
-        for d in self.data_decls + self.variables:
-            self._undeclared([as_expr(x) for x in d.shape], f"the shape of '{d.name}'", declared)
+        shaped: list[DataDecl | VarDecl] = [*self.data_decls, *self.variables]
+        for sd in shaped:
+            self._undeclared([as_expr(x) for x in sd.shape], f"the shape of '{sd.name}'", declared)
         for lmi in self.lmis:
             ents = [e for row in lmi.spec.block.rows for e in row if e is not STAR and isinstance(e, sympy.Basic)]
             self._undeclared(ents, f"LMI '{lmi.name}'", declared)
-        for c in self.constraints:
-            self._undeclared([c.relation], f"constraint '{c.name}'", declared)
+        for con in self.constraints:
+            self._undeclared([con.relation], f"constraint '{con.name}'", declared)
         self._undeclared([self.objective[1]], "the objective", declared)
-        for d in self.derived:
-            self._undeclared([d.expr], f"derive '{d.name}'", declared)
-        for c in self.checks:
-            e = c.spec.expr
+        for der in self.derived:
+            self._undeclared([der.expr], f"derive '{der.name}'", declared)
+        for chk in self.checks:
+            e = chk.spec.expr
             ents = [x for row in e.rows for x in row if x is not STAR] if isinstance(e, Block) else [e]
-            self._undeclared([x for x in ents if isinstance(x, sympy.Basic)], f"check '{c.name}'", declared)
+            self._undeclared([x for x in ents if isinstance(x, sympy.Basic)], f"check '{chk.name}'", declared)
 
     def fingerprint(self) -> dict[str, str]:
         """Short hashes of every declaration (what a certificate's ``template_hash`` covers).
@@ -642,14 +643,14 @@ class Template:
             ]
         for lmi in self.lmis:
             parts[f"LMI {lmi.name}"] = [lmi.spec.relation, sr(lmi.spec.block)]
-        for c in self.constraints:
-            parts[f"constraint {c.name}"] = sr(c.relation)
+        for con in self.constraints:
+            parts[f"constraint {con.name}"] = sr(con.relation)
         if self.objective[0] != "feasibility":
             parts["objective"] = [self.objective[0], sr(self.objective[1])]
-        for d in self.derived:
-            parts[f"derive {d.name}"] = sr(d.expr)
-        for c in self.checks:
-            parts[f"check {c.name}"] = [c.spec.kind, sr(c.spec.expr), c.spec.bound]
+        for der in self.derived:
+            parts[f"derive {der.name}"] = sr(der.expr)
+        for chk in self.checks:
+            parts[f"check {chk.name}"] = [chk.spec.kind, sr(chk.spec.expr), chk.spec.bound]
         for r in self.requirements:
             parts[f"requirement {r.name}"] = r.doc
         if self.observer_decl is not None:
