@@ -200,8 +200,9 @@ def _uio_constants(t, n, p, C, Dui, key):
 
 def _uio_gains(t, n, p, A, B, C, P, Ybar, Kbar, U, V):
     """Back-substitution (4.26)/(4.36): ``Y, K, E, M, N, L, G``."""
-    Y = t.derive("Y", P.inv() * Ybar, doc="Y = P^-1 Ybar")
-    K = t.derive("K", P.inv() * Kbar, doc="K = P^-1 Kbar")
+    # fixes=: the audit variants fixed_Y / fixed_K take printed Y, K as data (Ybar = P Y, Kbar = P K)
+    Y = t.derive("Y", P.inv() * Ybar, doc="Y = P^-1 Ybar", fixes=Ybar)
+    K = t.derive("K", P.inv() * Kbar, doc="K = P^-1 Kbar", fixes=Kbar)
     E = t.derive("E", U + Y * V, doc="E = U + Y V")
     M = t.derive("M", I(n) + E * C, doc="M = I + E C")
     N = t.derive("N", M * A - K * C, doc="N = M A - K C")

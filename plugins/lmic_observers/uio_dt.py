@@ -97,8 +97,9 @@ def _gains(t, n, p, mats, consts, P, Ybar, Kbar):
     """Back-substitution (22)/(27); returns the symbols of N and M."""
     A, B, C, D, D1 = mats
     U, V = consts
-    Y = t.derive("Y", P.inv() * Ybar, doc="Y = P^-1 Ybar")
-    K = t.derive("K", P.inv() * Kbar, doc="K = P^-1 Kbar")
+    # fixes=: the audit variants fixed_Y / fixed_K take printed Y, K as data (Ybar = P Y, Kbar = P K)
+    Y = t.derive("Y", P.inv() * Ybar, doc="Y = P^-1 Ybar", fixes=Ybar)
+    K = t.derive("K", P.inv() * Kbar, doc="K = P^-1 Kbar", fixes=Kbar)
     E = t.derive("E", U + Y * V, doc="E = U + Y V (18)")
     M = t.derive("M", I(n) + E * C, doc="M = I + E C")
     N = t.derive("N", M * A - K * C, doc="N = M A - K C")
