@@ -128,11 +128,10 @@ def obs_control_thm3_1(t):
     )
     second = epsc2 if variant == "corrected" else epsc1
     c = epsc1 * gamma**2 + (epso2 + second) * beta**2 / alpha**2
-    P = t.symmetric("P", n)
+    P = t.symmetric("P", n, pd=True)
     Q = t.symmetric("Q", n)
     Acl = A - B * K
     Aob = A - L * C
-    t.lmi("P > 0", block(P) > 0)
     t.lmi("Q > 0", block(Q) > 0)
     t.lmi(
         "(9) (Schur form)",

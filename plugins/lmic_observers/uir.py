@@ -75,9 +75,8 @@ def uir_thm3_1(t):
     J = t.data("J", nh, q1, doc="observer output matrix J (given)")
     M = t.data("M", q1, n, doc="M (given; from R by (34))")
     gamma = t.param("gamma", domain="nonnegative", doc="Lipschitz constant of f")
-    P = t.symmetric("P", q1)
+    P = t.symmetric("P", q1, pd=True)
     Gamma = t.symmetric("Gamma", n)
-    t.lmi("P > 0", block(P) > 0)
     t.lmi("Gamma - I < 0", block(Gamma - I(n)) < 0)
     t.lmi("(11)", block([[N.T * P + P * N + gamma**2 * J.T * J, P * M], [STAR, -Gamma]]) < 0)
     t.check("N Hurwitz (error dynamics (10))", hurwitz(N))
@@ -109,9 +108,8 @@ def uir_thm3_2(t):
     D2 = t.data("D2", p, nw, doc="disturbance matrix of the output")
     gamma = t.param("gamma", domain="nonnegative", doc="Lipschitz constant of f")
     mu = t.param("mu", domain="positive", doc="disturbance attenuation level")
-    P = t.symmetric("P", q1)
+    P = t.symmetric("P", q1, pd=True)
     Gamma = t.symmetric("Gamma", n)
-    t.lmi("P > 0", block(P) > 0)
     t.lmi("Gamma - I < 0", block(Gamma - I(n)) < 0)
     t.lmi("(16)", hinf_block(P, Gamma, N, L, J, E, M, M * D1, D2, 1 + gamma**2, mu**2) < 0)
     t.check("N Hurwitz (error dynamics (10))", hurwitz(N))
@@ -132,7 +130,7 @@ def _robust(t, multiobjective: bool):
         default=True,
         doc="impose the side condition (40) rho < 1/(1 + gamma0^2) (1, default) or not (0)",
     )
-    P = t.symmetric("P", q1)
+    P = t.symmetric("P", q1, pd=True)
     Gamma = t.symmetric("Gamma", n)
     Ybar1 = t.full("Ybar1", q1, q1 + p)
     Y2 = t.full("Y2", n + h, q1 + p)
@@ -143,7 +141,6 @@ def _robust(t, multiobjective: bool):
     else:
         mu_sq = mu**2
     a11, a12, a13, a14, a34 = reduced_order_blocks(s, P, Ybar1, Y2, s["M"])
-    t.lmi("P > 0", block(P) > 0)
     t.lmi("Gamma - I < 0", block(Gamma - I(n)) < 0)
     name = "(41)" if multiobjective else "(38)"
     t.lmi(

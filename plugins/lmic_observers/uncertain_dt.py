@@ -58,12 +58,11 @@ def uncertain_dt_lemma3(t):
     M1 = t.data("M1", n, r, doc="uncertainty dA = M1 F N")
     N = t.data("N", s, n, doc="uncertainty dA = M1 F N")
     mu = t.param("mu", domain="positive", doc="L2 gain bound mu")
-    P = t.symmetric("P", n)
+    P = t.symmetric("P", n, pd=True)
     alpha = t.scalar("alpha", sign="positive")
     eps1 = t.scalar("eps1", sign="positive")
     eps2 = t.scalar("eps2", sign="positive")
     Lambda1 = H.T * H - P + eps2 * N.T * N
-    t.lmi("P > 0", block(P) > 0)
     t.lmi(
         "(15)",
         block(
