@@ -256,3 +256,24 @@ def test_undeclared_symbol_is_an_error_at_template_time():
 
     with pytest.raises(TemplateError, match=r"theorem my.sym: LMI '\(1\)' uses Symbol 'g', which is not declared"):
         build.template()
+
+
+def test_check_json(tmp_path, capsys):
+    import json
+
+    f = _module(
+        tmp_path,
+        """
+        @theorem(id="my.js", title="t", citation="c", kind="analysis")
+        def build(t):
+            (n,) = t.dims("n")
+            A = t.data("A", n, n)
+            P = t.symmetric("P", n, pd=True)
+            t.lmi("(1)", A.T * P < 0)
+        """,
+    )
+    assert main(["check", str(f), "--json"]) == 2
+    doc = json.loads(capsys.readouterr().out)
+    (rep,) = doc["theorems"]
+    assert rep["id"] == "my.js" and doc["exit_code"] == 2
+    assert rep["findings"] == ["LMI '(1)' block (1,1) is not symmetric: A.T*P"]

@@ -517,6 +517,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-p", "--param", action="append", default=[], metavar="K=V", help="fix a structural option")
     p.add_argument("--seed", type=int, default=0, help="random seed for dimensions and data (default 0)")
     p.add_argument("--strict", action="store_true", help="unused declarations fail the check too")
+    p.add_argument("--json", action="store_true", help="print one JSON object (findings per theorem)")
     p.set_defaults(func=run)
 
 
@@ -542,6 +543,22 @@ def run(args: argparse.Namespace) -> int:
         from lmic.registry import get_theorem
 
         thms = [get_theorem(target)]
+    if getattr(args, "json", False):
+        from lmic.commands._common import print_json
+
+        reports = [check_theorem(thm, options, seed=args.seed) for thm in thms]
+        fail = bool(problems) or any(r.findings or (args.strict and r.warnings) for r in reports)
+        print_json(
+            {
+                "problems": problems,
+                "theorems": [
+                    {"id": r.theorem, "dims": r.dims, "findings": r.findings, "warnings": r.warnings}
+                    for r in reports
+                ],
+                "exit_code": 2 if fail else 0,
+            }
+        )
+        return 2 if fail else 0
     for line in problems:
         sys.stderr.write(f"lmic check: {line}\n")
     bad = bool(problems)
