@@ -552,8 +552,7 @@ def run(args: argparse.Namespace) -> int:
             {
                 "problems": problems,
                 "theorems": [
-                    {"id": r.theorem, "dims": r.dims, "findings": r.findings, "warnings": r.warnings}
-                    for r in reports
+                    {"id": r.theorem, "dims": r.dims, "findings": r.findings, "warnings": r.warnings} for r in reports
                 ],
                 "exit_code": 2 if fail else 0,
             }
