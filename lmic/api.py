@@ -149,7 +149,8 @@ class Result:
             "lmic": __version__,
             "target": self.target,
             "theorem": self.theorem,
-            "params": self.params,
+            # every parameter and option the compilation used (defaults and file values included)
+            "params": {**(self.problem.meta or {}).get("params", {}), **self.params},
             "backend": self.backend,
             "status": self.status,
             "native_status": sol.native_status,
@@ -184,6 +185,14 @@ def load_target(
         if system is not None or params:
             raise LmicError("a system and parameters apply to a theorem, not to an IR problem")
         return target, target.meta.get("theorem"), time.perf_counter() - t0
+    from lmic.template.theorem import Theorem
+
+    if isinstance(target, Theorem):  # an inline theorem (notebook): no registration needed
+        if system is None:
+            raise LmicError(f"theorem {target.id}: give a system (file, dict or StateSpace) to solve it")
+        from lmic.compile import compile_theorem
+
+        return compile_theorem(target, system, params), target.id, time.perf_counter() - t0
     text = os.fspath(target)
     if text.endswith(_FILE_SUFFIXES) or (Path(text).is_file() and system is None):
         if system is not None:
@@ -288,9 +297,10 @@ def solve(
 
     Parameters
     ----------
-    target : str, path or Problem
-        A theorem id (then ``system`` is required), an ``.json`` IR or ``.dat-s`` SDPA file, or
-        a Problem.
+    target : str, path, Theorem or Problem
+        A theorem id or a :class:`~lmic.template.Theorem` object (an inline theorem, registered
+        or not; then ``system`` is required), an ``.json`` IR or ``.dat-s`` SDPA file, or a
+        Problem.
     system : path, dict or System, optional
     params : dict, optional
         Parameter overrides (theorems only).
@@ -318,7 +328,8 @@ def solve(
 
         system = as_system(target, system)
     problem, theorem, compile_s = load_target(target, system, params)
-    name = target if isinstance(target, str) else ("<problem>" if isinstance(target, Problem) else os.fspath(target))
+    name = theorem if getattr(target, "build", None) is not None else target  # a Theorem object: its id
+    name = name if isinstance(name, str) else ("<problem>" if isinstance(name, Problem) else os.fspath(name))
     if backend is None:
         ok = _backend("clarabel").supports(problem, explain=True)
         backend = "clarabel" if (ok[0] if isinstance(ok, tuple) else ok) else "auto"

@@ -228,8 +228,10 @@ class SupResult:
 class SweepResult:
     """Every grid point, and the best certified one.
 
-    ``best`` is the certified point with the best objective (``min``/``max`` theorems) or, for a
-    feasibility theorem, the largest relative margin.
+    ``best`` is the certified point with the best objective (``min``/``max`` theorems). For a
+    feasibility theorem it is the certified point at the edge of feasibility when the certified
+    points are one run at the start (or the end) of the grid (e.g. the largest certified
+    Lipschitz constant), otherwise the largest relative margin; ``best_rule`` says which.
     """
 
     theorem: str
@@ -240,6 +242,8 @@ class SweepResult:
     backend: str
     plan_s: float
     total_s: float
+    #: how ``best`` was chosen: ``objective``, ``edge of the certified range``, ``largest margin``
+    best_rule: str = ""
 
     def exit_code(self) -> int:
         """0 some point certified, 3 every point proven infeasible, 1 otherwise."""
@@ -261,6 +265,7 @@ class SweepResult:
             "backend": self.backend,
             "sense": self.sense,
             "best": None if self.best is None else self.best.to_dict(),
+            "best_rule": self.best_rule,
             "points": [p.to_dict() for p in self.points],
             "timings": _timings(self.plan_s, [p.bind_s for p in self.points], self.points, self.total_s),
             "exit_code": self.exit_code(),
@@ -928,19 +933,29 @@ def sweep(
         ev(float(v), "sweep", iteration=k + 1)
     certified = [p for p in ev.points if p.outcome == "feasible"]
     best: PointResult | None = None
+    best_rule = ""
     sense = ev.sense
     if certified:
+        ok = [p.outcome == "feasible" for p in ev.points]
+        k = len(certified)
         if sense in ("min", "max") and all(p.objective is not None for p in certified):
             pick = min if sense == "min" else max
             best = pick(certified, key=lambda p: float(p.objective))  # type: ignore[arg-type]
+            best_rule = "objective"
+        elif k < len(ok) and (all(ok[:k]) or all(ok[-k:])):
+            # one certified run at an end of the grid: the interesting point is where it stops
+            best = certified[-1] if all(ok[:k]) else certified[0]
+            best_rule = "edge of the certified range"
         else:
             best = max(certified, key=lambda p: -math.inf if p.rel_margin is None else p.rel_margin)
+            best_rule = "largest margin"
     return SweepResult(
         theorem=plan.id,
         param=param,
         sense=sense,
         points=ev.points,
         best=best,
+        best_rule=best_rule,
         backend=str(getattr(backend, "label", backend)),
         plan_s=plan_s,
         total_s=time.perf_counter() - t_start,
@@ -1142,6 +1157,8 @@ def _print_sweep(r: SweepResult) -> None:
             if r.sense in ("min", "max")
             else "relative margin " + _fmt(r.best.rel_margin, 3)
         )
+        if r.best_rule == "edge of the certified range":
+            what = f"the edge of the certified range; {what}"
         out.print(f"best certified point: {r.param} = {_fmt(r.best.value)} ({what})")
     binds = [p.bind_s for p in r.points]
     out.print(

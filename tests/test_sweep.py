@@ -104,10 +104,17 @@ def test_sweep_toy_reports_every_point_and_the_best_margin():
     res = sweep(toy_decay, TOY, "a", [0.0, 0.5, 1.5, 2.0])
     assert [p.outcome for p in res.points] == ["feasible", "feasible", "infeasible", "infeasible"]
     assert all(p.verdict == "infeasible-certified" for p in res.points[2:])
-    assert res.best is res.points[0]  # the largest relative margin
+    # feasibility ends after 0.5: the best point is the edge of the certified range, not the
+    # largest margin (a = 0); a grid with certified points on both sides of a gap keeps the margin
+    assert res.best is res.points[1] and res.best_rule == "edge of the certified range"
+    assert res.points[0].rel_margin > res.points[1].rel_margin
     assert res.exit_code() == 0
     d = res.to_dict()
-    assert d["mode"] == "sweep" and len(d["points"]) == 4 and d["best"]["value"] == 0.0
+    assert d["mode"] == "sweep" and len(d["points"]) == 4 and d["best"]["value"] == 0.5
+    assert d["best_rule"] == "edge of the certified range"
+    mixed = sweep(toy_decay, TOY, "a", [0.0, 1.5, 0.5])
+    assert mixed.points[0].outcome == mixed.points[2].outcome == "feasible" != mixed.points[1].outcome
+    assert mixed.best_rule == "largest margin" and mixed.best is mixed.points[0]
     assert d["timings"]["bind_s_mean"] > 0
 
 

@@ -445,11 +445,31 @@ class _Binder:
             "system_path": system.path,
             "data_hash": system.data_hash(),
             "lmic_version": __version__,
+            # which theorem this is: its provider and a hash of the analysed template (certificates)
+            **template_identity(plan),
         }
         if t.observer_decl is not None:
             ob = t.observer_decl
             meta["observer"] = {"model": ob.model, "time": ob.time, "roles": dict(ob.roles)}
         return Problem(list(self.vars.values()), lmis, linear, objective, data, derived, checks, meta)
+
+
+def template_identity(plan: Plan) -> dict[str, Any]:
+    """``provider`` (distribution, version) and ``template`` (hash and per-declaration parts) of a plan.
+
+    >>> from lmic.compile import plan_for
+    >>> ident = template_identity(plan_for("thesis.lyapunov"))
+    >>> ident["provider"]["distribution"], len(ident["template"]["sha256"])
+    ('lmic', 64)
+    """
+    from lmic.template.builder import template_hash
+    from lmic.template.theorem import Provider
+
+    parts = plan.cache.get("template_parts")
+    if parts is None:
+        parts = plan.cache["template_parts"] = plan.template.fingerprint()
+    provider = plan.theorem.provider or Provider.api(plan.theorem)
+    return {"provider": provider.to_dict(), "template": {"sha256": template_hash(parts), "parts": dict(parts)}}
 
 
 def bind(plan: Plan, system: Any, params: Mapping[str, Any] | None = None) -> Problem:

@@ -8,6 +8,7 @@ and the key at fault.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from typing import Any
 
@@ -16,7 +17,7 @@ import sympy
 
 from lmic.compile.plan import Plan
 from lmic.errors import DataError, LmicError, TemplateError
-from lmic.system import System
+from lmic.system import System, UnusedDataNote, near_miss
 from lmic.template.builder import normalise_option
 from lmic.template.convert import as_expr
 
@@ -134,9 +135,22 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
 
     # data and dimensions
     declared = {d.name for d in t.data_decls}
-    for key in system.data:
-        if key not in declared:
-            raise DataError(f"{where}: unknown data key '{key}' (the theorem takes: {', '.join(sorted(declared))})")
+    unused = [key for key in system.data if key not in declared]
+    absent = [d.name for d in t.data_decls if d.name not in system.data]  # missing or optional
+    for key in unused:  # extra keys are fine (one plant file, several theorems); typos are not
+        close = near_miss(key, absent)
+        if close is not None:
+            raise DataError(
+                f"{where}: unknown data key '{key}' (did you mean '{close}'? the theorem takes: "
+                f"{', '.join(sorted(declared))})"
+            )
+    if unused:
+        warnings.warn(
+            f"{where}: data {', '.join(repr(k) for k in unused)} not used by the theorem "
+            f"(it takes: {', '.join(sorted(declared))})",
+            UnusedDataNote,
+            stacklevel=2,
+        )
     origin: dict[sympy.Symbol, str] = {}
     arrays: dict[str, np.ndarray] = {}
     for d in t.data_decls:

@@ -197,7 +197,7 @@ def test_theorem_certificate_recompiles(theorem_cert):
     assert doc["ir"]["embedded"] is None
     r = audit_certificate(path)
     assert r.ok, r.message
-    assert r.checked[:3] == ["schema", "system.sha256", "ir.sha256"]
+    assert r.checked[:4] == ["schema", "system.sha256", "theorem.template_hash", "ir.sha256"]
     assert "theorem thesis.lyapunov on lyap.yaml" in r.message
 
 
@@ -214,8 +214,59 @@ def test_changed_compilation_is_caught_by_the_ir_hash(theorem_cert):
     doc["params"] = {"nonstrict": "1"}
     _rewrite(path, doc)
     r = audit_certificate(path)
+    assert not r.ok and r.field == "theorem.template_hash"
+    assert "option nonstrict differs; LMI (2.9) removed; LMI (2.14) added" in r.message
+    # a certificate predating template hashes still meets the IR hash
+    for key in ("template_hash", "template_parts"):
+        doc["theorem"].pop(key)
+    _rewrite(path, doc)
+    r = audit_certificate(path)
     assert not r.ok and r.field == "ir.sha256"
     assert "recompiling gives a different IR" in r.message
+
+
+def test_certificate_records_provider_and_template_hash(theorem_cert):
+    _, doc, _ = theorem_cert
+    thm = doc["theorem"]
+    assert thm["provider"]["distribution"] == "lmic" and thm["provider"]["version"]
+    assert thm["provider"]["entry_point"] == "thesis = lmic_observers.thesis"
+    assert len(thm["template_hash"]) == 64 and "LMI (2.9)" in thm["template_parts"]
+
+
+def test_audit_rejects_a_certificate_whose_theorem_changed(tmp_path):
+    """The same id, now with a different LMI (e.g. a plugin upgrade): the audit names the change."""
+    from lmic.compile import compile_theorem
+    from lmic.registry import REGISTRY, register
+    from lmic.system import load_system
+    from lmic.template import theorem
+
+    def make(scale):
+        @theorem(id="tst.changed", title="t", citation="c", kind="analysis")
+        def build(t):
+            (n,) = t.dims("n")
+            A = t.data("A", n, n)
+            P = t.symmetric("P", n, pd=True)
+            t.lmi("(1)", A.T * P + P * A + scale * P < 0)
+
+        return build
+
+    sysfile = tmp_path / "s.yaml"
+    sysfile.write_text("lmic: 1\ndata:\n  A: " + json.dumps(A3) + "\n")
+    system = load_system(sysfile)
+    try:
+        register(make(0))
+        prob = compile_theorem("tst.changed", system)
+        P = solve_continuous_lyapunov(np.array(A3).T, -np.eye(3))
+        sol = Solution("feasible", x=prob.pack({"P": P}), backend="scs")
+        path = tmp_path / "c.json"
+        write_certificate(path, prob, sol, certify(prob, sol), system=system)
+        assert audit_certificate(path).ok
+        register(make(1))  # the theorem changes under the same id
+        r = audit_certificate(path)
+        assert not r.ok and r.field == "theorem.template_hash"
+        assert "LMI (1) differs" in r.message and "P > 0" not in r.message
+    finally:
+        REGISTRY._theorems.pop("tst.changed", None)
 
 
 def test_theorem_not_installed_and_missing_system(theorem_cert):
