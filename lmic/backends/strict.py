@@ -78,6 +78,12 @@ reduced to closed ones before lowering, and the answer is mapped back. Two reduc
 Every attempt is listed in ``Solution.info["strict_attempts"]`` and the strategy of the
 returned answer in ``Solution.strategy``.
 
+An optimisation problem whose solve ends ``error`` or ``inaccurate`` (not on a time limit) is
+then decided on its constraints alone, as a feasibility problem (same plan): when that answer is
+``infeasible`` with a Farkas ray that verifies against the original constraints, it replaces
+the failure (the objective plays no part in infeasibility); otherwise the failure is returned
+with the attempt in ``Solution.info["constraints_attempt"]``.
+
 Examples
 --------
 >>> import scipy.sparse as sp

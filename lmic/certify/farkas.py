@@ -69,8 +69,18 @@ A verified float certificate still has ``g_k ~ 1e-14`` instead of ``0``. :func:`
 turns it into an exact one: on the certificate's face (``Z_i = V_i S_i V_i^T``, ``V_i`` the
 eigenvectors above ``1e-9`` of the largest multiplier, rounded to rationals ``2^-50``; ``y_r``
 on the rows it uses) the conditions ``g_k = 0`` are linear in ``(S_i, y)`` with exact rational
-coefficients. The rounded ``(S_i, y)`` is projected exactly onto their solution space (over an
-independent subset of the equations, python-flint), and then, exactly: every ``S_i`` is
+coefficients. Entries of ``V_i`` below ``2^-40`` are LAPACK's round-off on coordinates the face
+does not touch (a zero row of ``Z_i``) and are set to exact zeros before the rounding: kept,
+they tilt the face out of its coordinate subspace, an equation that vanishes identically on the
+true face binds in exact arithmetic, and the projection below has to cancel an O(1) part of the
+multiplier (how much noise LAPACK leaves depends on its build: this decided the SDPA test case
+on one machine and not on another). The rounded ``(S_i, y)`` is projected exactly onto their
+solution space (over an independent subset of the equations, python-flint). When that leaves
+the cone (an eigenvalue of ``S_i`` smaller than the projection's correction), a second attempt
+first moves the float point towards the analytic centre of the face's certificates (log-det
+barrier, Newton steps in the null space of the float equations): by the smallest step of a
+grid that leaves every eigenvalue a float margin, so the certificate stays close to the
+solver's. Either way the result is only a candidate; then, exactly: every ``S_i`` is
 positive semidefinite (so is ``Z_i``), ``y_r >= 0`` on ``ge`` rows, ``g_k = 0`` for
 ``k >= 1`` by construction, and ``g_0 < 0`` (closed) or ``g_0 <= 0`` with ``tau > 0``
 (strict). Nothing is left to tolerance: the problem is infeasible as stated by its IR.
@@ -812,7 +822,7 @@ def _face_jacobian(problem: Problem, eigs: list, sels: list, rows: list[int]) ->
 
 
 def _center_on_face(
-    J: np.ndarray, u0: np.ndarray, sizes: list[int], ge_rows: np.ndarray, separate: bool, max_iter: int = 60
+    J: np.ndarray, u0: np.ndarray, sizes: list[int], ge_rows: np.ndarray, separate: bool, max_iter: int = 30
 ) -> np.ndarray | None:
     """A point deep inside the face's slice of the certificate cone, in floats.
 
@@ -881,8 +891,27 @@ def _center_on_face(
     _, sv, Vt = np.linalg.svd(A)
     rank = int(np.sum(sv > 1e-10 * sv[0])) if sv.size else 0
     B = Vt[rank:].T
-    u = u0 - np.linalg.lstsq(A, A @ u0 - b, rcond=1e-10)[0]
-    if not inside(u) or not B.shape[1]:
+    dp = -np.linalg.lstsq(A, A @ u0 - b, rcond=1e-10)[0]  # least-norm move onto the slice
+    if not inside(u0) or not B.shape[1]:
+        return None
+    # phase 1 (infeasible start): u = u0 + s dp + B z; each step takes the rest of dp and the
+    # barrier's Newton correction in the null space, damped to stay inside the cone, until s = 1
+    u, s = u0.copy(), 0.0
+    for _ in range(max_iter):
+        grad, H = derivatives(u)
+        rest = (1.0 - s) * dp
+        Hz = B.T @ H @ B
+        dz = -np.linalg.solve(Hz + 1e-14 * np.trace(Hz) * np.eye(len(Hz)) / len(Hz), B.T @ (grad + H @ rest))
+        t = 1.0
+        while t > 1e-6 and not inside(u + t * (rest + B @ dz)):
+            t *= 0.5
+        if t <= 1e-6:
+            return None
+        u = u + t * (rest + B @ dz)
+        s = 1.0 if t == 1.0 else s + t * (1.0 - s)
+        if s == 1.0:
+            break
+    if s < 1.0:
         return None
 
     def value(u: np.ndarray) -> float:
@@ -896,17 +925,17 @@ def _center_on_face(
         gz, Hz = B.T @ grad, B.T @ H @ B
         dz = -np.linalg.solve(Hz + 1e-14 * np.trace(Hz) * np.eye(len(gz)) / len(gz), gz)
         dec = -float(gz @ dz)  # Newton decrement squared
-        if not dec > 1e-12:
+        if not dec > 1e-8:  # near enough to the centre: only a margin is needed
             break
         du, t = B @ dz, 1.0
-        while t > 1e-12:
+        while t > 1e-6:
             un = u + t * du
             if inside(un):
                 fn = value(un)
                 if fn <= f - 0.25 * t * dec:
                     break
             t *= 0.5
-        if t <= 1e-12:
+        if t <= 1e-6:
             break
         u, f = un, fn
     return u
@@ -929,7 +958,10 @@ def _towards_center(
     J = _face_jacobian(problem, eigs, sels, rows)
     ge_rows = np.array([bool(ge[r]) for r in rows], dtype=bool)
     separate = float(J[0] @ u0) < 0
-    uc = _center_on_face(J, u0, sizes, ge_rows, separate)
+    try:
+        uc = _center_on_face(J, u0, sizes, ge_rows, separate)
+    except np.linalg.LinAlgError:  # a singular block: the slice has no interior here
+        uc = None
     if uc is None:
         return None
     ua = u0 - np.linalg.lstsq(J[1:], J[1:] @ u0, rcond=1e-13)[0]
@@ -947,7 +979,9 @@ def _towards_center(
         out += [float(v) for v in u[nS:][ge_rows]]
         return min(out, default=math.inf)
 
-    want = min(0.25 * margin(uc), max(1e-6 * top, 0.0))
+    if not margin(uc) > 1e-9 * top:  # the centre is on the boundary: the face is too large
+        return None
+    want = min(0.25 * margin(uc), 1e-6 * top)
     for theta in (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 0.03, 0.1, 0.3):
         u = (1 - theta) * ua + theta * uc
         if margin(u) >= want:
