@@ -78,8 +78,9 @@ reduced to closed ones before lowering, and the answer is mapped back. Two reduc
 Every attempt is listed in ``Solution.info["strict_attempts"]`` and the strategy of the
 returned answer in ``Solution.strategy``.
 
-An optimisation problem whose solve ends ``error`` or ``inaccurate`` (not on a time limit) is
-then decided on its constraints alone, as a feasibility problem (same plan): when that answer is
+An optimisation problem whose solve ends ``error`` or ``inaccurate`` without a point (not on
+a time limit; a returned point goes to the certifier as it is) is then decided on its
+constraints alone, as a feasibility problem (same plan): when that answer is
 ``infeasible`` with a Farkas ray that verifies against the original constraints, it replaces
 the failure (the objective plays no part in infeasibility); otherwise the failure is returned
 with the attempt in ``Solution.info["constraints_attempt"]``.
@@ -626,7 +627,7 @@ def solve(
     ('feasible', 'max-margin', 0.5)
     """
     sol = _solve_plan(problem, options, run, first_order)
-    if problem.objective.sense != "feasibility" and sol.status in ("error", "inaccurate"):
+    if problem.objective.sense != "feasibility" and sol.status in ("error", "inaccurate") and sol.x is None:
         sol = _constraints_route(problem, options, run, first_order, sol)
     return sol
 
@@ -662,7 +663,7 @@ def _constraints_route(
     first_order: bool,
     failed: Solution,
 ) -> Solution:
-    """An optimisation solve ended without a decision: decide its constraints alone.
+    """An optimisation solve ended without a decision or a point: decide its constraints alone.
 
     The objective plays no part in infeasibility, and the feasibility problem is often the
     better-conditioned one (Clarabel 0.11.1 stops with ``NumericalError`` on the optimisation
