@@ -78,6 +78,13 @@ reduced to closed ones before lowering, and the answer is mapped back. Two reduc
 Every attempt is listed in ``Solution.info["strict_attempts"]`` and the strategy of the
 returned answer in ``Solution.strategy``.
 
+An optimisation problem whose solve ends ``error`` or ``inaccurate`` without a point (not on
+a time limit; a returned point goes to the certifier as it is) is then decided on its
+constraints alone, as a feasibility problem (same plan): when that answer is
+``infeasible`` with a Farkas ray that verifies against the original constraints, it replaces
+the failure (the objective plays no part in infeasibility); otherwise the failure is returned
+with the attempt in ``Solution.info["constraints_attempt"]``.
+
 Examples
 --------
 >>> import scipy.sparse as sp
@@ -619,6 +626,19 @@ def solve(
     >>> sol.status, sol.strategy, round(sol.margin, 6)
     ('feasible', 'max-margin', 0.5)
     """
+    sol = _solve_plan(problem, options, run, first_order)
+    if problem.objective.sense != "feasibility" and sol.status in ("error", "inaccurate") and sol.x is None:
+        sol = _constraints_route(problem, options, run, first_order, sol)
+    return sol
+
+
+def _solve_plan(
+    problem: Problem,
+    options: SolveOptions,
+    run: Callable[[Problem, SolveOptions], Solution],
+    first_order: bool,
+) -> Solution:
+    """The attempts of :func:`plan` and the answer :func:`_choose` keeps."""
     steps = plan(problem, options, first_order)
     if not steps:
         return run(problem, options)
@@ -634,6 +654,51 @@ def solve(
     if len(steps) > 1 or problem.objective.sense == "feasibility":
         chosen.info["strict_attempts"] = [_attempt_record(a) for a in attempts]
     return chosen
+
+
+def _constraints_route(
+    problem: Problem,
+    options: SolveOptions,
+    run: Callable[[Problem, SolveOptions], Solution],
+    first_order: bool,
+    failed: Solution,
+) -> Solution:
+    """An optimisation solve ended without a decision or a point: decide its constraints alone.
+
+    The objective plays no part in infeasibility, and the feasibility problem is often the
+    better-conditioned one (Clarabel 0.11.1 stops with ``NumericalError`` on the optimisation
+    problem of ``delay_b.thm3_1`` at an infeasible instance, and proves the same constraints
+    infeasible in 17 iterations without the objective). The feasibility answer replaces
+    ``failed`` only when it is ``infeasible`` with a Farkas ray that verifies against the
+    original constraints (:func:`lmic.certify.farkas.verify_farkas`); otherwise ``failed`` is
+    returned, with the attempt recorded in ``info["constraints_attempt"]``. A solve that hit
+    the time limit is not followed by another.
+    """
+    if failed.native_status in ("MaxTime", "time_limit") or "time limit" in (failed.message or ""):
+        return failed
+    feasibility = replace(problem, objective=Objective("feasibility", np.zeros(1 + problem.n)))
+    sol = _solve_plan(feasibility, options, run, first_order)
+    sol.solve_s += failed.solve_s
+    if sol.status == "infeasible" and sol.farkas and sol.farkas.get("lmis") is not None:
+        from lmic.certify.farkas import verify_farkas
+
+        try:
+            report = verify_farkas(problem, {k: sol.farkas[k] for k in ("lmis", "linear") if k in sol.farkas})
+        except Exception:  # noqa: BLE001 - a malformed ray is just not a proof
+            report = {"verified": False}
+        if report.get("verified"):
+            if report.get("kind") == "strict":
+                sol.farkas["strict"] = True
+            why = failed.message or failed.native_status or failed.status
+            sol.message = (
+                f"the optimisation solve ended '{failed.status}' ({why}); the constraints alone are "
+                f"infeasible: the feasibility solve's Farkas ray verifies ({report.get('kind')})"
+            )
+            sol.info["optimisation_attempt"] = _attempt_record(failed)
+            return sol
+    failed.info["constraints_attempt"] = _attempt_record(sol)
+    failed.solve_s = sol.solve_s
+    return failed
 
 
 def _verified(sol: Solution, problem: Problem) -> bool:
