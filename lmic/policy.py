@@ -14,8 +14,8 @@ certified point, or a GLOBAL infeasibility proof, :mod:`lmic.outcome`):
 2. ``default``: the backend's own strict reduction plan (:mod:`lmic.reductions.strict`);
 3. on ``error``, ``inaccurate``, a rejected point or a bounded ray: the other strict reduction
    (``max-margin`` <-> ``fixed-margin``) when the problem is a feasibility problem with strict
-   constraints, and the problem preconditioned at the point the solver returned
-   (``rescaled``);
+   constraints (unless ``SolveOptions.strict`` names one: that choice is honoured), and the
+   problem preconditioned at the point the solver returned (``rescaled``);
 4. an ``infeasible-bounded`` answer ("no solution with ``||x||_inf <= R``") is immediately
    tried for an exact rational proof (:func:`lmic.certify.farkas.prove_infeasible`), which
    makes it global when it holds.
@@ -25,10 +25,13 @@ point whose float eigenvalues are all positive (margins below the float error bo
 supremum that is not attained). The best outcome found is returned (certified or
 infeasible-certified > infeasible-bounded > rejected > undecided), with every attempt.
 
-Escalation order (:data:`ORDER`): Clarabel -> CVXOPT -> SDPA -> SCS, skipping backends that are
-not installed or cannot take the problem (Clarabel's memory guard on large PSD blocks). SCS, a
-first-order method, runs at tolerance :data:`FIRST_ORDER_TOL` (its answers are certified, not
-trusted). ``backend="X"`` means X alone (strategies and exact rescue still apply, no other
+Escalation order: the size-based first choice of :func:`lmic.backends.auto.route` (small
+problems: Clarabel; large strict feasibility problems: SCS then CVXOPT; large optimisation
+problems: SDPA, CVXOPT, Clarabel), then the rest of :data:`ORDER` (Clarabel -> CVXOPT -> SDPA ->
+SCS), skipping backends that are not installed or cannot take the problem (Clarabel's memory
+guard on large PSD blocks). SCS, a first-order method, runs at tolerance
+:data:`FIRST_ORDER_TOL` in the route (its answers are certified, not trusted; alone it runs at
+its own floor). ``backend="X"`` means X alone (strategies and exact rescue still apply, no other
 backend); no backend (or ``"auto"``) means the escalating route. Once :data:`MAX_BOUNDED`
 backends have given bounded rays that no exact proof upgrades, the route stops there.
 
@@ -118,7 +121,10 @@ def route(problem: Problem, backend: Any = None) -> list[Any]:
     """
     if not is_auto(backend):
         return [backend]
-    usable = [name for name in ORDER if _usable(name, problem)]
+    from lmic.backends import auto
+
+    first = [name for name in auto.route(problem) if _usable(name, problem)]
+    usable = first + [name for name in ORDER if name not in first and _usable(name, problem)]
     if not usable:
         raise BackendError("no installed backend can take this problem (tried " + ", ".join(ORDER) + ")")
     return usable
@@ -295,7 +301,7 @@ def decide(
     for name in names:
         be = _instance(name)
         label = be.label
-        opts = step_options(be, options)
+        opts = step_options(be, options) if not single else options
         last_x: np.ndarray | None = None
         tried_strict: set[str] = set()
         plan: list[tuple[str, Problem, Any]] = []
@@ -324,7 +330,7 @@ def decide(
                 decided = True
                 break
             if tag in ("default", "scaled"):  # escalate within this backend
-                if feasibility_strict:
+                if feasibility_strict and options.strict == "auto":  # an explicit --strict is honoured
                     for s in ("max-margin", "fixed-margin"):
                         if s not in tried_strict and s != sol.strategy:
                             plan.append((f"strict={s}", problem, None))

@@ -726,7 +726,7 @@ def audit_published(
     system: Any,
     params: Mapping[str, Any] | None = None,
     *,
-    backend: Any = "clarabel",
+    backend: Any = None,
     options: Any = None,
     rtol: float = 0.05,
 ) -> AuditReport:

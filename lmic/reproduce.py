@@ -192,7 +192,7 @@ class ReproductionReport:
     results: list[RowResult]
     unlisted: list[str] = field(default_factory=list)
     missing: list[str] = field(default_factory=list)
-    backend: str = "clarabel"
+    backend: str = "auto"
     total_s: float = 0.0
     file_times: dict[str, float] = field(default_factory=dict)
 
@@ -465,7 +465,7 @@ def reproduce(
     expectations: str | os.PathLike[str] | None = None,
     *,
     only: Sequence[str] = (),
-    backend: str = "clarabel",
+    backend: str = "auto",
     options: Any = None,
     progress: Callable[[dict[str, Any]], None] | None = None,
 ) -> ReproductionReport:
