@@ -16,9 +16,9 @@ certified point, or a GLOBAL infeasibility proof, :mod:`lmic.outcome`):
    (``max-margin`` <-> ``fixed-margin``) when the problem is a feasibility problem with strict
    constraints (unless ``SolveOptions.strict`` names one: that choice is honoured), and the
    problem preconditioned at the point the solver returned (``rescaled``);
-4. an ``infeasible-bounded`` answer ("no solution with ``||x||_inf <= R``") is immediately
-   tried for an exact rational proof (:func:`lmic.certify.farkas.prove_infeasible`), which
-   makes it global when it holds.
+4. the first ``infeasible-bounded`` answer ("no solution with ``||x||_inf <= R``") is
+   immediately tried for an exact rational proof (:func:`lmic.certify.farkas.prove_infeasible`),
+   which makes it global when it holds (one ray per decision: a proof attempt costs seconds).
 
 Then the next backend of the route. After the route: the exact rescue of the best rejected
 point whose float eigenvalues are all positive (margins below the float error bound, e.g. near a
@@ -199,13 +199,15 @@ class _Run:
         self.attempts: list[Attempt] = []
         self.best: Outcome | None = None
         self.rejected: list[tuple[Solution, Any, str]] = []
+        self.ray_tried = False
 
     def record(self, backend: str, label: str, sol: Solution, t0: float) -> Outcome:
         t1 = time.perf_counter()
         cert = _certify(self.problem, sol, self.exact)
         verdict = verdict_of(self.problem, sol, cert)
         note = ""
-        if verdict == "infeasible-bounded" and self.rescue and not self.exact:
+        if verdict == "infeasible-bounded" and self.rescue and not self.exact and not self.ray_tried:
+            self.ray_tried = True  # an exact proof costs seconds: one ray per decision
             up = _certify(self.problem, sol, True)
             if up.verdict == "infeasible-certified":
                 cert, verdict, note = up, "infeasible-certified", "exact proof of the ray"
