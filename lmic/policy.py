@@ -191,6 +191,23 @@ def exact_rescue_point(problem: Problem, sol: Solution, cert: Any) -> Any | None
     return exact if exact.exact and exact.exact.get("proven") and exact.verdict == "certified" else None
 
 
+def _prove_ray(problem: Problem, sol: Solution, cert: Any) -> bool:
+    """Try an exact proof of a bounded ray (one face threshold); upgrade ``cert`` in place if it holds."""
+    from lmic.certify.farkas import prove_infeasible, scope
+
+    try:
+        ex = prove_infeasible(problem, sol.farkas or {}, cert.farkas or {}, rel_face=(1e-9,))
+    except (LmicError, ValueError, ArithmeticError):
+        return False
+    if not ex.get("proven"):
+        return False
+    cert.exact = ex
+    cert.farkas["scope"] = scope(problem, cert.farkas, ex)
+    cert.verdict = "infeasible-certified"
+    cert.reason = cert.farkas["scope"]["statement"] + "; " + str(ex.get("reason", ""))
+    return True
+
+
 class _Run:
     """The state of one :func:`decide` call: attempts so far and the best outcome."""
 
@@ -207,10 +224,9 @@ class _Run:
         verdict = verdict_of(self.problem, sol, cert)
         note = ""
         if verdict == "infeasible-bounded" and self.rescue and not self.exact and not self.ray_tried:
-            self.ray_tried = True  # an exact proof costs seconds: one ray per decision
-            up = _certify(self.problem, sol, True)
-            if up.verdict == "infeasible-certified":
-                cert, verdict, note = up, "infeasible-certified", "exact proof of the ray"
+            self.ray_tried = True  # an exact proof costs seconds: one ray per decision, one face
+            if _prove_ray(self.problem, sol, cert):
+                verdict, note = "infeasible-certified", "exact proof of the ray"
             else:
                 note = "exact proof of the ray failed"
         if verdict == "rejected":
@@ -372,6 +388,8 @@ def decide(
             )
             break
     best.attempts = run.attempts
+    if best.solution is not None:
+        best.solution.info["attempts"] = [a.to_dict() for a in run.attempts]
     if best.verdict == "infeasible-bounded":
         best.reason += (
             "; to go further: a larger bound (a more accurate ray), another backend (--backend), "

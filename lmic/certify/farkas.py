@@ -786,11 +786,18 @@ def _prove_farkas(problem: Problem, farkas: dict[str, Any], rel_face: float, kee
     return dict(base, proven=False, kind=None, reason=f"no exact separation: g_0 = {float(g0):.3g}")
 
 
-def prove_infeasible(problem: Problem, farkas: dict[str, Any], verification: dict[str, Any]) -> dict[str, Any]:
+def prove_infeasible(
+    problem: Problem,
+    farkas: dict[str, Any],
+    verification: dict[str, Any],
+    rel_face: tuple[float, ...] | None = None,
+) -> dict[str, Any]:
     """The exact proof :func:`lmic.certify.certify` runs for an ``infeasible`` answer.
 
     Tries the repaired certificate (when :func:`verify_farkas` repaired one), then the
-    solver's certificate in the orientation that verified (or both when none did).
+    solver's certificate in the orientation that verified (or both when none did). ``rel_face``
+    (default: :func:`prove_farkas`'s) limits the face thresholds tried (each try costs seconds on
+    problems with a few dozen variables).
 
     Returns
     -------
@@ -820,7 +827,7 @@ def prove_infeasible(problem: Problem, farkas: dict[str, Any], verification: dic
     candidates += [("solver", {"lmis": [sg * Z for Z in mats], "linear": sg * y}) for sg in signs]
     out: dict[str, Any] = {}
     for source, cand in candidates:
-        r = prove_farkas(problem, cand)
+        r = prove_farkas(problem, cand) if rel_face is None else prove_farkas(problem, cand, rel_face=rel_face)
         r["source"] = source
         if not out or r["proven"]:
             out = r
