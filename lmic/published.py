@@ -184,7 +184,7 @@ class AuditReport:
         raise KeyError(f"no {kind or ''} claim for published '{key}'".replace("  ", " "))
 
     def exit_code(self) -> int:
-        """0 certified, 1 rejected or not reproducible, 3 proven infeasible (module docstring)."""
+        """0 certified, 1 rejected or not reproducible, 3 proven infeasible, 4 bounded infeasibility only."""
         decisive = [c for c in self.claims if c.decisive]
         if decisive:
             findings = [c.finding for c in decisive]
@@ -192,6 +192,8 @@ class AuditReport:
                 return 1
             if "infeasible" in findings:
                 return 3
+            if "infeasible-bounded" in findings and all(f in ("certified", "infeasible-bounded") for f in findings):
+                return 4  # lmic.outcome: "no solution with ||x||_inf <= R" only
             if any(f != "certified" for f in findings):
                 return 1
             return 0
@@ -362,7 +364,9 @@ def _print_resolution(values: np.ndarray) -> float:
 
 
 def _finding_of(outcome: str) -> str:
-    return {"feasible": "certified", "infeasible": "infeasible"}.get(outcome, "not reproducible")
+    return {"feasible": "certified", "infeasible": "infeasible", "infeasible-bounded": "infeasible-bounded"}.get(
+        outcome, "not reproducible"
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -573,7 +577,7 @@ class _Auditor:
             kind="status",
             route="the theorem solved for the file's parameters",
             finding=_finding_of(pt.outcome),
-            agrees=None if pt.outcome == "undecided" else (pt.outcome == claimed),
+            agrees=None if pt.outcome in ("undecided", "infeasible-bounded") else (pt.outcome == claimed),
             published=word,
             computed=pt.outcome,
         )

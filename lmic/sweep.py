@@ -69,8 +69,9 @@ __all__ = [
     "run_cli",
 ]
 
-#: outcomes of one point
-OUTCOMES = ("feasible", "infeasible", "undecided")
+#: outcomes of one point (``infeasible``: a global proof; ``infeasible-bounded``: only "no solution
+#: with ||x||_inf <= R")
+OUTCOMES = ("feasible", "infeasible", "infeasible-bounded", "undecided")
 
 Progress = Callable[[dict[str, Any]], None]
 
@@ -274,7 +275,7 @@ def _kind(pt: PointResult) -> str:
         return "feasible"
     if pt.outcome == "infeasible":
         return "infeasible-certified"
-    if pt.verdict == "infeasible-bounded":
+    if pt.outcome == "infeasible-bounded" or pt.verdict == "infeasible-bounded":
         return "infeasible-bounded"
     return "undecided"
 
@@ -427,6 +428,7 @@ def decide(
         result.proof = "infeasible-certified: " + out.evidence.statement
     elif out.verdict == "infeasible-bounded":
         # never called infeasible: only "no solution with ||x||_inf <= R"
+        result.outcome = "infeasible-bounded"
         result.farkas_radius = out.evidence.radius
         result.proof = "infeasible-bounded: " + out.evidence.statement
         if scale is not None and out.evidence.radius is not None:
@@ -694,6 +696,11 @@ def maximize(
         message = f"stopped after {len(ev.points)} points (--max-evals) before the tolerance"
     proven = [p.value for p in ev.points if _kind(p) == "infeasible-certified" and (lower is None or p.value > lower)]
     upper_kind = "none" if upper_pt is None else _kind(upper_pt)
+    if upper is not None and upper_kind != "infeasible-certified" and not message:
+        message = (
+            f"the bisection's upper end {upper:g} is {upper_kind}, not a proof: the supremum is >= "
+            f"{lower if lower is not None else '-'} and may be larger (even infinite)"
+        )
     return SupResult(
         theorem=plan.id,
         param=param,
