@@ -103,8 +103,8 @@ def conflicts(rows: list[dict[str, Any]], sense: str, rtol: float) -> tuple[list
 
     >>> rows = [{"backend": "a", "decision": "certified", "objective": 1.0, "x_norm": 1.0},
     ...         {"backend": "b", "decision": "infeasible-bounded", "radius": 10.0, "objective": None}]
-    >>> conflicts(rows, "feasibility", 1e-3)[0]
-    ["a certifies a point with ||x||_inf = 1 but b proves no solution with ||x||_inf <= 10"]
+    >>> print(conflicts(rows, "feasibility", 1e-3)[0][0])
+    a certifies a point with ||x||_inf = 1 but b proves no solution with ||x||_inf <= 10
     """
     found: list[str] = []
     points = [r for r in rows if r["decision"] == "certified"]

@@ -15,7 +15,9 @@ certified point, or a GLOBAL infeasibility proof, :mod:`lmic.outcome`):
 3. on ``error``, ``inaccurate``, a rejected point or a bounded ray: the other strict reduction
    (``max-margin`` <-> ``fixed-margin``) when the problem is a feasibility problem with strict
    constraints (unless ``SolveOptions.strict`` names one: that choice is honoured), and the
-   problem preconditioned at the point the solver returned (``rescaled``);
+   problem preconditioned at the point the solver returned (``rescaled``); for an optimisation
+   problem whose solve failed, its feasibility problem (``feasibility``: only an infeasibility
+   proof counts from it, a point is no optimum);
 4. the first ``infeasible-bounded`` answer ("no solution with ``||x||_inf <= R``") is
    immediately tried for an exact rational proof (:func:`lmic.certify.farkas.prove_infeasible`),
    which makes it global when it holds (one ray per decision: a proof attempt costs seconds).
@@ -218,11 +220,14 @@ class _Run:
         self.rejected: list[tuple[Solution, Any, str]] = []
         self.ray_tried = False
 
-    def record(self, backend: str, label: str, sol: Solution, t0: float) -> Outcome:
+    def record(self, backend: str, label: str, sol: Solution, t0: float, infeasibility_only: bool = False) -> Outcome:
         t1 = time.perf_counter()
         cert = _certify(self.problem, sol, self.exact)
         verdict = verdict_of(self.problem, sol, cert)
         note = ""
+        if infeasibility_only and verdict in ("certified", "rejected"):
+            # a point of the feasibility problem is no optimum: it decides nothing here
+            verdict, note = "undecided", "the feasibility problem has a point; the optimum was not reached"
         if verdict == "infeasible-bounded" and self.rescue and not self.exact and not self.ray_tried:
             self.ray_tried = True  # an exact proof costs seconds: one ray per decision, one face
             if _prove_ray(self.problem, sol, cert):
@@ -341,7 +346,7 @@ def decide(
             sol = _solve_one(be, target, step_opts, scales, problem)
             for a in sol.info.get("strict_attempts", []) or []:
                 tried_strict.add(str(a.get("strategy")))
-            out = run.record(label, tag, sol, t0)
+            out = run.record(label, tag, sol, t0, infeasibility_only=tag == "feasibility")
             if sol.x is not None and len(sol.x) == problem.n:
                 last_x = sol.x
             if out.decided:
@@ -354,6 +359,10 @@ def decide(
                             plan.append((f"strict={s}", problem, None))
                 if last_x is not None and solve_as.lmis and np.all(np.isfinite(last_x)) and np.any(last_x):
                     plan.append(("rescaled", solve_as, last_x))
+                if problem.objective.sense != "feasibility" and sol.status in ("error", "inaccurate", "infeasible"):
+                    # an optimisation solve that failed: the feasibility problem can still prove
+                    # infeasibility (a Farkas ray does not depend on the objective)
+                    plan.append(("feasibility", _feasibility(solve_as), None))
         if decided:
             break
         if run.best is not None and run.best.verdict == "infeasible-bounded":
@@ -398,6 +407,13 @@ def decide(
     if best.evidence is None:
         best.evidence = Evidence()
     return best
+
+
+def _feasibility(problem: Problem) -> Problem:
+    """The same constraints without the objective."""
+    from lmic.ir.problem import Objective
+
+    return replace(problem, objective=Objective("feasibility", np.zeros(problem.n + 1)))
 
 
 def _rel_margin(cert: Any) -> float:

@@ -180,14 +180,16 @@ def test_qib_thm2_published_K_in_both_forms():
 
 
 def test_status_claims():
-    """T1.5 line 124: infeasible at gamma = 3.33 (the claim agrees); T11.6 line 702: uir (11) claim fails."""
+    """T1.5 line 124: infeasible at gamma = 3.33; T11.6 line 702: uir (11). Both are float rays of
+    inhomogeneous LMIs, so lmic proves "no solution with ||x||_inf <= R" only (undecided claims)."""
     rep = audit_published("thesis.thm3_2_2", EX / "thesis.thm3_2_2.ex3_2_2.yaml")
     c = rep.claim("status")
     # a float Farkas ray of an inhomogeneous LMI: "no solution with ||x||_inf <= R", not a proof
     assert (c.finding, c.agrees, c.verdict) == ("infeasible-bounded", None, "infeasible-bounded")
     assert rep.exit_code() == 4
     uir = audit_published("uir.thm3_1", EX / "uir.thm3_1.rossler_published_gains.yaml").claim("status")
-    assert uir.finding == "infeasible" and uir.agrees is False
+    # the claim "feasible" is not confirmed; what lmic proves is bounded infeasibility only
+    assert uir.finding == "infeasible-bounded" and uir.agrees is None
 
 
 def test_value_claims_and_skipped_keys():
