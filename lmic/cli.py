@@ -151,7 +151,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_FAILED
     except KeyboardInterrupt:
         sys.stderr.write("lmic: interrupted\n")
-        return EXIT_FAILED
+        return 130  # lmic.outcome.EXIT_CODES["interrupted"]
 
 
 def _entry() -> None:

@@ -227,6 +227,8 @@ def certificate_document(
             "iterations": solution.iterations,
             "solve_s": solution.solve_s,
             "versions": _versions(solution.backend or "", solution.info or {}),
+            # every solve the policy ran (lmic.policy): backend, reduction, statuses, verdict, time
+            "attempts": list((solution.info or {}).get("attempts", [])),
         },
         "solution": {
             "x": None if x is None else x.tolist(),

@@ -24,7 +24,7 @@ feasible ``x`` the left side of (*) is ``>= 0``.
   sum_{r strict} y_r``. If ``F_i(x) >= mu I`` on the strict LMIs and ``l_r(x) >= mu`` on the
   strict rows, the left side of (*) is ``>= mu tau``, so ``mu <= g_0 / tau <= 0``. This is the
   certificate of a homogeneous strict LMI (``F0 = 0``, ``g_0 = 0``, e.g. ``A^T P + P A < 0,
-  P > 0`` for an unstable ``A``) and of the max-margin reduction of :mod:`lmic.backends.strict`.
+  P > 0`` for an unstable ``A``) and of the max-margin reduction of :mod:`lmic.reductions.strict`.
 
 With floating-point certificates the equalities hold only approximately. The verifier first
 projects each ``Z_i`` onto the PSD cone and clips ``y`` on ``ge`` rows to ``>= 0`` (the part
@@ -42,6 +42,36 @@ no feasible ``x`` with ``||x||_inf < radius = -g_0 / ||g_{1:}||_1``; for the str
 ``x`` with margin ``mu > margin_bound = (g_0 + ||g_{1:}||_1 ||x||_inf) / tau`` (reported for
 ``||x||_inf = 1``; the margin bound scales with ``||x||`` for homogeneous problems, so it is a
 bound on the *relative* margin).
+
+Global or bounded: what a certificate proves about the ORIGINAL problem
+-----------------------------------------------------------------------
+Backends reduce strict constraints before solving (:mod:`lmic.reductions.strict`): the
+``max-margin`` problem adds a margin ``t``, a cap ``t <= 1`` and, for scale-free problems, a
+trace normalisation ``tr F_i(x) <= d_i``. The dual of such a problem carries multipliers of those
+extra rows (the "box term"); :func:`verify_farkas` is always run on the ORIGINAL problem with
+the multipliers of the original constraints only, so no box multiplier can enter ``g``. What
+remains is the float residual ``g_k != 0`` (``k >= 1``), and that is what decides the scope
+(:func:`scope`):
+
+* **exact proof** (:func:`prove_farkas`): ``g_k = 0`` for ``k >= 1`` in rational arithmetic,
+  ``Z_i >= 0`` and the separation exactly. Then (*) holds for every ``x`` with no ``x`` term,
+  so no ``x`` at all is feasible: a **global** proof.
+* **homogeneous problems** (every ``F_i^(0) = 0`` and ``a_r0 = 0``: the strict feasible set is
+  an open cone, e.g. Lyapunov LMIs) with a verified *strict* certificate: ``g_0 = 0`` exactly
+  (a sum of exact zeros), and (*) gives ``mu tau <= ||x||_inf ||g_{1:}||_1`` for every ``x``
+  with margin ``mu``. Since ``x -> s x`` (``s > 0``) maps the feasible cone onto itself, the
+  trace normalisation of the reduction loses nothing, and the bound is scale-free: no point
+  *at any scale* has relative margin ``mu / ||x||_inf`` above ``rho = ||g_{1:}||_1 / tau``
+  (recorded). lmic treats this as **global** (the coordinator's rule for scale-free cones);
+  the recorded ``rho`` says how far that float statement goes.
+* **everything else** (an inhomogeneous problem with a float certificate): (*) gives
+  ``0 <= g_0 + ||x||_inf ||g_{1:}||_1`` at any feasible ``x``, so only points with
+  ``||x||_inf < R = -g_0 / ||g_{1:}||_1`` are excluded: a **bounded** proof, "no solution with
+  ``||x||_inf <= R``", never called infeasible. This is not a formality: the problem
+  ``[[x, 1], [1, 1e-5]] > 0`` is feasible exactly for ``x > 1e5``, and SDPA and SCS return
+  certificates that verify to ``1e-6`` with ``R ~ 4e4`` (``tests/test_engine.py``). To go
+  further: an exact proof (``--exact``), another backend (another ray), or a larger ``R``
+  (a more accurate ray).
 
 Repair of inaccurate certificates
 ---------------------------------
@@ -112,6 +142,8 @@ from lmic.ir.svec import tril_rows_cols
 
 __all__ = [
     "verify_farkas",
+    "scope",
+    "is_homogeneous",
     "repair_farkas",
     "prove_farkas",
     "prove_infeasible",
@@ -989,11 +1021,18 @@ def _towards_center(
     return uc
 
 
-def prove_infeasible(problem: Problem, farkas: dict[str, Any], verification: dict[str, Any]) -> dict[str, Any]:
+def prove_infeasible(
+    problem: Problem,
+    farkas: dict[str, Any],
+    verification: dict[str, Any],
+    rel_face: tuple[float, ...] | None = None,
+) -> dict[str, Any]:
     """The exact proof :func:`lmic.certify.certify` runs for an ``infeasible`` answer.
 
     Tries the repaired certificate (when :func:`verify_farkas` repaired one), then the
-    solver's certificate in the orientation that verified (or both when none did).
+    solver's certificate in the orientation that verified (or both when none did). ``rel_face``
+    (default: :func:`prove_farkas`'s) limits the face thresholds tried (each try costs seconds on
+    problems with a few dozen variables).
 
     Returns
     -------
@@ -1023,7 +1062,7 @@ def prove_infeasible(problem: Problem, farkas: dict[str, Any], verification: dic
     candidates += [("solver", {"lmis": [sg * Z for Z in mats], "linear": sg * y}) for sg in signs]
     out: dict[str, Any] = {}
     for source, cand in candidates:
-        r = prove_farkas(problem, cand)
+        r = prove_farkas(problem, cand) if rel_face is None else prove_farkas(problem, cand, rel_face=rel_face)
         r["source"] = source
         if not out or r["proven"]:
             out = r
@@ -1031,3 +1070,109 @@ def prove_infeasible(problem: Problem, farkas: dict[str, Any], verification: dic
             break
     out["denominator"] = "rational" if out["proven"] else "-"  # sizes in denominator_bits
     return out
+
+
+def is_homogeneous(problem: Problem) -> bool:
+    """True when every LMI has ``F0 = 0`` and every linear row ``a0 = 0`` (a conic feasible set).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> is_homogeneous(p)
+    True
+    """
+    for lmi in problem.lmis:
+        col0 = lmi.coeffs.tocsc()[:, 0]
+        if col0.nnz and np.any(col0.toarray()):
+            return False
+    if len(problem.linear):
+        a0 = problem.linear.A.tocsc()[:, 0]
+        if a0.nnz and np.any(a0.toarray()):
+            return False
+    return True
+
+
+def scope(problem: Problem, verification: dict[str, Any] | None, exact: dict[str, Any] | None = None) -> dict[str, Any]:
+    """What a Farkas certificate proves about the original problem: global, bounded or nothing.
+
+    Rules in the module docstring ("Global or bounded").
+
+    Parameters
+    ----------
+    problem : Problem
+        The original problem (never a reduction of it).
+    verification : dict or None
+        :func:`verify_farkas`'s report.
+    exact : dict or None
+        :func:`prove_infeasible`'s report, when an exact proof was tried.
+
+    Returns
+    -------
+    dict
+        ``scope`` (``"global"``, ``"bounded"`` or ``None``), ``radius`` (bounded: no solution with
+        ``||x||_inf <= radius``; ``inf`` for global), ``basis`` (``"exact"``, ``"homogeneous"``,
+        ``"float"``), ``rho`` (homogeneous: relative-margin bound) and ``statement`` (one line).
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))],
+    ...             [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]])), LMI("-p > 0", 1, sp.csc_matrix([[0., -1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> f = {"lmis": [np.eye(1), np.eye(1)]}
+    >>> scope(p, verify_farkas(p, f))["scope"]
+    'global'
+    >>> q = Problem([Variable("p", "scalar", (1, 1))],
+    ...             [LMI("p >= 0", 1, sp.csc_matrix([[0., 1.]]), strict=False),
+    ...              LMI("-1 - p >= 0", 1, sp.csc_matrix([[-1., -1.0000001]]), strict=False)],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> s = scope(q, verify_farkas(q, {"lmis": [np.eye(1), np.eye(1)]}, repair=False))
+    >>> s["scope"], round(s["radius"])
+    ('bounded', 10000000)
+    """
+    if exact is not None and exact.get("proven"):
+        return {
+            "scope": "global",
+            "radius": math.inf,
+            "basis": "exact",
+            "rho": None,
+            "statement": f"infeasible: exact rational Farkas certificate ({exact.get('kind')})",
+        }
+    v = verification or {}
+    if not v.get("verified"):
+        return {"scope": None, "radius": None, "basis": None, "rho": None, "statement": "no verified certificate"}
+    g0, tau = float(v.get("g0") or 0.0), float(v.get("tau") or 0.0)
+    radius = float(v.get("radius") or 0.0)
+    if v.get("kind") == "strict" and tau > 0 and is_homogeneous(problem):
+        mb = v.get("margin_bound")
+        rho = float(mb) if mb is not None else None
+        return {
+            "scope": "global",
+            "radius": math.inf,
+            "basis": "homogeneous",
+            "rho": rho,
+            "statement": (
+                "infeasible: homogeneous (scale-free) problem; at any scale no point has relative "
+                f"margin above {rho:.3g} (strict Farkas certificate)"
+            ),
+        }
+    if g0 < 0 and radius > 0:
+        return {
+            "scope": "bounded",
+            "radius": radius,
+            "basis": "float",
+            "rho": None,
+            "statement": (
+                f"no solution with ||x||_inf <= {radius:.6g} (float Farkas certificate, residual "
+                f"{float(v.get('rel_residual') or 0.0):.2g}); a larger solution is not excluded"
+            ),
+        }
+    return {
+        "scope": None,
+        "radius": None,
+        "basis": "float",
+        "rho": None,
+        "statement": "the certificate bounds the margin only (separation >= 0): no infeasibility shown",
+    }

@@ -162,7 +162,10 @@ def test_sdpa_certificate_with_residual_3e_5_is_verified_after_repair():
     again = verify_farkas(prob, r["certificate"], repair=False)
     assert again["verified"] and again["rel_residual"] == pytest.approx(r["rel_residual"], abs=1e-15)
     cert = certify(prob, Solution("infeasible", farkas=farkas, backend="sdpa"))
-    assert cert.verdict == "infeasible-certified" and "after repair" in cert.reason
+    # the ray is a float certificate of an inhomogeneous problem: it proves "no solution with
+    # ||x||_inf <= R" (R > 1e10), not infeasibility (lmic.certify.farkas.scope)
+    assert cert.verdict == "infeasible-bounded" and cert.farkas["scope"]["radius"] > 1e10
+    assert "after repair" in cert.farkas["reason"]
 
 
 def test_perturbed_certificate_of_a_feasible_problem_stays_unverified():
