@@ -66,6 +66,9 @@ class Result:
         mapping), ``solve_s`` (inside the solver), ``certify_s``.
     attempts : list of dict
         For ``auto``: every backend tried, its status and verdict.
+    enclosure : dict or None
+        Optimisation problems: the certified enclosure of the optimal value
+        (:func:`lmic.certify.enclosure.enclosure`).
     """
 
     target: str
@@ -81,6 +84,7 @@ class Result:
     solution: Solution
     params: dict[str, Any] = field(default_factory=dict)
     attempts: list[dict[str, Any]] = field(default_factory=list)
+    enclosure: dict[str, Any] | None = None
 
     @property
     def verdict(self) -> str:
@@ -161,6 +165,8 @@ class Result:
             "certificate": self.certificate_dict(),
             "timings": self.timings,
             "attempts": self.attempts,
+            # -- optimal-value enclosure (lmic.certify.enclosure) --
+            "enclosure": _enclosure_summary(self.enclosure),
             "exit_code": self.exit_code(),
         }
 
@@ -348,11 +354,14 @@ def solve(
             break
     assert sol is not None
     variables, derived = _values(problem, sol.x, cert)
+    # -- optimal-value enclosure (lmic.certify.enclosure) --
+    enc, enclosure_s = _enclosure(problem, sol, cert, exact)
     timings = {
         "compile_s": compile_s,
         "lower_s": sol.lower_s,
         "solve_s": sum(a["solve_s"] for a in attempts),
         "certify_s": certify_s,
+        "enclosure_s": enclosure_s,
     }
     return Result(
         target=str(name),
@@ -368,4 +377,27 @@ def solve(
         solution=sol,
         params=dict(params or {}),
         attempts=attempts if len(chain) > 1 else [],
+        enclosure=enc,
     )
+
+
+# -- optimal-value enclosure (lmic.certify.enclosure) -----------------------------------------
+
+
+def _enclosure(problem: Problem, sol: Solution, cert: Any, exact: bool) -> tuple[dict[str, Any] | None, float]:
+    """The enclosure of an optimisation problem's optimal value (``None`` for feasibility)."""
+    if problem.objective.sense == "feasibility" or cert is None:
+        return None, 0.0
+    from lmic.certify.enclosure import enclosure
+
+    t0 = time.perf_counter()
+    obj = getattr(cert, "objective", None) or {}
+    upper = obj.get("value") if getattr(cert, "verdict", None) == "certified" else None
+    enc = enclosure(problem, sol.duals, None if upper is None else float(upper), exact=exact)
+    return enc, time.perf_counter() - t0
+
+
+def _enclosure_summary(enc: dict[str, Any] | None) -> dict[str, Any] | None:
+    from lmic.certify.enclosure import summary
+
+    return _jsonable(summary(enc))

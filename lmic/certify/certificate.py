@@ -148,6 +148,7 @@ def certificate_document(
     system: Any = None,
     path: str | os.PathLike[str] | None = None,
     embed_ir: bool | None = None,
+    enclosure: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The certificate file's content as a dict (see the module docstring).
 
@@ -162,6 +163,9 @@ def certificate_document(
     embed_ir : bool, optional
         Embed the IR (default: unless ``system`` is given, has a path, and the problem records
         its theorem; then the audit recompiles it).
+    enclosure : dict, optional
+        The optimal-value enclosure (:func:`lmic.certify.enclosure.enclosure`), recorded as
+        the ``enclosure`` section with its dual point; the audit re-verifies both ends.
 
     Examples
     --------
@@ -233,6 +237,8 @@ def certificate_document(
         "tolerances": dict(certificate.tolerances),
         "certificate": cert,
     }
+    if enclosure is not None:  # -- optimal-value enclosure (lmic.certify.enclosure) --
+        doc["enclosure"] = enclosure
     return _jsonable(doc)
 
 
@@ -244,6 +250,7 @@ def write_certificate(
     *,
     system: Any = None,
     embed_ir: bool | None = None,
+    enclosure: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Write a certificate file atomically (temporary file + rename); return its content.
 
@@ -259,7 +266,9 @@ def write_certificate(
     >>> json.load(open(f))["certificate"]["verdict"]
     'certified'
     """
-    doc = certificate_document(problem, solution, certificate, system=system, path=path, embed_ir=embed_ir)
+    doc = certificate_document(
+        problem, solution, certificate, system=system, path=path, embed_ir=embed_ir, enclosure=enclosure
+    )
     text = json.dumps(doc, indent=1, allow_nan=False) + "\n"
     target = Path(path)
     folder = target.parent if str(target.parent) else Path(".")
@@ -636,6 +645,14 @@ def audit_certificate(path: str | os.PathLike[str], exact: bool = False) -> Audi
                 checked=checked,
             )
     checked.append("certificate")
+    # -- optimal-value enclosure (lmic.certify.enclosure): both ends re-verified --
+    if doc.get("enclosure") is not None:
+        from lmic.certify.enclosure import audit_enclosure
+
+        enc = audit_enclosure(problem, doc["enclosure"], cert)
+        if not enc["ok"]:
+            return _fail(doc, enc["field"], enc["message"], cert, theorem=theorem_id, checked=checked)
+        checked.append("enclosure")
     shown = cert
     msg = f"every hash and number matches ({label}); verdict {cert.label}"
     if exact and not recorded_exact:

@@ -68,7 +68,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("system", nargs="?", default=None, help="system file (with a theorem)")
     add_param_option(p)
     p.add_argument(
-        "--backend", "-b", default=None,
+        "--backend",
+        "-b",
+        default=None,
         help="backend (see 'lmic backends'); default clarabel, or auto when a PSD block is too large for it",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -92,7 +94,14 @@ def _write_certificate(path: str, result: Any, system: Any) -> None:
     from lmic.system import load_system
 
     sysobj = load_system(system) if system is not None else None
-    write_certificate(path, result.problem, result.solution, result.certificate, system=sysobj)
+    write_certificate(
+        path,
+        result.problem,
+        result.solution,
+        result.certificate,
+        system=sysobj,
+        enclosure=getattr(result, "enclosure", None),  # lmic.certify.enclosure
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -126,4 +135,9 @@ def run(args: argparse.Namespace) -> int:
     from lmic.commands._display import print_result
 
     print_result(result, args.system, args.output)
+    # -- optimal-value enclosure (lmic.certify.enclosure) --
+    from lmic.certify.enclosure import describe
+
+    for line in describe(getattr(result, "enclosure", None)):
+        print(line)
     return result.exit_code()
