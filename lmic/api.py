@@ -355,7 +355,7 @@ def solve(
     assert sol is not None
     variables, derived = _values(problem, sol.x, cert)
     # -- optimal-value enclosure (lmic.certify.enclosure) --
-    enc, enclosure_s = _enclosure(problem, sol, cert, exact)
+    enc, enclosure_s = _enclosure(problem, sol, cert, exact, used, options)
     timings = {
         "compile_s": compile_s,
         "lower_s": sol.lower_s,
@@ -384,8 +384,13 @@ def solve(
 # -- optimal-value enclosure (lmic.certify.enclosure) -----------------------------------------
 
 
-def _enclosure(problem: Problem, sol: Solution, cert: Any, exact: bool) -> tuple[dict[str, Any] | None, float]:
-    """The enclosure of an optimisation problem's optimal value (``None`` for feasibility)."""
+def _enclosure(
+    problem: Problem, sol: Solution, cert: Any, exact: bool, backend: str, options: SolveOptions | None
+) -> tuple[dict[str, Any] | None, float]:
+    """The enclosure of an optimisation problem's optimal value (``None`` for feasibility).
+
+    A degenerate dual is retried on a perturbed problem, solved on the backend that answered.
+    """
     if problem.objective.sense == "feasibility" or cert is None:
         return None, 0.0
     from lmic.certify.enclosure import enclosure
@@ -393,7 +398,15 @@ def _enclosure(problem: Problem, sol: Solution, cert: Any, exact: bool) -> tuple
     t0 = time.perf_counter()
     obj = getattr(cert, "objective", None) or {}
     upper = obj.get("value") if getattr(cert, "verdict", None) == "certified" else None
-    enc = enclosure(problem, sol.duals, None if upper is None else float(upper), exact=exact)
+
+    def resolve(perturbed: Problem) -> dict[str, Any] | None:
+        try:
+            other = solve_problem(perturbed, backend, options)
+        except LmicError:
+            return None
+        return other.duals if other.status in ("optimal", "inaccurate") else None
+
+    enc = enclosure(problem, sol.duals, None if upper is None else float(upper), exact=exact, resolve=resolve)
     return enc, time.perf_counter() - t0
 
 

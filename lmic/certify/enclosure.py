@@ -33,9 +33,10 @@ stands. The steps, each checked rather than trusted:
    lambda_max(Z_i)`` (``eps_rel`` tried in :data:`SHIFTS`, smallest first): the dual moves
    into the interior of the cone, at a cost of about ``eps (sum_i tr F_i(x*) + sum_r
    l_r(x*))`` in the bound;
-3. *repair*: damped least-squares steps ``Z_i -> U_i (I + E_i) U_i^T`` (``Z_i = U_i U_i^T``,
-   ``||E_i||_2 <= 1/2``) and ``y_r -> y_r (1 + e_r)`` (``ge`` rows; ``eq`` rows are free)
-   drive the residual ``rho = q_{1:} - g_{1:}(u)`` down while keeping the cone; two plain
+3. *repair*: damped least-squares steps ``Z_i -> eps/2 I + U_i (I + E_i) U_i^T`` (``Z_i -
+   eps/2 I = U_i U_i^T``, ``||E_i||_2 <= 1/2``) and ``y_r -> eps/2 + (y_r - eps/2) (1 + e_r)``
+   (``ge`` rows; ``eq`` rows are free), so that every eigenvalue stays above ``eps / 2``, drive
+   the residual ``rho = q_{1:} - g_{1:}(u)`` down while keeping the cone; two plain
    least-norm steps over every entry then take it to round-off (they may leave the cone by
    their own size, which the shift must cover: the proof decides);
 4. *rigorous bound*, in floating point with a priori error bounds (``u = 2^-53``,
@@ -98,6 +99,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -114,13 +116,21 @@ __all__ = [
     "dual_bound",
     "verify_dual_bound",
     "enclosure",
+    "perturbed_problem",
+    "PERTURBATIONS",
     "summary",
     "describe",
     "audit_enclosure",
 ]
 
 #: relative shifts ``eps_rel`` tried, smallest first (step 2 of the module docstring)
-SHIFTS = (1e-14, 1e-12, 1e-10, 1e-8, 1e-6)
+SHIFTS = (1e-12, 1e-10, 1e-8, 1e-6)
+#: relative perturbations ``eps_rel`` of :func:`perturbed_problem` tried when the solver's
+#: own dual is degenerate
+PERTURBATIONS = (1e-8, 1e-6)
+#: a multiplier block below this times the largest multiplier is set to exactly zero (an
+#: inactive constraint; it then needs no interior shift)
+DROP = 1e-6
 #: largest number of variables the exact (rational) correction is attempted for
 EXACT_MAX_N = 400
 _U = 2.0**-53
@@ -248,7 +258,19 @@ def _target(problem: Problem) -> tuple[float, np.ndarray]:
 # -- steps 1-3: a dual point inside the cone with round-off residual --------------------------
 
 
-def _repair(problem: Problem, J: sp.csr_matrix, ranges: list, q: np.ndarray, mats: list, y: np.ndarray, steps: int = 8):
+def _repair(
+    problem: Problem,
+    J: sp.csr_matrix,
+    ranges: list,
+    q: np.ndarray,
+    mats: list,
+    y: np.ndarray,
+    floor: float = 0.0,
+    steps: int = 40,
+):
+    import scipy.linalg
+
+
     ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
     Jx = J[1:].tocsc()
     qn = q[1:]
@@ -263,7 +285,7 @@ def _repair(problem: Problem, J: sp.csr_matrix, ranges: list, q: np.ndarray, mat
             if not lmi.dim:
                 factors.append(None)
                 continue
-            w, V = np.linalg.eigh(Z)
+            w, V = np.linalg.eigh(Z - floor * np.eye(lmi.dim))
             sel = w > 0
             U = V[:, sel] * np.sqrt(w[sel])
             r = U.shape[1]
@@ -279,15 +301,15 @@ def _repair(problem: Problem, J: sp.csr_matrix, ranges: list, q: np.ndarray, mat
             blocks.append(np.asarray(Jx[:, a:b] @ T))
             factors.append((U, ia, ib))
         off = ranges[-1][1] if ranges else 0
-        rows = [r for r in range(len(y)) if (not ge[r]) or y[r] > 0]
+        rows = [r for r in range(len(y)) if (not ge[r]) or y[r] > floor]
         top = max([float(np.max(np.abs(y), initial=0.0))] + [float(np.max(np.abs(Z), initial=0.0)) for Z in mats])
-        srow = np.array([y[r] if ge[r] else max(abs(y[r]), 1e-3 * top, 1e-300) for r in rows])
+        srow = np.array([y[r] - floor if ge[r] else max(abs(y[r]), 1e-3 * top, 1e-300) for r in rows])
         if rows:
             blocks.append(Jx[:, [off + r for r in rows]].toarray() * srow[None, :])
         if not blocks:
             break
         G = np.hstack(blocks)
-        e = np.linalg.lstsq(G, rho, rcond=None)[0]
+        e = scipy.linalg.lstsq(G, rho, lapack_driver="gelsy", check_finite=False)[0]
         k, norms, Es = 0, [0.0], []
         for f in factors:
             if f is None:
@@ -310,7 +332,7 @@ def _repair(problem: Problem, J: sp.csr_matrix, ranges: list, q: np.ndarray, mat
                 new.append(Z)
             else:
                 U = f[0]
-                Zn = U @ (np.eye(U.shape[1]) + alpha * E) @ U.T
+                Zn = U @ (np.eye(U.shape[1]) + alpha * E) @ U.T + floor * np.eye(U.shape[0])
                 new.append(0.5 * (Zn + Zn.T))
         mats = new
         y = y.copy()
@@ -319,7 +341,60 @@ def _repair(problem: Problem, J: sp.csr_matrix, ranges: list, q: np.ndarray, mat
     return mats, y
 
 
-def _prepare(problem: Problem, J, ranges, q, mats, y, eps_rel: float):
+def _scale(problem: Problem, mats: list, y: np.ndarray) -> float:
+    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
+    top = max(
+        [float(np.max(np.abs(y[ge]), initial=0.0))]
+        + [float(np.max(np.linalg.eigvalsh(Z), initial=0.0)) if Z.size else 0.0 for Z in mats]
+    )
+    return top if top > 0 else 1.0
+
+
+def perturbed_problem(problem: Problem, eps: float) -> Problem:
+    """The closed problem whose duals are ``eps`` inside the cone (VSDP's perturbation).
+
+    Its objective is the minimisation form's ``q`` minus ``eps t`` with ``t_k = sum_i tr
+    F_i^(k) + sum_{r ge} a_rk``: a dual point ``(Z_i', y')`` of it gives ``Z_i = Z_i' + eps I``,
+    ``y_r = y_r' + eps`` (``ge`` rows), a dual point of ``problem`` whose every eigenvalue is at
+    least ``eps``. Strict constraints are closed (the dual bound holds for the closure).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t > 2", 1, sp.csc_matrix([[-2.0, 1.0]]))],
+    ...             LinearConstraints.empty(1), Objective("max", [0.0, -1.0]))
+    >>> q = perturbed_problem(p, 0.5)
+    >>> q.objective.sense, q.objective.c.tolist(), q.lmis[0].strict
+    ('min', [0.0, 0.5], False)
+    """
+    import dataclasses
+
+    from lmic.ir.problem import LinearConstraints, Objective
+
+    _, q = _target(problem)
+    t = np.zeros(1 + problem.n)
+    for lmi in problem.lmis:
+        i, j = tril_rows_cols(lmi.dim)
+        t += np.asarray(lmi.coeffs.tocsr()[np.flatnonzero(i == j)].sum(axis=0)).ravel()
+    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
+    if np.any(ge):
+        t += np.asarray(problem.linear.A.tocsr()[np.flatnonzero(ge)].sum(axis=0)).ravel()
+    c = q - eps * t
+    c[0] = q[0]
+    lin = problem.linear
+    return Problem(
+        list(problem.variables),
+        [dataclasses.replace(lmi, strict=False) for lmi in problem.lmis],
+        LinearConstraints(lin.A, list(lin.kinds), [False] * len(lin), list(lin.names)),
+        Objective("min", c),
+        meta={"perturbed_from": problem.meta.get("theorem") if problem.meta else None},
+    )
+
+
+def _prepare(
+    problem: Problem, J, ranges, q, mats, y, eps_rel: float, top: float | None = None, drop: bool = True
+) -> tuple[list, np.ndarray, np.ndarray]:
+    """Steps 1-3 of the module docstring; returns ``(Z_i, y, active)`` (``active``: the
+    entries of ``u`` the proof may correct; the others are exactly zero)."""
     ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
     proj = []
     for Z in mats:
@@ -329,36 +404,50 @@ def _prepare(problem: Problem, J, ranges, q, mats, y, eps_rel: float):
         w, V = np.linalg.eigh(Z)
         proj.append((V * np.maximum(w, 0.0)) @ V.T)
     y = np.where(ge, np.maximum(y, 0.0), y)
-    top = max(
-        [float(np.max(np.abs(y[ge]), initial=0.0))] + [float(np.linalg.norm(Z, 2)) if Z.size else 0.0 for Z in proj]
-    )
-    if not top > 0:
-        top = 1.0
+    if top is None:
+        top = _scale(problem, proj, y)
     eps = eps_rel * top
-    proj = [Z + eps * np.eye(Z.shape[0]) for Z in proj]
-    y = np.where(ge, y + eps, y)
-    mats, y = _repair(problem, J, ranges, q, [0.5 * (Z + Z.T) for Z in proj], y)
-    # what the damped steps left: a plain least-norm step over every entry (it may leave the
-    # cone by its own size, which the shift pays for; the proof decides)
+    active = np.ones(_pack(problem, proj, y).size, dtype=bool)
+    keep = []
+    for Z, (a, b) in zip(proj, ranges, strict=True):
+        on = not drop or (Z.size and float(np.max(np.linalg.eigvalsh(Z))) > DROP * top)
+        keep.append(on)
+        active[a:b] = on
+    off = ranges[-1][1] if ranges else 0
+    rows_on = ~ge | (y > DROP * top) | (not drop)
+    active[off:] = rows_on
+    proj = [Z + eps * np.eye(Z.shape[0]) if on else np.zeros_like(Z) for Z, on in zip(proj, keep, strict=True)]
+    y = np.where(ge & rows_on, y + eps, np.where(ge, 0.0, y))
+    mats, y = _repair(problem, J, ranges, q, [0.5 * (Z + Z.T) for Z in proj], y, floor=0.5 * eps)
+    # what the damped steps left: a plain least-norm step over the active entries (it may
+    # leave the cone by its own size, which the shift pays for; the proof decides)
     u = _pack(problem, mats, y)
-    Js = J[1:]
+    Js = J[1:][:, np.flatnonzero(active)]
     for _ in range(2):
-        rho = q[1:] - Js @ u
+        rho = q[1:] - J[1:] @ u
         if not np.any(rho):
             break
         M = (Js @ Js.T).toarray()
         w = np.linalg.lstsq(M, rho, rcond=None)[0]
-        u = u + Js.T @ w
+        u[active] += Js.T @ w
     mats, y = _unpack(problem, u, ranges)
-    return mats, y, eps
+    return mats, y, active
 
 
 # -- step 4: the rigorous bound -----------------------------------------------------------------
 
 
-def _prove_float(problem: Problem, J, ranges, q, mats, y) -> dict[str, Any]:
+def _prove_float(problem: Problem, J, ranges, q, mats, y, active: np.ndarray | None = None) -> dict[str, Any]:
     ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
     u = _pack(problem, mats, y)
+    if active is None:  # every nonzero entry may be corrected
+        active = np.ones(u.size, dtype=bool)
+        for (a, b) in ranges:
+            active[a:b] = bool(np.any(u[a:b]))
+        off = ranges[-1][1] if ranges else 0
+        active[off:] = ~ge | (u[off:] != 0)
+    if np.any(u[~active] != 0):
+        return {"proven": False, "reason": "an inactive multiplier is not exactly zero"}
     m = u.size
     gm = _gamma(m + 2)
     Ja = abs(J)
@@ -367,12 +456,12 @@ def _prove_float(problem: Problem, J, ranges, q, mats, y) -> dict[str, Any]:
     rho = q[1:] - g[1:]
     rho_bar = (np.abs(rho) + gm * (np.abs(q[1:]) + (Ja @ absu)[1:])) * _SAFE
     rho_norm = float(np.linalg.norm(rho_bar)) * _SAFE
-    Js = J[1:]
-    # drop variables that appear nowhere with zero objective and zero residual (exactly)
-    nz = np.asarray(Ja[1:].sum(axis=1)).ravel() > 0
-    if np.any(~nz & (q[1:] != 0)):
-        k = int(np.flatnonzero(~nz & (q[1:] != 0))[0])
-        return {"proven": False, "reason": f"x[{k}] has an objective weight but appears in no constraint"}
+    Js = J[1:][:, np.flatnonzero(active)]
+    # a variable no active multiplier can move needs an exactly zero residual
+    nz = np.asarray(abs(Js).sum(axis=1)).ravel() > 0
+    if np.any(~nz & (rho_bar != 0)):
+        k = int(np.flatnonzero(~nz & (rho_bar != 0))[0])
+        return {"proven": False, "reason": f"x[{k}] has a residual no active multiplier can absorb"}
     Js = Js[nz]
     if Js.shape[0]:
         M = (Js @ Js.T).toarray()
@@ -389,7 +478,9 @@ def _prove_float(problem: Problem, J, ranges, q, mats, y) -> dict[str, Any]:
     else:
         dn = 0.0
     margins = []
-    for lmi, Z in zip(problem.lmis, mats, strict=True):
+    for lmi, Z, (a, b) in zip(problem.lmis, mats, ranges, strict=True):
+        if not np.any(active[a:b]):
+            continue  # exactly zero, not corrected: PSD
         lb = lambda_min_lower(Z) if lmi.dim else math.inf
         margins.append(lb)
         if lmi.dim and not lb - math.sqrt(2.0) * dn * _SAFE >= 0:
@@ -398,12 +489,14 @@ def _prove_float(problem: Problem, J, ranges, q, mats, y) -> dict[str, Any]:
                 "reason": f"multiplier of LMI '{lmi.name}' not proved PSD: lambda_min >= {lb:.3g}, "
                 f"correction up to {math.sqrt(2.0) * dn:.3g}",
             }
-    if np.any(ge) and not float(np.min(y[ge])) - dn * _SAFE >= 0:
+    off = ranges[-1][1] if ranges else 0
+    gea = ge & active[off:]
+    if np.any(gea) and not float(np.min(y[gea])) - dn * _SAFE >= 0:
         return {"proven": False, "reason": "a row multiplier is not proved nonnegative after the correction"}
     j0 = J[0].toarray().ravel()
     g0 = float(g[0])
     g0_err = gm * float(np.abs(j0) @ absu) * _SAFE
-    corr = float(np.linalg.norm(j0)) * dn * _SAFE
+    corr = float(np.linalg.norm(j0[active])) * dn * _SAFE
     lower = _down(_down(q[0] - g0) - (g0_err + corr) * _SAFE)
     return {
         "proven": True,
@@ -505,7 +598,13 @@ def _prove_exact(problem: Problem, J, ranges, q, mats, y) -> dict[str, Any]:
     }
 
 
-def dual_bound(problem: Problem, duals: dict[str, Any], *, exact: bool = False) -> dict[str, Any]:
+def dual_bound(
+    problem: Problem,
+    duals: dict[str, Any],
+    *,
+    exact: bool = False,
+    resolve: Callable[[Problem], dict[str, Any] | None] | None = None,
+) -> dict[str, Any]:
     """Prove a lower bound of the minimisation form's optimal value from a dual point.
 
     Parameters
@@ -516,11 +615,15 @@ def dual_bound(problem: Problem, duals: dict[str, Any], *, exact: bool = False) 
         ``{"lmis": [Z_i], "linear": y}`` (:attr:`lmic.solution.Solution.duals`).
     exact : bool
         Prove in rational arithmetic (module docstring, *Exact mode*) after the float proof.
+    resolve : callable, optional
+        ``resolve(problem) -> duals`` (a solve on the caller's backend). When the solver's own
+        dual cannot be proved (a degenerate dual: no strictly feasible point near it), the
+        dual of :func:`perturbed_problem` is tried (``route`` ``"perturbed"``).
 
     Returns
     -------
     dict
-        ``proven`` (bool), ``lower`` (a bound ``<= inf q_0 + q . x``, the minimisation form:
+        ``proven`` (bool), ``route`` (``"solver dual"`` or ``"perturbed"``), ``lower`` (a bound ``<= inf q_0 + q . x``, the minimisation form:
         for ``max`` problems ``-lower`` bounds the maximum from above), ``method``
         (``"rigorous-float"`` or ``"exact"``), ``shift`` (the ``eps_rel`` used), ``reason``,
         ``dual`` (the dual point the bound was proved from, JSON-ready), ``time_s``; the float
@@ -544,18 +647,34 @@ def dual_bound(problem: Problem, duals: dict[str, Any], *, exact: bool = False) 
     _, q = _target(problem)
     J, ranges = _jacobian(problem)
     out: dict[str, Any] = {"proven": False, "reason": "no shift gave a provable dual point"}
-    for eps_rel in SHIFTS:
+    top = _scale(problem, mats0, y0)
+    attempts: list[tuple[str, float, list, np.ndarray]] = [("solver dual", e, mats0, y0) for e in SHIFTS]
+    for k, (route, eps_rel, mz, yz) in enumerate(attempts):
+        if route == "perturbed" and mz is None:
+            try:
+                d2 = resolve(perturbed_problem(problem, eps_rel * top)) if resolve is not None else None
+                mz, yz = _parse(problem, d2) if d2 else (None, None)
+            except CertificateError:
+                mz = None
+            if mz is None:
+                continue
+            # Z = Z' + eps I: the perturbed dual shifted back (the shift of _prepare)
         try:
-            mats, y, _eps = _prepare(problem, J, ranges, q, mats0, y0, eps_rel)
-            res = _prove_float(problem, J, ranges, q, mats, y)
+            mats, y, active = _prepare(problem, J, ranges, q, mz, yz, eps_rel, top)
+            res = _prove_float(problem, J, ranges, q, mats, y, active)
+            if not res["proven"] and ("singular" in res["reason"] or "absorb" in res["reason"]):
+                mats, y, active = _prepare(problem, J, ranges, q, mz, yz, eps_rel, top, drop=False)
+                res = _prove_float(problem, J, ranges, q, mats, y, active)
         except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
             res = {"proven": False, "reason": f"numerical failure in the repair: {exc}"}
-        res.update(method="rigorous-float", shift=eps_rel)
+        res.update(method="rigorous-float", shift=eps_rel, route=route)
         if res["proven"] or not out.get("proven"):
             res["dual"] = {"lmis": [Z.tolist() for Z in mats], "linear": y.tolist()} if res["proven"] else None
             out = res
         if res["proven"]:
             break
+        if k == len(SHIFTS) - 1 and resolve is not None:
+            attempts += [("perturbed", e, None, None) for e in PERTURBATIONS]
     if exact and out.get("proven"):
         mats, y = _parse(problem, out["dual"])
         ex = _prove_exact(problem, J, ranges, q, mats, y)
@@ -617,7 +736,12 @@ def verify_dual_bound(problem: Problem, record: dict[str, Any], *, exact: bool =
 
 
 def enclosure(
-    problem: Problem, duals: dict[str, Any] | None, upper_value: float | None, *, exact: bool = False
+    problem: Problem,
+    duals: dict[str, Any] | None,
+    upper_value: float | None,
+    *,
+    exact: bool = False,
+    resolve: Callable[[Problem], dict[str, Any] | None] | None = None,
 ) -> dict[str, Any]:
     """The certified enclosure of the optimal value, in the problem's own sense.
 
@@ -630,6 +754,8 @@ def enclosure(
         The objective at a *certified* feasible point (``None`` when there is none): the
         primal end (an upper bound of a minimum, a lower bound of a maximum).
     exact : bool
+    resolve : callable, optional
+        A solve of a perturbed problem on the caller's backend (:func:`dual_bound`).
 
     Returns
     -------
@@ -661,7 +787,7 @@ def enclosure(
         dual = {"proven": False, "reason": "the solver returned no dual point"}
     else:
         try:
-            dual = dual_bound(problem, duals, exact=exact)
+            dual = dual_bound(problem, duals, exact=exact, resolve=resolve)
         except CertificateError as exc:
             dual = {"proven": False, "reason": str(exc)}
     out["dual"] = dual
