@@ -99,6 +99,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -275,11 +276,14 @@ def _repair(
     Jx = J[1:].tocsc()
     qn = q[1:]
     scale = float(np.max(np.abs(qn), initial=0.0)) + 1e-300
+    history: list[float] = []
     for _ in range(steps):
         u = _pack(problem, mats, y)
         rho = qn - Jx @ u
-        if float(np.max(np.abs(rho), initial=0.0)) <= 1e-15 * scale:
-            break
+        now = float(np.max(np.abs(rho), initial=0.0))
+        if now <= 1e-15 * scale or (len(history) >= 6 and now > 0.9 * history[-6]):
+            break  # converged, or stalled (no interior point near: the proof will say so)
+        history.append(now)
         blocks, factors = [], []
         for lmi, Z, (a, b) in zip(problem.lmis, mats, ranges, strict=True):
             if not lmi.dim:
@@ -309,7 +313,15 @@ def _repair(
         if not blocks:
             break
         G = np.hstack(blocks)
-        e = scipy.linalg.lstsq(G, rho, lapack_driver="gelsy", check_finite=False)[0]
+        # least-norm step through the Gram matrix (n x n, cheap for the wide G of a face)
+        Gm = G @ G.T
+        Gm[np.diag_indices_from(Gm)] += 1e-14 * float(np.trace(Gm)) / max(1, Gm.shape[0]) + 1e-300
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
+                e = G.T @ scipy.linalg.solve(Gm, rho, assume_a="pos", check_finite=False)
+        except (np.linalg.LinAlgError, ValueError):
+            e = scipy.linalg.lstsq(G, rho, lapack_driver="gelsy", check_finite=False)[0]
         k, norms, Es = 0, [0.0], []
         for f in factors:
             if f is None:
@@ -361,10 +373,10 @@ def perturbed_problem(problem: Problem, eps: float) -> Problem:
     >>> import scipy.sparse as sp
     >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
     >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t > 2", 1, sp.csc_matrix([[-2.0, 1.0]]))],
-    ...             LinearConstraints.empty(1), Objective("max", [0.0, -1.0]))
+    ...             LinearConstraints.empty(1), Objective("max", [1.0, -1.0]))
     >>> q = perturbed_problem(p, 0.5)
     >>> q.objective.sense, q.objective.c.tolist(), q.lmis[0].strict
-    ('min', [0.0, 0.5], False)
+    ('min', [-1.0, 0.5], False)
     """
     import dataclasses
 
@@ -604,6 +616,7 @@ def dual_bound(
     *,
     exact: bool = False,
     resolve: Callable[[Problem], dict[str, Any] | None] | None = None,
+    budget_s: float = 60.0,
 ) -> dict[str, Any]:
     """Prove a lower bound of the minimisation form's optimal value from a dual point.
 
@@ -619,6 +632,8 @@ def dual_bound(
         ``resolve(problem) -> duals`` (a solve on the caller's backend). When the solver's own
         dual cannot be proved (a degenerate dual: no strictly feasible point near it), the
         dual of :func:`perturbed_problem` is tried (``route`` ``"perturbed"``).
+    budget_s : float
+        No new attempt (shift or perturbation) starts after this many seconds.
 
     Returns
     -------
@@ -650,6 +665,9 @@ def dual_bound(
     top = _scale(problem, mats0, y0)
     attempts: list[tuple[str, float, list, np.ndarray]] = [("solver dual", e, mats0, y0) for e in SHIFTS]
     for k, (route, eps_rel, mz, yz) in enumerate(attempts):
+        if k and time.perf_counter() - t0 > budget_s:
+            out["reason"] = f"{out.get('reason')}; time budget {budget_s:g} s spent after {k} attempts"
+            break
         if route == "perturbed" and mz is None:
             try:
                 d2 = resolve(perturbed_problem(problem, eps_rel * top)) if resolve is not None else None
