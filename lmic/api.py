@@ -69,6 +69,8 @@ class Result:
     enclosure : dict or None
         Optimisation problems: the certified enclosure of the optimal value
         (:func:`lmic.certify.enclosure.enclosure`).
+    backoff : dict or None
+        The backed-off, well-scaled point near the optimum (:func:`lmic.backoff.backoff`).
     """
 
     target: str
@@ -85,6 +87,7 @@ class Result:
     params: dict[str, Any] = field(default_factory=dict)
     attempts: list[dict[str, Any]] = field(default_factory=list)
     enclosure: dict[str, Any] | None = None
+    backoff: dict[str, Any] | None = None
 
     @property
     def verdict(self) -> str:
@@ -167,6 +170,7 @@ class Result:
             "attempts": self.attempts,
             # -- optimal-value enclosure (lmic.certify.enclosure) --
             "enclosure": _enclosure_summary(self.enclosure),
+            "backoff": _jsonable(self.backoff),
             "exit_code": self.exit_code(),
         }
 
@@ -289,6 +293,7 @@ def solve(
     backend: str | Backend | None = None,
     options: SolveOptions | None = None,
     exact: bool = False,
+    backoff: float | None = None,
 ) -> Result:
     """Compile (or load), solve, certify.
 
@@ -307,6 +312,10 @@ def solve(
     options : SolveOptions, optional
     exact : bool
         Ask the certifier for an exact rational proof too.
+    backoff : float or None
+        Optimisation problems: relative backoff of the objective for a second, well-scaled
+        solve (:mod:`lmic.backoff`); ``None`` is :data:`lmic.backoff.DEFAULT_BACKOFF` when the
+        problem derives quantities (gains) and off otherwise, ``0`` is off.
 
     Returns
     -------
@@ -356,6 +365,7 @@ def solve(
     variables, derived = _values(problem, sol.x, cert)
     # -- optimal-value enclosure (lmic.certify.enclosure) --
     enc, enclosure_s = _enclosure(problem, sol, cert, exact, used, options)
+    back = _backoff(problem, enc, backoff, used, options, sol.objective)
     timings = {
         "compile_s": compile_s,
         "lower_s": sol.lower_s,
@@ -363,6 +373,8 @@ def solve(
         "certify_s": certify_s,
         "enclosure_s": enclosure_s,
     }
+    if back is not None:
+        timings["backoff_s"] = back["time_s"]
     return Result(
         target=str(name),
         theorem=theorem,
@@ -378,6 +390,7 @@ def solve(
         params=dict(params or {}),
         attempts=attempts if len(chain) > 1 else [],
         enclosure=enc,
+        backoff=back,
     )
 
 
@@ -391,7 +404,7 @@ def _enclosure(
 
     A degenerate dual is retried on a perturbed problem, solved on the backend that answered.
     """
-    if problem.objective.sense == "feasibility" or cert is None:
+    if problem.objective.sense == "feasibility" or cert is None or sol.status in ("infeasible", "unbounded"):
         return None, 0.0
     from lmic.certify.enclosure import enclosure
 
@@ -408,6 +421,33 @@ def _enclosure(
 
     enc = enclosure(problem, sol.duals, None if upper is None else float(upper), exact=exact, resolve=resolve)
     return enc, time.perf_counter() - t0
+
+
+def _backoff(
+    problem: Problem,
+    enc: dict[str, Any] | None,
+    rel: float | None,
+    backend: str,
+    options: SolveOptions | None,
+    claimed: float | None = None,
+) -> dict[str, Any] | None:
+    """The backed-off point (``None`` when off or without a reference objective).
+
+    The reference is the certified primal end, else the solver's claimed objective (the
+    backed-off point is certified on its own either way).
+    """
+    from lmic.backoff import DEFAULT_BACKOFF, backoff
+
+    if rel is None:
+        rel = DEFAULT_BACKOFF if problem.derived else 0.0
+    if not rel or enc is None:
+        return None
+    value = enc["upper"] if problem.objective.sense == "min" else enc["lower"]
+    if value is None:
+        value = claimed
+    if value is None or not np.isfinite(value):
+        return None
+    return backoff(problem, float(value), backend, options, rel=float(rel))
 
 
 def _enclosure_summary(enc: dict[str, Any] | None) -> dict[str, Any] | None:

@@ -271,7 +271,6 @@ def _repair(
 ):
     import scipy.linalg
 
-
     ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
     Jx = J[1:].tocsc()
     qn = q[1:]
@@ -454,7 +453,7 @@ def _prove_float(problem: Problem, J, ranges, q, mats, y, active: np.ndarray | N
     u = _pack(problem, mats, y)
     if active is None:  # every nonzero entry may be corrected
         active = np.ones(u.size, dtype=bool)
-        for (a, b) in ranges:
+        for a, b in ranges:
             active[a:b] = bool(np.any(u[a:b]))
         off = ranges[-1][1] if ranges else 0
         active[off:] = ~ge | (u[off:] != 0)
