@@ -366,6 +366,10 @@ def solve(
     # -- optimal-value enclosure (lmic.certify.enclosure) --
     enc, enclosure_s = _enclosure(problem, sol, cert, exact, used, options)
     back = _backoff(problem, enc, backoff, used, options, sol.objective)
+    if enc is not None and back is not None and back.get("verdict") == "certified":
+        from lmic.certify.enclosure import with_primal
+
+        enc = with_primal(enc, float(back["objective"]), "certified backed-off point")
     timings = {
         "compile_s": compile_s,
         "lower_s": sol.lower_s,

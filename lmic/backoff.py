@@ -7,7 +7,8 @@ objective within a relative ``backoff`` of the certified end and minimises ``t =
 over the same constraints:
 
     ``min t``  s.t.  every LMI and row of the problem,  ``-t <= x_k <= t``,
-    ``q_0 + q . x <= v + backoff * max(1, |v|)``
+    ``q_0 + q . x <= v + backoff * |v|``  (``backoff`` itself when ``v = 0``),
+    ``F_i(x) >= MARGIN t I`` on strict LMIs (and strict rows ``>= MARGIN t``)
 
 (``q`` the minimisation form of the objective, ``v`` the certified primal end). The point it
 returns is certified against the *original* problem by the certifier, like any other point:
@@ -40,12 +41,20 @@ import scipy.sparse as sp
 
 from lmic.errors import LmicError
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+from lmic.ir.svec import tril_rows_cols
 
 __all__ = ["DEFAULT_BACKOFF", "backoff_problem", "backoff", "describe"]
 
 #: default relative backoff for problems with derived gains
 DEFAULT_BACKOFF = 1e-3
+#: strict constraints of the backed-off problem hold with margin ``MARGIN * ||x||_inf``, far
+#: above the certifier's relative threshold (``1e-12`` of the scale)
+MARGIN = 1e-10
 _T = "__backoff_t"
+
+
+def _room(value: float, rel: float) -> float:
+    return rel * (abs(value) if value != 0 else 1.0)
 
 
 def backoff_problem(problem: Problem, value: float, rel: float) -> Problem:
@@ -62,20 +71,18 @@ def backoff_problem(problem: Problem, value: float, rel: float) -> Problem:
     n = problem.n
     s = -1.0 if problem.objective.sense == "max" else 1.0
     q = s * problem.objective.c
-    bound = s * value + rel * max(1.0, abs(value))
-    lmis = [
-        LMI(
-            lmi.name,
-            lmi.dim,
-            sp.hstack([lmi.coeffs, sp.csc_matrix((lmi.coeffs.shape[0], 1))]).tocsc(),
-            lmi.strict,
-            lmi.relation,
-            lmi.block_sizes,
-        )
-        for lmi in problem.lmis
-    ]
+    bound = s * value + _room(value, rel)
+    lmis = []
+    for lmi in problem.lmis:
+        col = np.zeros((lmi.coeffs.shape[0], 1))
+        if lmi.strict:  # F(x) >= margin * t I: a margin that scales with the point
+            i, j = tril_rows_cols(lmi.dim)
+            col[i == j, 0] = -MARGIN
+        coeffs = sp.hstack([lmi.coeffs, sp.csc_matrix(col)]).tocsc()
+        lmis.append(LMI(lmi.name, lmi.dim, coeffs, lmi.strict, lmi.relation, lmi.block_sizes))
     lin = problem.linear
-    old = sp.hstack([lin.A, sp.csr_matrix((len(lin), 1))]).tocsr()
+    tcol = np.where(np.asarray(lin.strict, dtype=bool), -MARGIN, 0.0)[:, None] if len(lin) else np.zeros((0, 1))
+    old = sp.hstack([lin.A, sp.csr_matrix(tcol)]).tocsr()
     eye = sp.identity(n, format="csr")
     ones = sp.csr_matrix(np.ones((n, 1)))
     zeros = sp.csr_matrix((n, 1))
@@ -128,7 +135,7 @@ def backoff(
 
     t0 = time.perf_counter()
     s = -1.0 if problem.objective.sense == "max" else 1.0
-    out: dict[str, Any] = {"rel": rel, "bound": s * (s * value + rel * max(1.0, abs(value))), "x": None}
+    out: dict[str, Any] = {"rel": rel, "bound": s * (s * value + _room(value, rel)), "x": None}
     bp = backoff_problem(problem, value, rel)
     be = backend if not isinstance(backend, str) else get_backend(backend)
     try:

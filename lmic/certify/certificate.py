@@ -655,7 +655,7 @@ def audit_certificate(path: str | os.PathLike[str], exact: bool = False) -> Audi
     if doc.get("enclosure") is not None:
         from lmic.certify.enclosure import audit_enclosure
 
-        enc = audit_enclosure(problem, doc["enclosure"], cert)
+        enc = audit_enclosure(problem, doc["enclosure"], cert, doc.get("backoff"))
         if not enc["ok"]:
             return _fail(doc, enc["field"], enc["message"], cert, theorem=theorem_id, checked=checked)
         checked.append("enclosure")

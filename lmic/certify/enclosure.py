@@ -122,6 +122,7 @@ __all__ = [
     "summary",
     "describe",
     "audit_enclosure",
+    "with_primal",
 ]
 
 #: relative shifts ``eps_rel`` tried, smallest first (step 2 of the module docstring)
@@ -884,13 +885,45 @@ def describe(record: dict[str, Any] | None) -> list[str]:
     return lines
 
 
-def audit_enclosure(problem: Problem, record: dict[str, Any], certificate: Any) -> dict[str, Any]:
+def with_primal(record: dict[str, Any], value: float, label: str) -> dict[str, Any]:
+    """The enclosure with a primal end from another certified point (e.g. the backed-off one).
+
+    Used only when the record has no primal end: ``value`` must be the objective at a point
+    the certifier certified against the same problem.
+
+    >>> e = {"sense": "min", "kind": "minimum", "lower": 1.0, "upper": None, "dual": {"proven": True}}
+    >>> with_primal(e, 1.5, "certified backed-off point")["gap"]
+    0.5
+    """
+    out = dict(record)
+    key = "upper" if out.get("sense") == "min" else "lower"
+    if out.get(key) is not None:
+        return out
+    out[key] = float(value)
+    out["primal"] = label
+    lo, hi = out.get("lower"), out.get("upper")
+    if lo is not None and hi is not None and hi >= lo:
+        out["gap"] = hi - lo
+        out["rel_gap"] = (hi - lo) / max(1.0, 0.5 * (abs(hi) + abs(lo)))
+        out["reason"] = f"{out['kind']} in [{lo:.10g}, {hi:.10g}] (relative gap {out['rel_gap']:.2g}; {label})"
+    elif lo is not None and hi is not None:
+        out["reason"] = f"inconsistent ends: lower {lo:.10g} > upper {hi:.10g}"
+        out["consistent"] = False
+    else:
+        out["reason"] = f"{out['kind']}: only the {key} end is certified ({label})"
+    return out
+
+
+def audit_enclosure(
+    problem: Problem, record: dict[str, Any], certificate: Any, backoff: dict[str, Any] | None = None
+) -> dict[str, Any]:
     """Re-verify both ends of a recorded enclosure (``lmic audit``).
 
     The primal end must be the objective the certifier recomputes at the recorded point, and
     only when that point is certified; the dual end must be re-proved from the recorded dual
-    point (:func:`verify_dual_bound`). Returns ``ok``, ``field`` (the first failing one) and
-    ``message``.
+    point (:func:`verify_dual_bound`). A primal end taken from the backed-off point
+    (:func:`with_primal`) must be the objective at ``backoff["x"]``, re-certified here.
+    Returns ``ok``, ``field`` (the first failing one) and ``message``.
 
     >>> import numpy as np, scipy.sparse as sp
     >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
@@ -906,7 +939,21 @@ def audit_enclosure(problem: Problem, record: dict[str, Any], certificate: Any) 
         return {"ok": False, "field": "enclosure.sense", "message": "enclosure.sense differs from the IR's objective"}
     primal_key, dual_key = ("upper", "lower") if sense == "min" else ("lower", "upper")
     pv = record.get(primal_key)
-    if pv is not None:
+    if pv is not None and record.get("primal") == "certified backed-off point":
+        from lmic.certify.check import certify
+        from lmic.solution import Solution
+
+        xb = None if not backoff or backoff.get("x") is None else np.asarray(backoff["x"], dtype=float)
+        if xb is None or xb.shape != (problem.n,):
+            return {"ok": False, "field": f"enclosure.{primal_key}", "message": "no backed-off point recorded"}
+        cb = certify(problem, Solution(status="optimal", x=xb))
+        if cb.verdict != "certified" or float(pv) != problem.objective.value(xb):
+            return {
+                "ok": False,
+                "field": f"enclosure.{primal_key}",
+                "message": f"enclosure.{primal_key} is not the objective at a certified backed-off point",
+            }
+    elif pv is not None:
         obj = getattr(certificate, "objective", None) or {}
         if getattr(certificate, "verdict", None) != "certified" or obj.get("value") is None:
             return {
