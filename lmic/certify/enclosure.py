@@ -520,6 +520,17 @@ def _prove_float(problem: Problem, J, ranges, q, mats, y, active: np.ndarray | N
     }
 
 
+def _default_active(problem: Problem, ranges: list, u: np.ndarray) -> np.ndarray:
+    """Entries a proof may correct: every nonzero block, ``eq`` rows, nonzero ``ge`` rows."""
+    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
+    active = np.ones(u.size, dtype=bool)
+    for a, b in ranges:
+        active[a:b] = bool(np.any(u[a:b]))
+    off = ranges[-1][1] if ranges else 0
+    active[off:] = ~ge | (u[off:] != 0)
+    return active
+
+
 def _prove_exact(problem: Problem, J, ranges, q, mats, y) -> dict[str, Any]:
     from fractions import Fraction
 
@@ -537,18 +548,25 @@ def _prove_exact(problem: Problem, J, ranges, q, mats, y) -> dict[str, Any]:
         return flint.fmpq(f.numerator, f.denominator)
 
     Jc = J.tocsr()
-    nzrow = [k for k in range(1, 1 + n) if Jc.indptr[k + 1] > Jc.indptr[k]]
-    for k in range(1, 1 + n):
-        if k not in set(nzrow) and q[k] != 0:
-            return {"proven": False, "reason": f"x[{k - 1}] has an objective weight but appears in no constraint"}
+    active = _default_active(problem, ranges, u)
     uq = [fq(v) for v in u]
 
     def row(k: int) -> dict[int, Any]:
         a, b = Jc.indptr[k], Jc.indptr[k + 1]
         return {int(j): fq(v) for j, v in zip(Jc.indices[a:b], Jc.data[a:b], strict=True)}
 
-    rows = [row(k) for k in nzrow]
-    rho = [fq(q[k]) - sum((v * uq[j] for j, v in r.items()), flint.fmpq(0)) for k, r in zip(nzrow, rows, strict=True)]
+    # exact residual over every entry; the correction moves only the active ones
+    rows, rho = [], []
+    for k in range(1, 1 + n):
+        full = row(k)
+        res = fq(q[k]) - sum((v * uq[j] for j, v in full.items()), flint.fmpq(0))
+        act = {j: v for j, v in full.items() if active[j]}
+        if not act:
+            if res != 0:
+                return {"proven": False, "reason": f"x[{k - 1}] has a residual no active multiplier can absorb"}
+            continue
+        rows.append(act)
+        rho.append(res)
     p = len(rows)
     if p:
         Mq = flint.fmpq_mat(p, p)
