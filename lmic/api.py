@@ -366,10 +366,22 @@ def solve(
     # -- optimal-value enclosure (lmic.certify.enclosure) --
     enc, enclosure_s = _enclosure(problem, sol, cert, exact, used, options)
     back = _backoff(problem, enc, backoff, used, options, sol.objective)
-    if enc is not None and back is not None and back.get("verdict") == "certified":
-        from lmic.certify.enclosure import with_primal
+    if enc is not None and (enc["upper"] if problem.objective.sense == "min" else enc["lower"]) is None:
+        # no rigorous primal end at the solver's point (a non-strict constraint met only to
+        # the certifier's tolerance, or a rejected point): a point inside, from a backed-off
+        # solve with margins on every constraint
+        if (back is None or back.get("x") is None) and sol.objective is not None and sol.x is not None:
+            from lmic.backoff import RESTORE, RESTORE_MARGIN, backoff as _restore
 
-        enc = with_primal(enc, float(back["objective"]), "certified backed-off point")
+            back = _restore(
+                problem, float(sol.objective), used, options, rel=RESTORE, all_margins=True, margin=RESTORE_MARGIN
+            )
+        if back is not None and back.get("x") is not None:
+            from lmic.certify.enclosure import primal_end, with_primal
+
+            pe = primal_end(problem, np.asarray(back["x"], dtype=float))
+            if pe["proven"]:
+                enc = with_primal(enc, pe["value"], "certified backed-off point")
     timings = {
         "compile_s": compile_s,
         "lower_s": sol.lower_s,
@@ -413,8 +425,7 @@ def _enclosure(
     from lmic.certify.enclosure import enclosure
 
     t0 = time.perf_counter()
-    obj = getattr(cert, "objective", None) or {}
-    upper = obj.get("value") if getattr(cert, "verdict", None) == "certified" else None
+    x = sol.x if getattr(cert, "verdict", None) == "certified" else None
 
     def resolve(perturbed: Problem) -> dict[str, Any] | None:
         try:
@@ -423,7 +434,7 @@ def _enclosure(
             return None
         return other.duals if other.status in ("optimal", "inaccurate") else None
 
-    enc = enclosure(problem, sol.duals, None if upper is None else float(upper), exact=exact, resolve=resolve)
+    enc = enclosure(problem, sol.duals, x, exact=exact, resolve=resolve)
     return enc, time.perf_counter() - t0
 
 

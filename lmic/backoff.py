@@ -43,10 +43,15 @@ from lmic.errors import LmicError
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 from lmic.ir.svec import tril_rows_cols
 
-__all__ = ["DEFAULT_BACKOFF", "backoff_problem", "backoff", "describe"]
+__all__ = ["DEFAULT_BACKOFF", "RESTORE", "RESTORE_MARGIN", "MARGIN", "backoff_problem", "backoff", "describe"]
 
 #: default relative backoff for problems with derived gains
 DEFAULT_BACKOFF = 1e-3
+#: relative backoff of the restoration solve that supplies a rigorous primal end when the
+#: solver's point meets a non-strict constraint only to the certifier's tolerance
+RESTORE = 5e-7
+#: the margin (relative to ||x||_inf) of the restoration solve: above the solvers' accuracy
+RESTORE_MARGIN = 1e-8
 #: strict constraints of the backed-off problem hold with margin ``MARGIN * ||x||_inf``, far
 #: above the certifier's relative threshold (``1e-12`` of the scale)
 MARGIN = 1e-10
@@ -57,7 +62,9 @@ def _room(value: float, rel: float) -> float:
     return rel * (abs(value) if value != 0 else 1.0)
 
 
-def backoff_problem(problem: Problem, value: float, rel: float) -> Problem:
+def backoff_problem(
+    problem: Problem, value: float, rel: float, all_margins: bool = False, margin: float | None = None
+) -> Problem:
     """The second problem of the module docstring (``x`` first, then ``t``).
 
     >>> import scipy.sparse as sp
@@ -69,19 +76,21 @@ def backoff_problem(problem: Problem, value: float, rel: float) -> Problem:
     if problem.objective.sense == "feasibility":
         raise LmicError("a feasibility problem has no objective to back off")
     n = problem.n
+    m = MARGIN if margin is None else margin
     s = -1.0 if problem.objective.sense == "max" else 1.0
     q = s * problem.objective.c
     bound = s * value + _room(value, rel)
     lmis = []
     for lmi in problem.lmis:
         col = np.zeros((lmi.coeffs.shape[0], 1))
-        if lmi.strict:  # F(x) >= margin * t I: a margin that scales with the point
+        if lmi.strict or all_margins:  # F(x) >= margin * t I: a margin that scales with the point
             i, j = tril_rows_cols(lmi.dim)
-            col[i == j, 0] = -MARGIN
+            col[i == j, 0] = -m
         coeffs = sp.hstack([lmi.coeffs, sp.csc_matrix(col)]).tocsc()
         lmis.append(LMI(lmi.name, lmi.dim, coeffs, lmi.strict, lmi.relation, lmi.block_sizes))
     lin = problem.linear
-    tcol = np.where(np.asarray(lin.strict, dtype=bool), -MARGIN, 0.0)[:, None] if len(lin) else np.zeros((0, 1))
+    marked = np.asarray(lin.strict, dtype=bool) | (all_margins & np.array([k == "ge" for k in lin.kinds], dtype=bool))
+    tcol = np.where(marked, -m, 0.0)[:, None] if len(lin) else np.zeros((0, 1))
     old = sp.hstack([lin.A, sp.csr_matrix(tcol)]).tocsr()
     eye = sp.identity(n, format="csr")
     ones = sp.csr_matrix(np.ones((n, 1)))
@@ -106,7 +115,14 @@ def backoff_problem(problem: Problem, value: float, rel: float) -> Problem:
 
 
 def backoff(
-    problem: Problem, value: float, backend: Any, options: Any = None, *, rel: float = DEFAULT_BACKOFF
+    problem: Problem,
+    value: float,
+    backend: Any,
+    options: Any = None,
+    *,
+    rel: float = DEFAULT_BACKOFF,
+    all_margins: bool = False,
+    margin: float | None = None,
 ) -> dict[str, Any]:
     """Solve the backed-off problem and certify its point against ``problem``.
 
@@ -120,6 +136,11 @@ def backoff(
     options : SolveOptions, optional
     rel : float
         Relative backoff of the objective.
+    all_margins : bool
+        Impose the margin ``MARGIN t`` on the non-strict constraints too (a point strictly
+        inside, which :func:`lmic.certify.enclosure.primal_end` can prove feasible).
+    margin : float, optional
+        The relative margin (default :data:`MARGIN`).
 
     Returns
     -------
@@ -136,7 +157,7 @@ def backoff(
     t0 = time.perf_counter()
     s = -1.0 if problem.objective.sense == "max" else 1.0
     out: dict[str, Any] = {"rel": rel, "bound": s * (s * value + _room(value, rel)), "x": None}
-    bp = backoff_problem(problem, value, rel)
+    bp = backoff_problem(problem, value, rel, all_margins, margin)
     be = backend if not isinstance(backend, str) else get_backend(backend)
     try:
         sol = be.solve(bp, options)

@@ -123,10 +123,11 @@ __all__ = [
     "describe",
     "audit_enclosure",
     "with_primal",
+    "primal_end",
 ]
 
 #: relative shifts ``eps_rel`` tried, smallest first (step 2 of the module docstring)
-SHIFTS = (1e-12, 1e-10, 1e-8, 1e-6)
+SHIFTS = (1e-12, 1e-10, 1e-9, 1e-8, 3e-8, 1e-7, 3e-7, 1e-6)
 #: relative perturbations ``eps_rel`` of :func:`perturbed_problem` tried when the solver's
 #: own dual is degenerate
 PERTURBATIONS = (1e-8, 1e-6)
@@ -170,8 +171,8 @@ def lambda_min_lower(A: np.ndarray) -> float:
     norm = float(np.max(np.abs(A)))
     g = _gamma(2 * (d + 1))
     best = -math.inf
-    for f in (1e-3, 1e-2, 0.1, 0.5):
-        s = est - f * abs(est) - 4 * d * _U * norm
+    for f in (1e-9, 1e-6, 1e-3, 0.1, 0.5):
+        s = est - max(f * abs(est), 4.0 * (d + 1) * (d + 1) * _U * norm)
         B = A - s * np.eye(d)
         try:
             R = np.linalg.cholesky(B)
@@ -771,10 +772,88 @@ def verify_dual_bound(problem: Problem, record: dict[str, Any], *, exact: bool =
     return {"ok": True, "lower": res["lower"], "reason": "lower bound re-proved from the recorded dual point"}
 
 
+def primal_end(problem: Problem, x: np.ndarray) -> dict[str, Any]:
+    """Prove ``x`` feasible with rigorous rounding, and bound its objective outwards.
+
+    Every ``F_i(x)`` is evaluated in floating point with the entrywise error bound
+    ``gamma_{k+1} (|F_i^(0)| + sum_k |x_k| |F_i^(k)|)`` (``k`` terms); ``lambda_min(F_i(x)) >=
+    lambda_min_lower(fl(F_i(x))) - ||E_i||_F`` must be ``>= 0`` (``> 0`` when strict). Rows
+    ``ge`` likewise; ``eq`` rows are evaluated exactly (rationals) and must vanish. The
+    certifier's tolerances play no part: a point it certifies with a non-strict constraint
+    violated by round-off gives no primal end here.
+
+    Returns
+    -------
+    dict
+        ``proven`` (bool), ``value`` (the objective, rounded up for ``min`` and down for
+        ``max``: a rigorous end), ``reason``.
+
+    Examples
+    --------
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("t", "scalar", (1, 1))],
+    ...             [LMI("t - 2 >= 0", 1, sp.csc_matrix([[-2.0, 1.0]]), strict=False)],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+    >>> primal_end(p, np.array([2.5]))["value"] >= 2.5, primal_end(p, np.array([1.9]))["proven"]
+    (True, False)
+    """
+    from fractions import Fraction
+
+    x = np.asarray(x, dtype=float).ravel()
+    if x.shape != (problem.n,) or not np.all(np.isfinite(x)):
+        return {"proven": False, "value": None, "reason": "no finite point of the right length"}
+    xx = np.concatenate([[1.0], x])
+    ax = np.abs(xx)
+    for lmi in problem.lmis:
+        C = lmi.coeffs.tocsr()
+        f = np.asarray(C @ xx).ravel()
+        k = int(np.max(np.diff(C.indptr), initial=0))
+        err = _gamma(k + 2) * np.asarray(abs(C) @ ax).ravel() * _SAFE
+        F = tril_unvec(f, lmi.dim)
+        E = tril_unvec(err, lmi.dim)
+        lb = lambda_min_lower(0.5 * (F + F.T)) - float(np.linalg.norm(E)) * _SAFE
+        if not (lb > 0 if lmi.strict else lb >= 0):
+            return {
+                "proven": False,
+                "value": None,
+                "reason": f"LMI '{lmi.name}' is not proved {'> 0' if lmi.strict else '>= 0'} at the point "
+                f"with rigorous rounding (lambda_min >= {lb:.3g})",
+            }
+    lin = problem.linear
+    if len(lin):
+        A = lin.A.tocsr()
+        r = np.asarray(A @ xx).ravel()
+        k = int(np.max(np.diff(A.indptr), initial=0))
+        err = _gamma(k + 2) * np.asarray(abs(A) @ ax).ravel() * _SAFE
+        for i, (kind, strict) in enumerate(zip(lin.kinds, lin.strict, strict=True)):
+            if kind == "eq":
+                a, b = A.indptr[i], A.indptr[i + 1]
+                exact = sum(
+                    (Fraction(float(v)) * Fraction(float(xx[j])) for j, v in zip(A.indices[a:b], A.data[a:b], strict=True)),
+                    Fraction(0),
+                )
+                ok = exact == 0
+            else:
+                ok = (r[i] - err[i] > 0) if strict else (r[i] - err[i] >= 0)
+            if not ok:
+                return {
+                    "proven": False,
+                    "value": None,
+                    "reason": f"row '{lin.names[i]}' is not proved at the point with rigorous rounding",
+                }
+    c = problem.objective.c
+    v = float(c @ xx)
+    e = _gamma(problem.n + 2) * float(np.abs(c) @ ax) * _SAFE
+    up = problem.objective.sense != "max"
+    value = float(np.nextafter(v + e, np.inf)) if up else float(np.nextafter(v - e, -np.inf))
+    return {"proven": True, "value": value, "reason": "point proved feasible with rigorous rounding"}
+
+
 def enclosure(
     problem: Problem,
     duals: dict[str, Any] | None,
-    upper_value: float | None,
+    x: np.ndarray | None,
     *,
     exact: bool = False,
     resolve: Callable[[Problem], dict[str, Any] | None] | None = None,
@@ -786,9 +865,10 @@ def enclosure(
     problem : Problem
     duals : dict or None
         The solver's dual point (``Solution.duals``).
-    upper_value : float or None
-        The objective at a *certified* feasible point (``None`` when there is none): the
-        primal end (an upper bound of a minimum, a lower bound of a maximum).
+    x : numpy.ndarray or None
+        A (certified) point: when :func:`primal_end` proves it feasible, its objective
+        (rounded outwards) is the primal end (an upper bound of a minimum, a lower bound of a
+        maximum).
     exact : bool
     resolve : callable, optional
         A solve of a perturbed problem on the caller's backend (:func:`dual_bound`).
@@ -810,9 +890,9 @@ def enclosure(
     >>> p = Problem([Variable("t", "scalar", (1, 1))],
     ...             [LMI("t - 2 >= 0", 1, sp.csc_matrix([[-2.0, 1.0]]), strict=False)],
     ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
-    >>> e = enclosure(p, {"lmis": [np.eye(1)], "linear": []}, 2.0)
-    >>> e["kind"], e["upper"], e["rel_gap"] < 1e-8
-    ('minimum', 2.0, True)
+    >>> e = enclosure(p, {"lmis": [np.eye(1)], "linear": []}, np.array([2.0 + 1e-9]))
+    >>> e["kind"], 2.0 < e["upper"] < 2.0 + 2e-9, e["rel_gap"] < 1e-8
+    ('minimum', True, True)
     """
     sense = problem.objective.sense
     strict = any(lmi.strict for lmi in problem.lmis) or any(problem.linear.strict)
@@ -827,7 +907,13 @@ def enclosure(
         except CertificateError as exc:
             dual = {"proven": False, "reason": str(exc)}
     out["dual"] = dual
-    out["primal"] = "certified point" if upper_value is not None else "no certified point"
+    upper_value = None
+    if x is None:
+        out["primal"] = "no certified point"
+    else:
+        pe = primal_end(problem, x)
+        upper_value = pe["value"] if pe["proven"] else None
+        out["primal"] = "certified point" if pe["proven"] else "no rigorous primal end: " + pe["reason"]
     bound = None
     if dual.get("proven"):
         bound = dual["lower"] if sense == "min" else -dual["lower"]
@@ -957,33 +1043,18 @@ def audit_enclosure(
         return {"ok": False, "field": "enclosure.sense", "message": "enclosure.sense differs from the IR's objective"}
     primal_key, dual_key = ("upper", "lower") if sense == "min" else ("lower", "upper")
     pv = record.get(primal_key)
-    if pv is not None and record.get("primal") == "certified backed-off point":
-        from lmic.certify.check import certify
-        from lmic.solution import Solution
-
-        xb = None if not backoff or backoff.get("x") is None else np.asarray(backoff["x"], dtype=float)
-        if xb is None or xb.shape != (problem.n,):
-            return {"ok": False, "field": f"enclosure.{primal_key}", "message": "no backed-off point recorded"}
-        cb = certify(problem, Solution(status="optimal", x=xb))
-        if cb.verdict != "certified" or float(pv) != problem.objective.value(xb):
+    if pv is not None:
+        if record.get("primal") == "certified backed-off point":
+            xs = None if not backoff else backoff.get("x")
+        else:
+            xs = getattr(certificate, "x", None)
+        pe = primal_end(problem, np.asarray(xs, dtype=float)) if xs is not None else {"proven": False}
+        if not pe["proven"] or float(pv) != pe["value"]:
             return {
                 "ok": False,
                 "field": f"enclosure.{primal_key}",
-                "message": f"enclosure.{primal_key} is not the objective at a certified backed-off point",
-            }
-    elif pv is not None:
-        obj = getattr(certificate, "objective", None) or {}
-        if getattr(certificate, "verdict", None) != "certified" or obj.get("value") is None:
-            return {
-                "ok": False,
-                "field": f"enclosure.{primal_key}",
-                "message": f"enclosure.{primal_key} claims a certified point, but the recorded point is not certified",
-            }
-        if float(pv) != float(obj["value"]):
-            return {
-                "ok": False,
-                "field": f"enclosure.{primal_key}",
-                "message": f"enclosure.{primal_key} {pv!r} differs from the objective at the certified point {obj['value']!r}",
+                "message": f"enclosure.{primal_key} {pv!r} is not the rigorous objective at the recorded point "
+                f"({pe.get('value')!r}; {pe.get('reason', 'no point recorded')})",
             }
     dv = record.get(dual_key)
     dual = record.get("dual") or {}
