@@ -43,7 +43,17 @@ from lmic.errors import LmicError
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 from lmic.ir.svec import tril_rows_cols
 
-__all__ = ["DEFAULT_BACKOFF", "RESTORE", "RESTORE_MARGIN", "MARGIN", "backoff_problem", "backoff", "describe"]
+__all__ = [
+    "DEFAULT_BACKOFF",
+    "RESTORE",
+    "RESTORE_MARGIN",
+    "MARGIN",
+    "backoff_problem",
+    "backoff",
+    "describe",
+    "restore_problem",
+    "restore",
+]
 
 #: default relative backoff for problems with derived gains
 DEFAULT_BACKOFF = 1e-3
@@ -211,3 +221,68 @@ def describe(record: dict[str, Any] | None, original_norm: float | None = None) 
         if arr is not None and arr.size:
             lines.append(f"  {name}: norm {float(np.linalg.norm(np.atleast_2d(arr), 2)):.4g}")
     return lines
+
+
+def restore_problem(problem: Problem, x: np.ndarray, rel: float = RESTORE_MARGIN) -> Problem:
+    """The problem with every constraint tightened by a margin, for a point strictly inside.
+
+    Every LMI becomes ``F_i(x) >= delta_i I`` and every ``ge`` row ``>= delta_r`` (closed), with
+    ``delta = rel * max(1, scale at x)`` (the largest entry of ``|F_i|`` at ``x``; the size of
+    the row's terms): the solver's optimum of it, within its accuracy, is then strictly
+    feasible for ``problem`` and :func:`lmic.certify.enclosure.primal_end` can prove it.
+
+    >>> import scipy.sparse as sp
+    >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t >= 0", 1, sp.csc_matrix([[0.0, 1.0]]), strict=False)],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+    >>> restore_problem(p, np.array([0.0]), 0.5).lmis[0].coeffs.toarray().tolist()
+    [[-0.5, 1.0]]
+    """
+    import dataclasses
+
+    x = np.asarray(x, dtype=float)
+    xx = np.concatenate([[1.0], x])
+    lmis = []
+    for lmi in problem.lmis:
+        C = lmi.coeffs.tocsc().astype(float).tolil()
+        i, j = tril_rows_cols(lmi.dim)
+        scale = float(np.max(np.abs(abs(lmi.coeffs) @ np.abs(xx)), initial=0.0))
+        delta = rel * max(1.0, scale)
+        for k in np.flatnonzero(i == j):
+            C[k, 0] = C[k, 0] - delta
+        lmis.append(dataclasses.replace(lmi, coeffs=C.tocsc(), strict=False))
+    lin = problem.linear
+    A = lin.A.tocsr().astype(float).tolil()
+    if len(lin):
+        sizes = np.asarray(abs(lin.A) @ np.abs(xx)).ravel()
+        for r, kind in enumerate(lin.kinds):
+            if kind == "ge":
+                A[r, 0] = A[r, 0] - rel * max(1.0, float(sizes[r]))
+    return Problem(
+        list(problem.variables),
+        lmis,
+        LinearConstraints(A.tocsr(), list(lin.kinds), [False] * len(lin), list(lin.names)),
+        Objective(problem.objective.sense, problem.objective.c.copy()),
+        meta={"restored_from": (problem.meta or {}).get("theorem")},
+    )
+
+
+def restore(
+    problem: Problem, x: np.ndarray, backend: Any, options: Any = None, rel: float = RESTORE_MARGIN
+) -> dict[str, Any]:
+    """Solve :func:`restore_problem` and return ``x`` (``None`` without a point), ``status``,
+    ``objective`` and ``time_s``; the caller proves the point (nothing here is trusted)."""
+    from lmic.backends.registry import get_backend
+
+    t0 = time.perf_counter()
+    be = backend if not isinstance(backend, str) else get_backend(backend)
+    try:
+        sol = be.solve(restore_problem(problem, x, rel), options)
+    except LmicError as exc:
+        return {"x": None, "status": "error", "reason": str(exc), "time_s": time.perf_counter() - t0}
+    xr = None if sol.x is None else np.asarray(sol.x, dtype=float)
+    return {
+        "x": None if xr is None else xr.tolist(),
+        "status": sol.status,
+        "objective": None if xr is None else problem.objective.value(xr),
+        "time_s": time.perf_counter() - t0,
+    }

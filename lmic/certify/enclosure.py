@@ -1046,6 +1046,8 @@ def audit_enclosure(
     if pv is not None:
         if record.get("primal") == "certified backed-off point":
             xs = None if not backoff else backoff.get("x")
+        elif record.get("primal") == "restored point":
+            xs = record.get("restored_x")
         else:
             xs = getattr(certificate, "x", None)
         pe = primal_end(problem, np.asarray(xs, dtype=float)) if xs is not None else {"proven": False}
