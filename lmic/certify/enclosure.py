@@ -635,7 +635,7 @@ def dual_bound(
     *,
     exact: bool = False,
     resolve: Callable[[Problem], dict[str, Any] | None] | None = None,
-    budget_s: float = 60.0,
+    budget_s: float = 20.0,
 ) -> dict[str, Any]:
     """Prove a lower bound of the minimisation form's optimal value from a dual point.
 
@@ -830,7 +830,10 @@ def primal_end(problem: Problem, x: np.ndarray) -> dict[str, Any]:
             if kind == "eq":
                 a, b = A.indptr[i], A.indptr[i + 1]
                 exact = sum(
-                    (Fraction(float(v)) * Fraction(float(xx[j])) for j, v in zip(A.indices[a:b], A.data[a:b], strict=True)),
+                    (
+                        Fraction(float(v)) * Fraction(float(xx[j]))
+                        for j, v in zip(A.indices[a:b], A.data[a:b], strict=True)
+                    ),
                     Fraction(0),
                 )
                 ok = exact == 0

@@ -52,9 +52,7 @@ def _eig_problem(M: np.ndarray, sense: str) -> Problem:
         lmi = lmi_from("tI - M >= 0", [-M, np.eye(d)], strict=False)
     else:
         lmi = lmi_from("M - tI >= 0", [M, -np.eye(d)], strict=False)
-    return Problem(
-        [Variable("t", "scalar", (1, 1))], [lmi], LinearConstraints.empty(1), Objective(sense, [0.0, 1.0])
-    )
+    return Problem([Variable("t", "scalar", (1, 1))], [lmi], LinearConstraints.empty(1), Objective(sense, [0.0, 1.0]))
 
 
 def hinf_norm(A, B, C, tol=1e-12):
@@ -178,17 +176,18 @@ def test_bounded_real_enclosure_contains_the_hinf_norm(seed, backend):
     assert e["rel_gap"] <= 1e-4
 
 
-@pytest.mark.parametrize("n", [10, 20])
-def test_bounded_real_larger_systems_never_claim_a_false_bound(n):
-    """At 10 and 20 states the dual of the BRL is nearly degenerate: the certified upper end
-    must be above the norm, and the enclosure reports a lower end only if it is below it."""
-    A, B, C = _stable(n, n)
+def test_bounded_real_20_states_upper_end_and_backed_off_point_are_certified():
+    """20 states (cvxopt): the rigorous upper end is above the H-infinity norm and the
+    backed-off point is certified by the certifier; the nearly degenerate dual gives no lower
+    end at this size, and the report says so instead of inventing one."""
+    A, B, C = _stable(20, 20)
     lo, hi = hinf_norm(A, B, C)
     system = {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}
-    r = lmic.api.solve("tutorial.bounded_real", system, backend="cvxopt", backoff=0)
+    r = lmic.api.solve("tutorial.bounded_real", system, backend="cvxopt", backoff=1e-3)
     assert r.verdict == "certified" and r.enclosure["upper"] >= hi
-    lower = r.enclosure["lower"]
-    assert (lower is None and "no certified" in r.enclosure["reason"]) or lower <= lo
+    assert r.backoff["verdict"] == "certified" and r.backoff["objective"] >= hi
+    assert r.backoff["objective"] <= r.enclosure["upper"] * (1 + 1e-3) + 1e-12
+    assert r.enclosure["lower"] is None and "no certified lower end" in r.enclosure["reason"]
 
 
 # -- SDPLIB: published optima inside the enclosures ---------------------------------------------
@@ -284,7 +283,9 @@ def test_dual_bound_rejects_a_malformed_dual_point():
 def test_sparse_linear_rows_take_part_in_the_bound():
     # min x1 + x2 s.t. x1 >= 1, x2 >= 2 (rows), [[x1, 0], [0, x2]] >= 0: optimum 3
     lmi = lmi_from("diag >= 0", [np.zeros((2, 2)), np.diag([1.0, 0.0]), np.diag([0.0, 1.0])], strict=False)
-    rows = LinearConstraints(sp.csr_matrix([[-1.0, 1.0, 0.0], [-2.0, 0.0, 1.0]]), ["ge", "ge"], [False, False], ["a", "b"])
+    rows = LinearConstraints(
+        sp.csr_matrix([[-1.0, 1.0, 0.0], [-2.0, 0.0, 1.0]]), ["ge", "ge"], [False, False], ["a", "b"]
+    )
     p = Problem(
         [Variable("x1", "scalar", (1, 1)), Variable("x2", "scalar", (1, 1), offset=1)],
         [lmi],
