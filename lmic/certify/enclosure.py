@@ -657,7 +657,8 @@ def dual_bound(
     Returns
     -------
     dict
-        ``proven`` (bool), ``route`` (``"solver dual"`` or ``"perturbed"``), ``lower`` (a bound ``<= inf q_0 + q . x``, the minimisation form:
+        ``proven`` (bool), ``route`` (``"solver dual"`` or ``"perturbed"``), ``lower`` (a
+        bound ``<= inf q_0 + q . x``, the minimisation form:
         for ``max`` problems ``-lower`` bounds the maximum from above), ``method``
         (``"rigorous-float"`` or ``"exact"``), ``shift`` (the ``eps_rel`` used), ``reason``,
         ``dual`` (the dual point the bound was proved from, JSON-ready), ``time_s``; the float
@@ -941,7 +942,8 @@ def enclosure(
         why = dual.get("reason") if missing == "dual bound" else "no certified point"
         side = "lower" if lo is None else "upper"
         out["reason"] = (
-            f"{kind}: only the {'upper' if side == 'lower' else 'lower'} end is certified; no certified {side} end ({why})"
+            f"{kind}: only the {'upper' if side == 'lower' else 'lower'} end is certified; "
+            f"no certified {side} end ({why})"
         )
     out["consistent"] = True
     return out
@@ -975,7 +977,8 @@ def describe(record: dict[str, Any] | None) -> list[str]:
     kind = record.get("kind", "optimum")
     if lo is not None and hi is not None:
         lines = [
-            f"optimal value ({kind}) in [{lo:.10g}, {hi:.10g}]  gap {record['gap']:.3g} (relative {record['rel_gap']:.3g})"
+            f"optimal value ({kind}) in [{lo:.10g}, {hi:.10g}]  "
+            f"gap {record['gap']:.3g} (relative {record['rel_gap']:.3g})"
         ]
     else:
         lines = [f"optimal value ({kind}): " + record.get("reason", "no certified bound")]
