@@ -273,7 +273,14 @@ def write_certificate(
     'certified'
     """
     doc = certificate_document(
-        problem, solution, certificate, system=system, path=path, embed_ir=embed_ir, enclosure=enclosure, backoff=backoff
+        problem,
+        solution,
+        certificate,
+        system=system,
+        path=path,
+        embed_ir=embed_ir,
+        enclosure=enclosure,
+        backoff=backoff,
     )
     text = json.dumps(doc, indent=1, allow_nan=False) + "\n"
     target = Path(path)
