@@ -320,7 +320,7 @@ def _repair(
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
-                e = G.T @ scipy.linalg.solve(Gm, rho, assume_a="pos", check_finite=False)
+                e = G.T @ np.linalg.solve(Gm, rho)
         except (np.linalg.LinAlgError, ValueError):
             e = scipy.linalg.lstsq(G, rho, lapack_driver="gelsy", check_finite=False)[0]
         k, norms, Es = 0, [0.0], []
