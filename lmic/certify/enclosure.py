@@ -957,7 +957,7 @@ def summary(record: dict[str, Any] | None) -> dict[str, Any] | None:
     """
     if record is None:
         return None
-    out = dict(record)
+    out = {k: v for k, v in record.items() if k != "restored_x"}
     if isinstance(out.get("dual"), dict):
         out["dual"] = {k: v for k, v in out["dual"].items() if k != "dual"}
     return out
