@@ -16,6 +16,10 @@ interval: the README prints few digits) meets the enclosure. Usage::
     python benchmarks/enclosure.py --repeat 5 --json out.json --backend cvxopt
     python benchmarks/enclosure.py --only control1,truss1
 
+On a shared machine run it with ``OPENBLAS_NUM_THREADS=1``: the proof does many small dense
+solves (``n x n``), which multi-threaded BLAS slows down ten-fold when the cores are busy
+(control3: 0.6 s single-threaded, 6.8 s with contended threads).
+
 Examples
 --------
 >>> rounding_interval("-8.999996e+00")
