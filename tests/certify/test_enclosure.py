@@ -296,3 +296,17 @@ def test_sparse_linear_rows_take_part_in_the_bound():
     assert r.verdict == "certified"
     e = r.enclosure
     assert e["lower"] <= 3.0 <= e["upper"] and e["rel_gap"] <= 1e-6
+
+
+def test_an_exact_lower_bound_is_re_proved_exactly_by_the_audit(tmp_path):
+    r = lmic.api.solve(str(SDPLIB / "truss1.dat-s"), backend="clarabel", exact=True)
+    assert r.enclosure["dual"]["method"] == "exact"
+    path = tmp_path / "t.json"
+    write_certificate(path, r.problem, r.solution, r.certificate, enclosure=r.enclosure)
+    assert audit_certificate(path).ok
+    doc = json.loads(path.read_text())
+    doc["enclosure"]["dual"]["lower"] = doc["enclosure"]["lower"] = doc["enclosure"]["lower"] + 1e-7
+    doc["enclosure"]["gap"] = doc["enclosure"]["upper"] - doc["enclosure"]["lower"]
+    path.write_text(json.dumps(doc))
+    bad = audit_certificate(path)
+    assert not bad.ok and bad.field == "enclosure.dual"
