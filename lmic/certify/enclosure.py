@@ -75,6 +75,14 @@ The same dual point ``u`` (after steps 1-3) is corrected in rational arithmetic
 down). Nothing is left to an error bound; it costs a rational solve of order ``n``
 (:data:`EXACT_MAX_N`).
 
+The primal end
+--------------
+The other end is the objective at a point proved feasible with rigorous rounding
+(:func:`primal_end`: ``F_i(x)`` with an a-priori evaluation error bound, ``lambda_min`` bounded
+by :func:`lambda_min_lower`, the objective rounded outwards). The certifier's ``certified``
+tolerates a non-strict LMI violated by round-off; such a point gives no primal end here (the
+caller may supply one from a point strictly inside, :func:`with_primal`).
+
 What is recorded
 ----------------
 :func:`dual_bound` returns the bound and the dual point ``u`` it was proved from (before the
