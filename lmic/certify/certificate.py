@@ -150,6 +150,8 @@ def certificate_document(
     system: Any = None,
     path: str | os.PathLike[str] | None = None,
     embed_ir: bool | None = None,
+    enclosure: dict[str, Any] | None = None,
+    backoff: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The certificate file's content as a dict (see the module docstring).
 
@@ -164,6 +166,11 @@ def certificate_document(
     embed_ir : bool, optional
         Embed the IR (default: unless ``system`` is given, has a path, and the problem records
         its theorem; then the audit recompiles it).
+    enclosure : dict, optional
+        The optimal-value enclosure (:func:`lmic.certify.enclosure.enclosure`), recorded as
+        the ``enclosure`` section with its dual point; the audit re-verifies both ends.
+    backoff : dict, optional
+        The backed-off point (:func:`lmic.backoff.backoff`); the audit re-certifies it.
 
     Examples
     --------
@@ -239,6 +246,10 @@ def certificate_document(
         "tolerances": dict(certificate.tolerances),
         "certificate": cert,
     }
+    if enclosure is not None:  # -- optimal-value enclosure (lmic.certify.enclosure) --
+        doc["enclosure"] = enclosure
+    if backoff is not None:  # -- backed-off point (lmic.backoff) --
+        doc["backoff"] = backoff
     return _jsonable(doc)
 
 
@@ -303,6 +314,8 @@ def write_certificate(
     *,
     system: Any = None,
     embed_ir: bool | None = None,
+    enclosure: dict[str, Any] | None = None,
+    backoff: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Write a certificate file atomically (temporary file + rename); return its content.
 
@@ -318,7 +331,16 @@ def write_certificate(
     >>> json.load(open(f))["certificate"]["verdict"]
     'certified'
     """
-    doc = certificate_document(problem, solution, certificate, system=system, path=path, embed_ir=embed_ir)
+    doc = certificate_document(
+        problem,
+        solution,
+        certificate,
+        system=system,
+        path=path,
+        embed_ir=embed_ir,
+        enclosure=enclosure,
+        backoff=backoff,
+    )
     text = json.dumps(doc, indent=1, allow_nan=False) + "\n"
     target = Path(path)
     folder = target.parent if str(target.parent) else Path(".")
@@ -703,6 +725,30 @@ def audit_certificate(path: str | os.PathLike[str], exact: bool = False) -> Audi
                 checked=checked,
             )
     checked.append("certificate")
+    # -- optimal-value enclosure (lmic.certify.enclosure): both ends re-verified --
+    if doc.get("enclosure") is not None:
+        from lmic.certify.enclosure import audit_enclosure
+
+        enc = audit_enclosure(problem, doc["enclosure"], cert, doc.get("backoff"))
+        if not enc["ok"]:
+            return _fail(doc, enc["field"], enc["message"], cert, theorem=theorem_id, checked=checked)
+        checked.append("enclosure")
+    if doc.get("backoff") is not None and doc["backoff"].get("x") is not None:  # -- lmic.backoff --
+        rec_b = doc["backoff"]
+        xb = np.asarray(rec_b["x"], dtype=float)
+        if xb.shape != (problem.n,):
+            return _fail(doc, "backoff.x", "backoff.x has the wrong length", cert, theorem=theorem_id, checked=checked)
+        cb = certify(problem, Solution(status=rec_b.get("status") or "optimal", x=xb), tol=tol)
+        if cb.verdict != rec_b.get("verdict") or problem.objective.value(xb) != rec_b.get("objective"):
+            return _fail(
+                doc,
+                "backoff",
+                f"backoff differs: recorded {rec_b.get('verdict')}, recomputed {cb.verdict}",
+                cert,
+                theorem=theorem_id,
+                checked=checked,
+            )
+        checked.append("backoff")
     shown = cert
     msg = f"every hash and number matches ({label}); verdict {cert.label}"
     if exact and not recorded_exact:
