@@ -34,7 +34,7 @@ Examples
 >>> make_observer("kalman", "discrete", {})
 Traceback (most recent call last):
 ...
-lmic.errors.DataError: unknown observer model 'kalman' (known: luenberger, sampled, uio)
+lmic.errors.DataError: unknown observer model 'kalman' (known: euler, filter_error, luenberger, obs_control, reduced, robust, sampled, ui_filter, uio)
 """
 
 from __future__ import annotations
