@@ -29,10 +29,10 @@ closed loop). Each model implements :meth:`Custom.custom_run` (the trajectory fo
     subsystem of ``E zeta' = Abar zeta + ...``, ``zeta = [x; nu]``), filter
     ``z' = N z + L y + Gf u + M f(x^)``, ``zeta^ = J z + E y = [x^; nu^]``. Roles ``A, C, F,
     G, N, L, M, J, E``; optional ``B, Gf, D1, D2``, certified gain ``gamma``.
-``filter_error`` (continuous) — the same filter's error system alone, for the analysis theorems
-    that give the filter but not the plant: ``eps' = N eps + (L D2 - M D1) w``,
-    ``e = J eps + E D2 w`` (the Lipschitz term vanishes on the linear part). Roles ``N, J``;
-    optional ``L, M, E, D1, D2, gamma``.
+``filter_error`` (continuous, discrete) — the error system of a filter alone, for the analysis
+    theorems that give the filter but not the plant: ``eps' | eps+ = N eps + (L D2 - M D1) w``,
+    ``e = J eps + E D2 w`` (the Lipschitz term vanishes on the linear part). Role ``N``;
+    optional ``J`` (default I), ``L, M, E, D1, D2, gamma``. The section's ``x0`` is ``eps(0)``.
 ``obs_control`` (continuous) — observer-based control (Paper F): ``x' = A x + B u + f(x) + E mu``,
     ``x^' = A x^ + B u + f(x^) + L (y - C x^)``, ``u = -K x^``. Roles ``A, B, C, K, L``;
     optional ``E`` and the practical-stability radius ``alpha``.
@@ -608,9 +608,9 @@ class FilterError(Custom):
     """The filter's error system ``eps' = N eps + (L D2 - M D1) w``, ``e = J eps + E D2 w``."""
 
     name = "filter_error"
-    times = ("continuous",)
-    required = ("N", "J")
-    optional = ("A", "C", "L", "M", "E", "gamma")
+    times = ("continuous", "discrete")
+    required = ("N",)
+    optional = ("A", "C", "J", "L", "M", "E", "gamma")
     extra = ("disturbance",)
 
     def __init__(self, time: str, mats: Mapping[str, Any], names: Mapping[str, str] | None = None) -> None:
@@ -622,8 +622,9 @@ class FilterError(Custom):
         # the plant's disturbance matrices have the plant's rows, not the error's: kept aside
         self._w = {r: np.atleast_2d(np.asarray(mats.pop(r), dtype=float)) for r in ("D1", "D2") if r in mats}
         # the base class's plant roles: the error eps is the "state", e = J eps the "output"
-        super().__init__(time, {**mats, "A": mats["N"], "C": mats["J"]}, {**names, "A": names.get("N", "N"),
-                         "C": names.get("J", "J")})  # fmt: skip
+        N = np.atleast_2d(np.asarray(mats["N"], dtype=float))
+        J = mats.get("J", np.eye(N.shape[0]))  # without J the error itself is the output
+        super().__init__(time, {**mats, "A": N, "C": J}, {**names, "A": names.get("N", "N"), "C": names.get("J", "I")})
 
     def _check(self) -> None:
         q1 = self.n
@@ -652,25 +653,38 @@ class FilterError(Custom):
                    zero: bool = False, nominal: bool = False) -> dict[str, Any]:  # fmt: skip
         wf = w if w is not None else self.disturbance(spec)
         e0 = np.zeros(self.n) if zero else spec.x0
+        if self.time == "discrete":
+            steps = max(1, int(round(spec.horizon / spec.dt)))
+            times = np.arange(steps + 1) * spec.dt
+            EPS = np.empty((steps + 1, self.n))
+            EPS[0] = e0
+            for k in range(steps):
+                EPS[k + 1] = self.A @ EPS[k] + self.Bw @ wf(float(times[k]))
+            if not np.all(np.isfinite(EPS)):
+                raise DataError(f"{spec.where}: the error state blew up")
+        else:
 
-        def rhs(t: float, s: np.ndarray) -> np.ndarray:
-            return self.A @ s + self.Bw @ wf(t)
+            def rhs(t: float, s: np.ndarray) -> np.ndarray:
+                return self.A @ s + self.Bw @ wf(t)
 
-        sol = _ct_run(rhs, e0, spec, spec.dt)
-        EPS = sol.y.T
-        W = np.array([wf(tk) for tk in sol.t]).reshape(sol.t.size, -1)
+            sol = _ct_run(rhs, e0, spec, spec.dt)
+            times, EPS = sol.t, sol.y.T
+        W = np.array([wf(tk) for tk in times]).reshape(times.size, -1)
         E = EPS @ self.C.T + W @ self.Dw.T
         # the "state" is the filter error eps; the estimate is 0 so that x - xhat = eps
-        return {"t": sol.t, "x": EPS, "xhat": np.zeros_like(EPS), "signals": {"w": W, "z": E}, "info": {}}
+        return {"t": times, "x": EPS, "xhat": np.zeros_like(EPS), "signals": {"w": W, "z": E}, "info": {}}
 
     def gain_system(self) -> tuple[Callable[[float], np.ndarray], str] | None:
         if "gamma" not in self.mats or self.w_dim == 0:
             return None
 
-        def G(om: float) -> np.ndarray:
-            return self.C @ np.linalg.solve(1j * om * np.eye(self.n) - self.A, self.Bw) + self.Dw
+        discrete = self.time == "discrete"
 
-        return G, "continuous"
+        def G(om: float) -> np.ndarray:
+            s = np.exp(1j * om) if discrete else 1j * om
+            return self.C @ np.linalg.solve(s * np.eye(self.n) - self.A, self.Bw) + self.Dw
+
+        return G, self.time
 
 
 # -- observer-based control (obs_control) -------------------------------------------------------

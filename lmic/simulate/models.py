@@ -31,10 +31,10 @@ Examples
 ...                                                "L": np.array([[0.5], [0.1]])})
 >>> obs.n, obs.p, obs.m
 (2, 1, 0)
->>> make_observer("kalman", "discrete", {})
+>>> make_observer("kalman", "discrete", {})  # doctest: +ELLIPSIS
 Traceback (most recent call last):
 ...
-lmic.errors.DataError: unknown observer model 'kalman' (known: euler, filter_error, luenberger, obs_control, reduced, robust, sampled, ui_filter, uio)
+lmic.errors.DataError: unknown observer model 'kalman' (known: euler, filter_error, luenberger, ...)
 """
 
 from __future__ import annotations
