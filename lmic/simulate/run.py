@@ -243,7 +243,7 @@ def check_section(section: Any, where: str = "simulation") -> dict[str, Any]:
     Traceback (most recent call last):
     ...
     lmic.errors.DataError: simulation: unknown key 'step' (allowed: nonlinearity, output_nonlinearity, \
-x0, xhat0, z0, input, unknown_input, horizon, dt, sampling, noise, method)
+x0, xhat0, z0, input, unknown_input, horizon, dt, sampling, noise, method, disturbance, uncertainty, delay, history)
     """
     if not isinstance(section, dict):
         raise DataError(f"{where}: must be a mapping of keys ({', '.join(KEYS)})")
