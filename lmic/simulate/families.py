@@ -357,6 +357,7 @@ class Robust(Custom):
         W = np.empty((steps + 1, self.w_dim))
         for k in range(steps + 1):
             tk = float(t[k])
+            X[k] = x  # before the delayed state is read: tau(k) = 0 reads x(k) itself
             xd = X[k - tau[k]] if k - tau[k] >= 0 else hist
             Fk = F[k]
             NF = self.NF if self.NF is not None else np.zeros((0, n))
