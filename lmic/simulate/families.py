@@ -54,7 +54,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from lmic.errors import DataError
-from lmic.simulate.models import MODELS, Observer, Vector
+from lmic.simulate.models import MODELS, Observer, SimulationDiverged, Vector
 from lmic.simulate.parser import Expression, parse, parse_vector
 
 __all__ = ["Custom", "Reduced", "Robust", "Euler", "UIFilter", "FilterError", "ObsControl", "EXTRA_KEYS"]
@@ -191,7 +191,9 @@ class Reduced(Custom):
             zh = self.AZ @ zh + self.BZ @ y + self.H @ fh + self.K @ (y_next - self.C @ zeta)
             y = y_next
             if not (np.all(np.isfinite(x)) and np.all(np.isfinite(zh))):
-                raise DataError(f"{spec.where}: the state blew up at t = {float(t[k + 1]):.6g}")
+                raise SimulationDiverged(
+                    f"{spec.where}: the state blew up at t = {float(t[k + 1]):.6g}", float(t[k + 1])
+                )
         return {"t": t, "x": X, "xhat": XH, "signals": {}, "info": {}}
 
 
@@ -368,7 +370,7 @@ class Robust(Custom):
                 not (np.all(np.isfinite(x)) and np.all(np.isfinite(xh)))
                 or max(np.abs(x).max(), np.abs(xh).max()) > 1e12
             ):
-                raise DataError(f"{spec.where}: the state blew up at t = {tk:.6g}")
+                raise SimulationDiverged(f"{spec.where}: the state blew up at t = {tk:.6g}", tk)
             if k == steps:
                 break
             u = fn.u(tk)
@@ -476,7 +478,7 @@ class Euler(Custom):
             with np.errstate(all="ignore"):
                 sol = solve_ivp(rhs, (tk, tk + self.T), x, rtol=1e-9, atol=1e-12)
             if sol.status != 0 or not np.all(np.isfinite(sol.y[:, -1])) or np.abs(sol.y[:, -1]).max() > 1e12:
-                raise DataError(f"{spec.where}: the plant state blew up at t = {tk:.6g}")
+                raise SimulationDiverged(f"{spec.where}: the plant state blew up at t = {tk:.6g}", tk)
             xh = self.Ad @ xh + self.T * f(xh, u, tk) + self.L @ (y - self.C @ xh)
             x = sol.y[:, -1]
         return {"t": t, "x": X, "xhat": XH, "signals": {}, "info": {"period": self.T}}
@@ -500,7 +502,7 @@ def _ct_run(rhs: Callable[[float, np.ndarray], np.ndarray], s0: np.ndarray, spec
                         max_step=max_step)  # fmt: skip
     if sol.status != 0 or not np.all(np.isfinite(sol.y)):
         tf = float(sol.t[-1]) if sol.t.size else 0.0
-        raise DataError(f"{spec.where}: the state blew up at t = {tf:.6g} (not finite or |x| > 1e12)")
+        raise SimulationDiverged(f"{spec.where}: the state blew up at t = {tf:.6g} (not finite or |x| > 1e12)", tf)
     return sol
 
 
@@ -662,7 +664,7 @@ class FilterError(Custom):
             for k in range(steps):
                 EPS[k + 1] = self.A @ EPS[k] + self.Bw @ wf(float(times[k]))
             if not np.all(np.isfinite(EPS)):
-                raise DataError(f"{spec.where}: the error state blew up")
+                raise SimulationDiverged(f"{spec.where}: the error state blew up", float(times[-1]))
         else:
 
             def rhs(t: float, s: np.ndarray) -> np.ndarray:

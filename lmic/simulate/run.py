@@ -44,7 +44,7 @@ import numpy as np
 
 from lmic.errors import DataError
 from lmic.simulate.families import EXTRA_KEYS, Custom
-from lmic.simulate.models import Observer, Sampled, make_observer
+from lmic.simulate.models import Observer, Sampled, SimulationDiverged, make_observer
 from lmic.simulate.parser import Expression, parse, parse_vector
 
 __all__ = [
@@ -87,14 +87,6 @@ DECAY_RATIO = 0.1
 MAX_POINTS = 200_000
 
 _NUMERIC = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
-
-
-class SimulationDiverged(DataError):
-    """The plant or observer state blew up; ``time`` is when it was first seen."""
-
-    def __init__(self, message: str, time: float) -> None:
-        super().__init__(message)
-        self.time = time
 
 
 @dataclass
