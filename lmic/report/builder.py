@@ -390,7 +390,7 @@ def _simulation_section(traj: Any, png: bytes | None, note: str, observer: Any) 
         word = {True: "ok", False: "VIOLATED", None: "informative"}[c.get("ok")]
         rows.append(
             [
-                _esc(c["property"]),
+                c["property"],
                 f"certified {number_text(c['certified'])}, measured {number_text(c['measured'])} "
                 f"{_badge(word)}<br><small>{_esc(c['detail'])}</small>",
             ]
