@@ -390,3 +390,22 @@ def test_shipped_example_simulates_and_the_certificate_holds(theorem, file, caps
         env = result.problem.environment(result.solution.x)
         (gain,) = [c for c in sim["checks"] if c["property"].startswith("L2 gain")]
         assert gain["certified"] == pytest.approx(float(env["eta_star"]), rel=1e-6)
+
+
+# -- figure and report ------------------------------------------------------------------------
+
+
+def test_figure_and_report_show_reconstruction_and_a_red_flag():
+    from lmic.report.builder import _simulation_section
+    from lmic.simulate.plot import figure, plot_png
+
+    obs, _m = _descriptor_filter()
+    sec = {"x0": [3, 2, -2], "z0": [0, 0, 0], "horizon": 1, "dt": 0.01, "unknown_input": ["sin(t)", "0"]}
+    _spec, traj = _simulate(obs, sec)
+    fig = figure(traj)
+    labels = [ax.get_ylabel() for ax in fig.axes]  # type: ignore[attr-defined]
+    assert sum("nu" in s for s in labels) == 2  # both reconstructed inputs have a panel
+    traj.checks = [{"property": "L2 gain w -> z", "certified": 0.1, "measured": 0.5, "ok": False, "detail": "d"}]
+    png = plot_png(traj)
+    html = _simulation_section(traj, png, "", obs)
+    assert "Red flag" in html and "VIOLATED" in html and "certified 0.1" in html
