@@ -365,6 +365,7 @@ def test_cli_bad_family_section_is_one_line_exit_2(tmp_path, capsys):
         ("uncertain_dt.thm1", "uncertain_dt.thm1.example.yaml"),
         ("descriptor.thm3_3", "descriptor.thm3_3.example.yaml"),
         ("qib.thm2", "simulation/qib.thm2.flexible-joint-deadbeat-K.yaml"),
+        ("uir.thm4_1", "simulation/uir.thm4_1.paperD-plant.yaml"),
         ("sampled_euler.thm3", "sampled_euler.thm3.example.yaml"),
         ("obs_control.thm3_1", "obs_control.thm3_1.rossler_z_published_gains.yaml"),
     ],
