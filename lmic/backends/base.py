@@ -24,6 +24,7 @@ Examples
 from __future__ import annotations
 
 import contextlib
+import functools
 import importlib
 import importlib.util
 import multiprocessing
@@ -39,6 +40,7 @@ from typing import Any, ClassVar
 import numpy as np
 import scipy.sparse as sp
 
+from lmic.errors import LmicError
 from lmic.ir.problem import Problem
 from lmic.ir.svec import tril_rows_cols, tril_size
 from lmic.solution import Solution
@@ -68,8 +70,12 @@ class SolveOptions:
         Relative accuracy (gap and feasibility) asked of the solver.
     max_iter : int or None
     time_limit : float or None
-        Seconds. Solvers without a native time limit run in a child process that is stopped
-        when the limit is reached (status ``error``, message ``time limit ... exceeded``).
+        Seconds for the whole :meth:`Backend.solve` call (every strict-reduction attempt
+        included). With a limit every backend solves in a forked child process that is stopped
+        when the limit is reached (solvers with a native limit are also given the time left).
+        A stopped solve is status ``error`` with ``info["time_limit"] = True`` and a message
+        ``time limit of ... s exceeded`` (:mod:`lmic.backends.outcomes`): report it as
+        ``undecided (time limit)``.
     verbose : bool
     margin : float
         Absolute margin imposed on strict inequalities (``F(x) >= margin I``) by the
@@ -87,12 +93,21 @@ class SolveOptions:
     extra : dict
         Solver-specific settings passed through unchanged.
 
+    Every field is checked when it is set (at construction and on assignment): a tolerance in
+    ``(0, 1)``, a positive finite time limit and margin, a positive integer ``max_iter``;
+    anything else (negative, zero, NaN, infinite, not a number) raises
+    :class:`lmic.errors.LmicError` (bad input: one line, exit code 2).
+
     Examples
     --------
     >>> SolveOptions(max_iter=50).max_iter
     50
     >>> SolveOptions(strict="fixed-margin").strict
     'fixed-margin'
+    >>> SolveOptions(time_limit=float("nan"))
+    Traceback (most recent call last):
+    ...
+    lmic.errors.LmicError: time_limit must be a finite number, got nan
     """
 
     tol: float = 1e-8
@@ -104,13 +119,76 @@ class SolveOptions:
     relative_margin: float = 1e-4
     extra: dict[str, Any] = field(default_factory=dict)
 
-    def __post_init__(self) -> None:
-        from lmic.errors import LmicError
+    def __setattr__(self, name: str, value: Any) -> None:
+        # every assignment is checked, at construction and later (the CLI sets fields one by one)
+        check = _OPTION_CHECKS.get(name)
+        if check is not None:
+            value = check(value)
+        object.__setattr__(self, name, value)
 
-        if self.strict not in ("auto", "max-margin", "fixed-margin"):
-            raise LmicError(f"strict strategy '{self.strict}' unknown; choose auto, max-margin or fixed-margin")
-        if not 0.0 < self.relative_margin < 1.0:
-            raise LmicError(f"relative_margin must be in (0, 1), got {self.relative_margin}")
+
+def _finite_number(name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise LmicError(f"{name} must be a number, got {value!r}")
+    value = float(value)
+    if not np.isfinite(value):
+        raise LmicError(f"{name} must be a finite number, got {value}")
+    return value
+
+
+def _check_tol(value: Any) -> float:
+    value = _finite_number("tol", value)
+    if not 0.0 < value < 1.0:
+        raise LmicError(f"tol must be in (0, 1), got {value:g}")
+    return value
+
+
+def _check_time_limit(value: Any) -> float | None:
+    if value is None:
+        return None
+    value = _finite_number("time_limit", value)
+    if value <= 0.0:
+        raise LmicError(f"time_limit must be a positive number of seconds, got {value:g}")
+    return value
+
+
+def _check_max_iter(value: Any) -> int | None:
+    if value is None:
+        return None
+    number = _finite_number("max_iter", value)
+    if number != int(number) or number < 1:
+        raise LmicError(f"max_iter must be a positive integer, got {value!r}")
+    return int(number)
+
+
+def _check_margin(value: Any) -> float:
+    value = _finite_number("margin", value)
+    if value <= 0.0:
+        raise LmicError(f"margin must be positive, got {value:g}")
+    return value
+
+
+def _check_strict(value: Any) -> str:
+    if value not in ("auto", "max-margin", "fixed-margin"):
+        raise LmicError(f"strict strategy '{value}' unknown; choose auto, max-margin or fixed-margin")
+    return str(value)
+
+
+def _check_relative_margin(value: Any) -> float:
+    value = _finite_number("relative_margin", value)
+    if not 0.0 < value < 1.0:
+        raise LmicError(f"relative_margin must be in (0, 1), got {value:g}")
+    return value
+
+
+_OPTION_CHECKS: dict[str, Callable[[Any], Any]] = {
+    "tol": _check_tol,
+    "time_limit": _check_time_limit,
+    "max_iter": _check_max_iter,
+    "margin": _check_margin,
+    "strict": _check_strict,
+    "relative_margin": _check_relative_margin,
+}
 
 
 def problem_kinds(problem: Problem) -> set[str]:
@@ -473,6 +551,47 @@ def _child(conn: Any, backend: Backend, problem: Problem, options: SolveOptions)
         conn.close()
 
 
+def _sandboxed(backend: Backend, problem: Problem, options: SolveOptions, seconds: float) -> Solution | None:
+    """Run ``backend._solve`` in a forked child for at most ``seconds``; ``None`` on time-out.
+
+    The child is stopped (SIGTERM, then SIGKILL after 1 s) when the time is up or when the
+    parent is interrupted. Where ``fork`` is unavailable the solve runs here, relying on the
+    solver's native limit.
+    """
+    try:
+        ctx = multiprocessing.get_context("fork")
+    except ValueError:  # no fork (Windows): native limits only
+        t0 = time.perf_counter()
+        try:
+            return backend._solve(problem, options)
+        except Exception as err:  # noqa: BLE001 - the solver's crash is a status
+            return Solution(
+                status="error", backend=backend.label, message=_describe(err), solve_s=time.perf_counter() - t0
+            )
+    recv, send = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_child, args=(send, backend, problem, options), daemon=True)
+    proc.start()
+    send.close()
+    try:
+        if recv.poll(seconds):
+            return recv.recv()
+        return None
+    except EOFError:
+        return Solution(
+            status="error",
+            backend=backend.label,
+            message=f"solver process died (exit code {proc.exitcode})",
+        )
+    finally:
+        if proc.is_alive():
+            proc.terminate()
+            proc.join(1.0)
+            if proc.is_alive():
+                proc.kill()
+        proc.join(1.0)
+        recv.close()
+
+
 def _describe(err: BaseException) -> str:
     msg = " ".join(str(err).split()) or "no message"
     return f"{type(err).__name__}: {msg}"
@@ -585,7 +704,10 @@ class Backend(ABC):
         t0 = time.perf_counter()
         try:
             kept, keep = eliminate_unused(problem, dependent=self.full_rank)
-            sol = strict.solve(kept, options, self._run, first_order=not self.interior_point)
+            # one deadline for every attempt of the strict reduction (SolveOptions.time_limit)
+            deadline = None if options.time_limit is None else time.monotonic() + options.time_limit
+            run = functools.partial(self._run, deadline=deadline)
+            sol = strict.solve(kept, options, run, first_order=not self.interior_point)
             if keep is not None:
                 restore_eliminated(sol, keep, problem)
         except Exception as err:  # noqa: BLE001 - a crash is a status, never a traceback
@@ -601,9 +723,19 @@ class Backend(ABC):
         sol.lower_s = max(0.0, time.perf_counter() - t0 - sol.solve_s)
         return sol
 
-    def _run(self, problem: Problem, options: SolveOptions) -> Solution:
-        """Call :meth:`_solve`, in a child process when a time limit must be enforced here."""
-        if options.time_limit is None or self.native_time_limit:
+    def _run(self, problem: Problem, options: SolveOptions, deadline: float | None = None) -> Solution:
+        """Call :meth:`_solve`; with a time limit, in a forked child stopped at the limit.
+
+        ``deadline`` (``time.monotonic()`` seconds) is the end of the whole :meth:`solve` call;
+        each attempt gets the time left (at most ``options.time_limit``), and an attempt that
+        starts after the deadline returns the time-limit solution at once. A solver that stops
+        by itself at the limit (a native limit) is marked the same way
+        (:func:`lmic.backends.outcomes.mark_time_limit`).
+        """
+        from lmic.backends.outcomes import mark_time_limit, time_limit_solution
+
+        limit = options.time_limit
+        if limit is None:
             t0 = time.perf_counter()
             try:
                 return self._solve(problem, options)
@@ -614,34 +746,21 @@ class Backend(ABC):
                     message=_describe(err),
                     solve_s=time.perf_counter() - t0,
                 )
-        ctx = multiprocessing.get_context("fork")
-        recv, send = ctx.Pipe(duplex=False)
-        proc = ctx.Process(target=_child, args=(send, self, problem, options), daemon=True)
+        left = limit if deadline is None else min(limit, deadline - time.monotonic())
+        if left <= 0.0:
+            return time_limit_solution(self.label, limit, 0.0)
+        from dataclasses import replace as _replace
+
+        child_options = _replace(options, time_limit=left)
         t0 = time.perf_counter()
-        proc.start()
-        send.close()
-        try:
-            if recv.poll(options.time_limit):
-                sol = recv.recv()
-            else:
-                sol = Solution(
-                    status="error",
-                    backend=self.label,
-                    native_status="time_limit",
-                    message=f"time limit of {options.time_limit:g} s exceeded",
-                    solve_s=time.perf_counter() - t0,
-                )
-        except EOFError:
-            sol = Solution(
-                status="error",
-                backend=self.label,
-                message=f"solver process died (exit code {proc.exitcode})",
-            )
-        finally:
-            if proc.is_alive():
-                proc.terminate()
-            proc.join(1.0)
-            recv.close()
+        sol = _sandboxed(self, problem, child_options, left)
+        elapsed = time.perf_counter() - t0
+        if sol is None:
+            return time_limit_solution(self.label, limit, elapsed)
+        stopped = sol.status in ("error", "inaccurate") and elapsed >= 0.95 * left
+        if sol.info.get("time_limit") or stopped:
+            sol.solve_s = sol.solve_s or elapsed
+            mark_time_limit(sol, limit, elapsed)
         return sol
 
     @abstractmethod

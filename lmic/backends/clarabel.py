@@ -24,6 +24,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from lmic.backends.base import Backend, SolveOptions, conic_data
+from lmic.backends.outcomes import mark_time_limit, settle_inexact_infeasible
 from lmic.ir.problem import Problem
 from lmic.ir.svec import svec_scale, tril_to_triu_colmajor_perm, tril_unvec
 from lmic.solution import Solution
@@ -112,9 +113,10 @@ class ClarabelBackend(Backend):
         "Solved": "optimal",
         "AlmostSolved": "inaccurate",
         "PrimalInfeasible": "infeasible",
-        "AlmostPrimalInfeasible": "infeasible",
+        # an inexact infeasibility claim: kept only if its ray verifies (settle_inexact_infeasible)
+        "AlmostPrimalInfeasible": "inaccurate",
         "DualInfeasible": "unbounded",
-        "AlmostDualInfeasible": "unbounded",
+        "AlmostDualInfeasible": "inaccurate",
         "MaxIterations": "inaccurate",
         "MaxTime": "error",
         "NumericalError": "error",
@@ -176,20 +178,30 @@ class ClarabelBackend(Backend):
             info={"solver_time_s": float(result.solve_time)},
         )
         z = np.asarray(result.z, dtype=float)
-        if status in ("optimal", "inaccurate"):
+
+        def ray() -> dict:
+            farkas = self.split_duals(data, z, clarabel_unvec, len(problem.linear))
+            scale = -float(data.b @ z)
+            if scale > 0:
+                farkas["lmis"] = [Z / scale for Z in farkas["lmis"]]
+                farkas["linear"] = farkas["linear"] / scale
+            return farkas
+
+        if native == "AlmostPrimalInfeasible":
+            settle_inexact_infeasible(problem, sol, ray())
+        elif native == "AlmostDualInfeasible":
+            sol.info["inexact_ray"] = np.asarray(result.x, dtype=float)
+            sol.message = "Clarabel stopped with status AlmostDualInfeasible (inexact unboundedness claim)"
+        elif status in ("optimal", "inaccurate"):
             sol.x = np.asarray(result.x, dtype=float)
             sol.objective = data.sign * (float(data.c @ sol.x) + data.c0)
             sol.duals = self.split_duals(data, z, clarabel_unvec, len(problem.linear))
         elif status == "infeasible":
-            sol.farkas = self.split_duals(data, z, clarabel_unvec, len(problem.linear))
-            scale = -float(data.b @ z)
-            if scale > 0:
-                sol.farkas["lmis"] = [Z / scale for Z in sol.farkas["lmis"]]
-                sol.farkas["linear"] = sol.farkas["linear"] / scale
+            sol.farkas = ray()
         elif status == "unbounded":
             sol.info["ray"] = np.asarray(result.x, dtype=float)
         if native == "MaxTime":
-            sol.message = f"time limit of {options.time_limit:g} s exceeded"
-        elif status in ("error", "inaccurate"):
+            mark_time_limit(sol, options.time_limit, solve_s)
+        elif status in ("error", "inaccurate") and not sol.message:
             sol.message = f"Clarabel stopped with status {native}"
         return sol
