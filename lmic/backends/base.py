@@ -732,6 +732,13 @@ class Backend(ABC):
         by itself at the limit (a native limit) is marked the same way
         (:func:`lmic.backends.outcomes.mark_time_limit`).
         """
+        from lmic.backends.progress import solve_progress
+
+        # a solve longer than 2 s shows "lmic: <label> | <step> | <seconds>" on a terminal
+        with solve_progress(self.label):
+            return self._run_limited(problem, options, deadline)
+
+    def _run_limited(self, problem: Problem, options: SolveOptions, deadline: float | None) -> Solution:
         from lmic.backends.outcomes import mark_time_limit, time_limit_solution
 
         limit = options.time_limit
