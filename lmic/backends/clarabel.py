@@ -29,29 +29,45 @@ from lmic.ir.problem import Problem
 from lmic.ir.svec import svec_scale, tril_to_triu_colmajor_perm, tril_unvec
 from lmic.solution import Solution
 
-__all__ = ["ClarabelBackend", "clarabel_vec", "clarabel_unvec", "kkt_bytes", "MEMORY_FRACTION"]
+__all__ = [
+    "ClarabelBackend",
+    "clarabel_vec",
+    "clarabel_unvec",
+    "kkt_bytes",
+    "MEMORY_FRACTION",
+    "BYTES_PER_KKT_ENTRY",
+    "KKT_CONSTANT_BYTES",
+]
 
-#: Clarabel is refused when its estimated KKT memory exceeds this share of the machine's memory
+#: Clarabel is refused when its estimated memory exceeds this share of the machine's memory
 MEMORY_FRACTION = 0.4
-#: measured bytes per entry of the dense ``t x t`` block a PSD cone of ``t = d(d+1)/2`` rows
-#: adds to Clarabel's KKT system (55 at d = 100, 24 at d = 250: use the larger-scale figure)
-_BYTES_PER_KKT_ENTRY = 24
+#: bytes per entry of the dense ``t x t`` block a PSD cone of ``t = d(d+1)/2`` rows adds to
+#: Clarabel's KKT system (matrix, LDL factor and workspace), calibrated against the peak
+#: resident memory of solves measured by ``benchmarks/clarabel_memory.py``: 52.2-54.7 bytes on
+#: max-cut SDPs (d = 40-130), 45.5-70 on Lyapunov LMIs (d = 40-100, the small sizes dominated by
+#: the constant), 51.5 in the issue's d = 150 max-cut (6.6 GB); 56 covers every large case
+BYTES_PER_KKT_ENTRY = 56
+#: fixed part of the estimate (solver workspace besides the PSD blocks)
+KKT_CONSTANT_BYTES = 64 << 20
 
 
 def kkt_bytes(problem: Problem) -> int:
-    """Estimated memory of Clarabel's dense PSD blocks for ``problem`` (bytes).
+    """Estimated peak memory of a Clarabel solve of ``problem`` (bytes).
 
     Clarabel factors a dense ``t x t`` scaling block per PSD cone with ``t = d (d + 1) / 2`` rows:
-    memory grows as ``d^4`` (a 250 x 250 LMI needs about 24 GB; SDPA solves it in 0.3 s).
+    memory grows as ``d^4`` (:data:`BYTES_PER_KKT_ENTRY` per entry, plus
+    :data:`KKT_CONSTANT_BYTES`). Measured: a 130 x 130 max-cut LMI peaks at 3.5 GiB against an
+    estimate of 3.8 GiB; a 250 x 250 LMI would need about 55 GB (SDPA solves it in 0.3 s).
 
     >>> import scipy.sparse as sp
     >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
     >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t>0", 1, sp.csc_matrix([[0., 1.]]))],
     ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
-    >>> kkt_bytes(p)
-    24
+    >>> kkt_bytes(p) - KKT_CONSTANT_BYTES
+    56
     """
-    return sum(_BYTES_PER_KKT_ENTRY * (lmi.dim * (lmi.dim + 1) // 2) ** 2 for lmi in problem.lmis)
+    blocks = sum((lmi.dim * (lmi.dim + 1) // 2) ** 2 for lmi in problem.lmis)
+    return BYTES_PER_KKT_ENTRY * blocks + KKT_CONSTANT_BYTES
 
 
 def _size(n: float) -> str:
