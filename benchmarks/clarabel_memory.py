@@ -2,10 +2,11 @@
 measured peak resident memory of a solve.
 
 Each measurement runs in a fresh child process (``python benchmarks/clarabel_memory.py --child
-KIND D``): it builds the problem, reads its peak RSS (``resource.getrusage``, after imports and
-construction), runs ``ClarabelBackend().solve`` with ``max_iter = 2`` (the peak is reached at the
-setup and the first factorisation of the KKT system; more iterations reuse that memory) and
-reads the peak RSS again. The solve's memory is the difference. Problems:
+KIND D``): it builds the problem, reads its resident memory and resets the peak (``VmRSS``,
+``VmHWM`` of ``/proc/self/status``; ``resource.getrusage`` elsewhere), runs
+``ClarabelBackend().solve`` with ``max_iter = 2`` (the peak is reached at the setup and the
+first factorisation of the KKT system; more iterations reuse that memory) and reads the peak
+again. The solve's memory is the difference. Problems:
 
 * ``maxcut``: ``min sum x`` s.t. ``diag(x) - W/4 >= 0`` (SDPLIB's maxcut form, one ``d x d``
   LMI, 10 % dense graph): an optimisation problem, Clarabel without chordal decomposition;
@@ -73,8 +74,37 @@ def lyapunov(d: int) -> Problem:
 KINDS = {"maxcut": maxcut, "lyapunov": lyapunov}
 
 
+def _status_kib(key: str) -> int | None:
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith(key + ":"):
+                    return int(line.split()[1])
+    except OSError:
+        pass
+    return None
+
+
+def _reset_peak() -> int:
+    """Current resident memory (bytes); resets the kernel's high-water mark where it can.
+
+    ``getrusage``'s ``ru_maxrss`` survives ``exec``: a child of a large process (pytest) starts
+    with its parent's size as its peak. ``VmHWM`` in ``/proc/self/status`` belongs to this
+    process image, and writing ``5`` to ``/proc/self/clear_refs`` resets it (Linux >= 4.0).
+    """
+    try:
+        with open("/proc/self/clear_refs", "w") as f:
+            f.write("5")
+    except OSError:
+        pass
+    rss = _status_kib("VmRSS")
+    return (rss if rss is not None else resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
+
+
 def _peak() -> int:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024  # Linux: KiB
+    """Peak resident memory of this process image (bytes): ``VmHWM``, else ``ru_maxrss``."""
+    hwm = _status_kib("VmHWM")
+    return (hwm if hwm is not None else resource.getrusage(resource.RUSAGE_SELF).ru_maxrss) * 1024
 
 
 def child(kind: str, d: int) -> None:
@@ -85,7 +115,7 @@ def child(kind: str, d: int) -> None:
     problem = KINDS[kind](d)
     be = ClarabelBackend()
     be.solve(KINDS[kind](4), SolveOptions(max_iter=2))  # imports and first-call allocations
-    before = _peak()
+    before = _reset_peak()
     sol = be.solve(problem, SolveOptions(max_iter=2))
     after = _peak()
     entries = sum((lmi.dim * (lmi.dim + 1) // 2) ** 2 for lmi in problem.lmis)

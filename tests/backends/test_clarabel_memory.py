@@ -49,10 +49,13 @@ def test_memory_estimate_covers_the_measured_peak(kind, d):
     """The guard's estimate is at least the peak RSS a Clarabel solve adds (measured in a fresh
     process by benchmarks/clarabel_memory.py), and not wildly above it."""
     script = Path(__file__).resolve().parents[2] / "benchmarks" / "clarabel_memory.py"
-    out = subprocess.run(
-        [sys.executable, str(script), "--child", kind, str(d)], capture_output=True, text=True, check=True
-    )
-    row = json.loads(out.stdout.strip().splitlines()[-1])
+    rows = []
+    for _ in range(2):  # the peak of the two runs (a busy machine can make one read low)
+        out = subprocess.run(
+            [sys.executable, str(script), "--child", kind, str(d)], capture_output=True, text=True, check=True
+        )
+        rows.append(json.loads(out.stdout.strip().splitlines()[-1]))
+    row = max(rows, key=lambda r: r["measured"])
     assert row["measured"] > 0
     assert row["measured"] <= row["estimate"] <= 3 * row["measured"], row
 
