@@ -36,6 +36,7 @@ __all__ = [
     "kkt_bytes",
     "MEMORY_FRACTION",
     "BYTES_PER_KKT_ENTRY",
+    "BYTES_PER_FILL_ENTRY",
     "KKT_CONSTANT_BYTES",
 ]
 
@@ -44,10 +45,14 @@ MEMORY_FRACTION = 0.4
 #: bytes per entry of the dense ``t x t`` block a PSD cone of ``t = d(d+1)/2`` rows adds to
 #: Clarabel's KKT system (matrix, LDL factor and workspace), calibrated against the peak
 #: resident memory of solves measured by ``benchmarks/clarabel_memory.py``: 52.2-54.7 bytes on
-#: max-cut SDPs (d = 40-130), 45.5-70 on Lyapunov LMIs (d = 40-100, the small sizes dominated by
-#: the constant), 51.5 in the issue's d = 150 max-cut (6.6 GB); 56 covers every large case
+#: max-cut SDPs (d = 40-130), 51.5 in the issue's d = 150 max-cut (6.6 GB); 56 covers them
 BYTES_PER_KKT_ENTRY = 56
-#: fixed part of the estimate (solver workspace besides the PSD blocks)
+#: bytes per entry of the ``n x n`` block the factorisation fills in among the ``n`` decision
+#: variables once the dense PSD blocks are eliminated (``A' H^-1 A``): negligible on max-cut
+#: (``n = d``), but a Lyapunov LMI pair at d = 90 (n = 4095) peaked at 1849 MiB and at d = 130
+#: (n = 8515) passed 9.4 GiB, above the PSD term alone (1791 MiB and 7.6 GiB)
+BYTES_PER_FILL_ENTRY = 32
+#: fixed part of the estimate (solver workspace besides the KKT system)
 KKT_CONSTANT_BYTES = 64 << 20
 
 
@@ -55,8 +60,9 @@ def kkt_bytes(problem: Problem) -> int:
     """Estimated peak memory of a Clarabel solve of ``problem`` (bytes).
 
     Clarabel factors a dense ``t x t`` scaling block per PSD cone with ``t = d (d + 1) / 2`` rows:
-    memory grows as ``d^4`` (:data:`BYTES_PER_KKT_ENTRY` per entry, plus
-    :data:`KKT_CONSTANT_BYTES`). Measured: a 130 x 130 max-cut LMI peaks at 3.5 GiB against an
+    memory grows as ``d^4`` (:data:`BYTES_PER_KKT_ENTRY` per entry), plus the fill among the
+    ``n`` decision variables (:data:`BYTES_PER_FILL_ENTRY` per ``n^2``) and
+    :data:`KKT_CONSTANT_BYTES`. Measured: a 130 x 130 max-cut LMI peaks at 3.5 GiB against an
     estimate of 3.8 GiB; a 250 x 250 LMI would need about 55 GB (SDPA solves it in 0.3 s).
 
     >>> import scipy.sparse as sp
@@ -64,10 +70,10 @@ def kkt_bytes(problem: Problem) -> int:
     >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t>0", 1, sp.csc_matrix([[0., 1.]]))],
     ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
     >>> kkt_bytes(p) - KKT_CONSTANT_BYTES
-    56
+    88
     """
     blocks = sum((lmi.dim * (lmi.dim + 1) // 2) ** 2 for lmi in problem.lmis)
-    return BYTES_PER_KKT_ENTRY * blocks + KKT_CONSTANT_BYTES
+    return BYTES_PER_KKT_ENTRY * blocks + BYTES_PER_FILL_ENTRY * problem.n**2 + KKT_CONSTANT_BYTES
 
 
 def _size(n: float) -> str:

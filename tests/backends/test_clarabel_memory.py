@@ -39,12 +39,16 @@ def maxcut_dual(d: int) -> Problem:
 
 
 def test_memory_estimate_grows_as_d_to_the_fourth():
-    base = clarabel_module.KKT_CONSTANT_BYTES
-    small, big = kkt_bytes(maxcut_dual(10)) - base, kkt_bytes(maxcut_dual(20)) - base
+    def psd_part(d):
+        return (
+            kkt_bytes(maxcut_dual(d)) - clarabel_module.KKT_CONSTANT_BYTES - clarabel_module.BYTES_PER_FILL_ENTRY * d**2
+        )
+
+    small, big = psd_part(10), psd_part(20)
     assert 14 < big / small < 18  # (210/55)^2 = 14.6
 
 
-@pytest.mark.parametrize("kind,d", [("maxcut", 60), ("lyapunov", 40)])
+@pytest.mark.parametrize("kind,d", [("maxcut", 60), ("lyapunov", 50)])
 def test_memory_estimate_covers_the_measured_peak(kind, d):
     """The guard's estimate is at least the peak RSS a Clarabel solve adds (measured in a fresh
     process by benchmarks/clarabel_memory.py), and not wildly above it."""
