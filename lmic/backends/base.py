@@ -71,8 +71,8 @@ class SolveOptions:
     max_iter : int or None
     time_limit : float or None
         Seconds for the whole :meth:`Backend.solve` call (every strict-reduction attempt
-        included). With a limit every backend solves in a forked child process that is stopped
-        when the limit is reached (solvers with a native limit are also given the time left).
+        included). Solvers with a native limit (Clarabel, SCS, CVXPY with either) are given the
+        time left; the others solve in a forked child process that is stopped at the limit.
         A stopped solve is status ``error`` with ``info["time_limit"] = True`` and a message
         ``time limit of ... s exceeded`` (:mod:`lmic.backends.outcomes`): report it as
         ``undecided (time limit)``.
@@ -738,21 +738,25 @@ class Backend(ABC):
         with solve_progress(self.label):
             return self._run_limited(problem, options, deadline)
 
+    def _call(self, problem: Problem, options: SolveOptions) -> Solution:
+        """:meth:`_solve` here, a crash turned into an ``error`` solution."""
+        t0 = time.perf_counter()
+        try:
+            return self._solve(problem, options)
+        except Exception as err:  # noqa: BLE001 - the solver's crash, timed as solver time
+            return Solution(
+                status="error",
+                backend=self.label,
+                message=_describe(err),
+                solve_s=time.perf_counter() - t0,
+            )
+
     def _run_limited(self, problem: Problem, options: SolveOptions, deadline: float | None) -> Solution:
         from lmic.backends.outcomes import mark_time_limit, time_limit_solution
 
         limit = options.time_limit
         if limit is None:
-            t0 = time.perf_counter()
-            try:
-                return self._solve(problem, options)
-            except Exception as err:  # noqa: BLE001 - the solver's crash, timed as solver time
-                return Solution(
-                    status="error",
-                    backend=self.label,
-                    message=_describe(err),
-                    solve_s=time.perf_counter() - t0,
-                )
+            return self._call(problem, options)
         left = limit if deadline is None else min(limit, deadline - time.monotonic())
         if left <= 0.0:
             return time_limit_solution(self.label, limit, 0.0)
@@ -760,7 +764,12 @@ class Backend(ABC):
 
         child_options = _replace(options, time_limit=left)
         t0 = time.perf_counter()
-        sol = _sandboxed(self, problem, child_options, left)
+        if self.native_time_limit:
+            # the solver stops itself, here: a forked child of a process that has already run
+            # Clarabel hangs in Clarabel's thread pool (SDPLIB infp1, measured), so no fork
+            sol: Solution | None = self._call(problem, child_options)
+        else:
+            sol = _sandboxed(self, problem, child_options, left)
         elapsed = time.perf_counter() - t0
         if sol is None:
             return time_limit_solution(self.label, limit, elapsed)
