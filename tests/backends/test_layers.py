@@ -87,12 +87,14 @@ def test_picos_time_limit_is_enforced_by_the_sandbox():
 @pytest.mark.skipif(not (SDPLIB / "infp1.dat-s").is_file(), reason="SDPLIB not found")
 def test_cvxpy_inexact_infeasibility_is_kept_when_its_ray_verifies():
     """CVXPY/Clarabel reports infp1 'infeasible_inaccurate': the ray verifies, so it stays a
-    (certified) infeasibility; the certifier checks it independently."""
+    infeasibility; the certifier checks it independently (exactly, for a global proof)."""
     problem = load_problem(SDPLIB / "infp1.dat-s")
     sol = get_backend("cvxpy").solve(problem, SolveOptions(tol=1e-7))
     assert sol.native_status == "infeasible_inaccurate"
     assert sol.status == "infeasible"
-    assert certify_solution(problem, sol).verdict == "infeasible-certified"
+    # the float ray verifies (bounded infeasibility); the exact proof makes it global
+    assert certify_solution(problem, sol).verdict == "infeasible-bounded"
+    assert certify_solution(problem, sol, exact=True).verdict == "infeasible-certified"
 
 
 def test_an_inexact_infeasibility_claim_with_a_bad_ray_is_inaccurate_without_a_point():
