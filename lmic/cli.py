@@ -39,6 +39,7 @@ COMMANDS = [
     "audit",
     "audit_published",
     "reproduce",
+    "batch",
     "simulate",
     "report",
 ]
