@@ -82,8 +82,13 @@ def _draw_map(study: Any, records: list[dict[str, Any]], path: str) -> str | Non
     if study.map_axes:
         return region_map(records, study.map_axes[0], study.map_axes[1], path, title=study.name)
     if study.task == "maximize" and len(study.grid_axes) == 1:
-        return region_map(records, study.grid_axes[0], None, path,
-                          title=f"{study.name}: sup {study.maximize['param']} over {study.grid_axes[0]}")
+        return region_map(
+            records,
+            study.grid_axes[0],
+            None,
+            path,
+            title=f"{study.name}: sup {study.maximize['param']} over {study.grid_axes[0]}",
+        )
     return None
 
 
@@ -114,8 +119,13 @@ def run(args: argparse.Namespace) -> int:
     if os.path.exists(args.output) and not os.path.isdir(args.output):
         raise DataError(f"-o {args.output}: exists and is not a folder")
     try:
-        summary = run_study(study, args.output, executor=args.executor, workers=args.workers,
-                            progress=not (args.no_progress or args.json))
+        summary = run_study(
+            study,
+            args.output,
+            executor=args.executor,
+            workers=args.workers,
+            progress=not (args.no_progress or args.json),
+        )
     except KeyboardInterrupt:
         sys.stderr.write("lmic: interrupted (finished results are kept; run again to resume)\n")
         return 130
@@ -123,18 +133,20 @@ def run(args: argparse.Namespace) -> int:
     if args.export:
         export(summary.records, args.export)
     if args.json:
-        print_json({
-            "name": study.name,
-            "total": summary.total,
-            "skipped": summary.skipped,
-            "ran": summary.ran,
-            "counts": dict(summary.counts),
-            "elapsed_s": summary.elapsed_s,
-            "executor": summary.executor,
-            "map": map_path,
-            "export": args.export,
-            "exit_code": summary.exit_code(),
-        })
+        print_json(
+            {
+                "name": study.name,
+                "total": summary.total,
+                "skipped": summary.skipped,
+                "ran": summary.ran,
+                "counts": dict(summary.counts),
+                "elapsed_s": summary.elapsed_s,
+                "executor": summary.executor,
+                "map": map_path,
+                "export": args.export,
+                "exit_code": summary.exit_code(),
+            }
+        )
         return summary.exit_code()
     rate = f", {summary.ran / summary.elapsed_s:.2f} jobs/s" if summary.ran and summary.elapsed_s else ""
     dup = f", {study.duplicates} duplicate jobs merged" if study.duplicates else ""

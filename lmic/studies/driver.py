@@ -116,8 +116,14 @@ class _Bar:
         self._task = self._progress.add_task(label, total=total, completed=done, counts="")
 
     def advance(self, counts: Counter[str]) -> None:
-        short = {"certified": "ok", "infeasible-certified": "inf", "infeasible-bounded": "bnd",
-                 "rejected": "rej", "undecided": "?", "error": "err"}
+        short = {
+            "certified": "ok",
+            "infeasible-certified": "inf",
+            "infeasible-bounded": "bnd",
+            "rejected": "rej",
+            "undecided": "?",
+            "error": "err",
+        }
         text = " ".join(f"{short[k]} {counts[k]}" for k in OUTCOMES if counts.get(k))
         self._progress.update(self._task, advance=1, counts=text)
 

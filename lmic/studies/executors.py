@@ -22,8 +22,8 @@ from __future__ import annotations
 
 import os
 import queue
-from abc import ABC, abstractmethod
 import threading
+from abc import ABC, abstractmethod
 from collections.abc import Iterator
 from typing import Any
 
@@ -42,8 +42,15 @@ def default_workers() -> int:
 
 
 def _crash_record(job: dict[str, Any], message: str) -> dict[str, Any]:
-    return {"hash": job["hash"], "outcome": "error", "status": "crashed", "verdict": None, "objective": None,
-            "message": message, "crashed": True}
+    return {
+        "hash": job["hash"],
+        "outcome": "error",
+        "status": "crashed",
+        "verdict": None,
+        "objective": None,
+        "message": message,
+        "crashed": True,
+    }
 
 
 class Executor(ABC):
@@ -159,8 +166,9 @@ class DaskExecutor(Executor):
         from lmic.studies.runner import run_in_runner
 
         self._count += 1
-        fut = self._client.submit(run_in_runner, job, time_limit, key=f"lmic-job-{job['hash'][:16]}-{self._count}",
-                                  pure=False)
+        fut = self._client.submit(
+            run_in_runner, job, time_limit, key=f"lmic-job-{job['hash'][:16]}-{self._count}", pure=False
+        )
         self._futures[fut.key] = job
         self._ac.add(fut)
 

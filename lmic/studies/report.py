@@ -34,9 +34,27 @@ COLOURS = {
     "error": "#222222",
 }
 
-_COLUMNS = ["hash", "task", "theorem", "system", "backend", "outcome", "status", "verdict", "objective",
-            "min_margin", "sup_lower", "sup_upper", "sup_upper_kind", "time_s", "attempts", "worker",
-            "finished_at", "certificate", "message"]
+_COLUMNS = [
+    "hash",
+    "task",
+    "theorem",
+    "system",
+    "backend",
+    "outcome",
+    "status",
+    "verdict",
+    "objective",
+    "min_margin",
+    "sup_lower",
+    "sup_upper",
+    "sup_upper_kind",
+    "time_s",
+    "attempts",
+    "worker",
+    "finished_at",
+    "certificate",
+    "message",
+]
 
 
 def outcome_table(records: list[dict[str, Any]]) -> dict[tuple[str, str], Counter[str]]:
@@ -65,8 +83,7 @@ def print_table(records: list[dict[str, Any]], title: str = "outcomes", total: i
         overall.update(counts)
         table.add_row(thm, be, *[str(counts.get(o, 0)) for o in OUTCOMES], str(sum(counts.values())))
     if len(rows) > 1:
-        table.add_row("all", "", *[str(overall.get(o, 0)) for o in OUTCOMES], str(sum(overall.values())),
-                      style="bold")
+        table.add_row("all", "", *[str(overall.get(o, 0)) for o in OUTCOMES], str(sum(overall.values())), style="bold")
     if total is not None and total > len(records):
         table.caption = f"{total - len(records)} of {total} jobs have no result yet"
     console = Console()
@@ -166,8 +183,9 @@ def region_map(records: list[dict[str, Any]], x: str, y: str | None, path: str, 
         for (i, j), counts in cells.items():
             grid[j, i] = OUTCOMES.index(counts.most_common(1)[0][0])
         cmap = ListedColormap([COLOURS[o] for o in OUTCOMES])
-        ax.imshow(grid, cmap=cmap, vmin=-0.5, vmax=len(OUTCOMES) - 0.5, origin="lower", aspect="auto",
-                  interpolation="nearest")
+        ax.imshow(
+            grid, cmap=cmap, vmin=-0.5, vmax=len(OUTCOMES) - 0.5, origin="lower", aspect="auto", interpolation="nearest"
+        )
         if any(sum(c.values()) > 1 for c in cells.values()) and len(cells) <= 400:
             for (i, j), counts in cells.items():
                 share = counts.get("certified", 0) / sum(counts.values())
@@ -178,8 +196,12 @@ def region_map(records: list[dict[str, Any]], x: str, y: str | None, path: str, 
         ax.set_xlabel(x)
         ax.set_ylabel(y)
         present = [o for o in OUTCOMES if any(o in c for c in cells.values())]
-        ax.legend(handles=[Patch(color=COLOURS[o], label=o) for o in present], loc="upper left",
-                  bbox_to_anchor=(1.01, 1.0), fontsize=8)
+        ax.legend(
+            handles=[Patch(color=COLOURS[o], label=o) for o in present],
+            loc="upper left",
+            bbox_to_anchor=(1.01, 1.0),
+            fontsize=8,
+        )
     else:
         pts = sorted(
             ((r["point"][x], r.get("sup_lower"), r.get("sup_upper")) for r in records if x in (r.get("point") or {})),
@@ -188,8 +210,14 @@ def region_map(records: list[dict[str, Any]], x: str, y: str | None, path: str, 
         xv = [p[0] for p in pts]
         lo = [math.nan if p[1] is None else p[1] for p in pts]
         hi = [math.nan if p[2] is None else p[2] for p in pts]
-        ax.fill_between(xv, [0 if not math.isnan(v) else math.nan for v in lo], lo, color=COLOURS["certified"],
-                        alpha=0.25, label="certified (below the supremum)")
+        ax.fill_between(
+            xv,
+            [0 if not math.isnan(v) else math.nan for v in lo],
+            lo,
+            color=COLOURS["certified"],
+            alpha=0.25,
+            label="certified (below the supremum)",
+        )
         ax.plot(xv, lo, "o-", color=COLOURS["certified"], label="certified lower bound of the supremum")
         ax.plot(xv, hi, "x--", color=COLOURS["infeasible-certified"], label="smallest value not certified")
         ax.set_xlabel(x)

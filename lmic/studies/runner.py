@@ -167,8 +167,15 @@ def run_in_runner(job: dict[str, Any], time_limit: float | None = None) -> dict[
     try:
         return runner.run(job, time_limit)
     except JobCrashed as err:
-        return {"hash": job["hash"], "outcome": "error", "status": "crashed", "verdict": None, "objective": None,
-                "message": str(err), "crashed": True}
+        return {
+            "hash": job["hash"],
+            "outcome": "error",
+            "status": "crashed",
+            "verdict": None,
+            "objective": None,
+            "message": str(err),
+            "crashed": True,
+        }
 
 
 def _main() -> None:

@@ -137,7 +137,7 @@ def expand_axis(name: str, spec: Any, where: str) -> list[Any]:
     """
     if isinstance(spec, list):
         return [float(v) if isinstance(v, int | float) else v for v in spec]
-    (kind, (a, b, n)), = spec.items()
+    ((kind, (a, b, n)),) = spec.items()
     a, b, n = float(a), float(b), int(n)
     if not (math.isfinite(a) and math.isfinite(b)):
         raise DataError(f"{where}: grid '{name}': {kind} bounds must be finite numbers")
@@ -285,7 +285,7 @@ def load_study(src: str | os.PathLike[str] | dict[str, Any], label: str | None =
         for _ in range(samples["count"]):
             pt: dict[str, Any] = {}
             for name, dist in samples["params"].items():
-                (kind, (a, b)), = dist.items()
+                ((kind, (a, b)),) = dist.items()
                 if kind == "loguniform":
                     if a <= 0 or b <= 0:
                         raise DataError(f"{where}: samples '{name}': loguniform bounds must be positive")

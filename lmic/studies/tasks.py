@@ -110,8 +110,14 @@ def _finite(v: Any) -> Any:
 def _solve(job: dict[str, Any], sysobj: Any, opts: Any) -> dict[str, Any]:
     from lmic.api import solve
 
-    res = solve(job["theorem"], sysobj, params=job["params"] or None, backend=job.get("backend"), options=opts,
-                exact=bool(job.get("exact")))
+    res = solve(
+        job["theorem"],
+        sysobj,
+        params=job["params"] or None,
+        backend=job.get("backend"),
+        options=opts,
+        exact=bool(job.get("exact")),
+    )
     rec: dict[str, Any] = {
         "outcome": outcome("solve", res),
         "status": res.status,
@@ -126,8 +132,9 @@ def _solve(job: dict[str, Any], sysobj: Any, opts: Any) -> dict[str, Any]:
     if res.certificate is not None:
         from lmic.certify.certificate import certificate_document
 
-        rec["_certificate"] = certificate_document(res.problem, res.solution, res.certificate, system=sysobj,
-                                                   embed_ir=True)
+        rec["_certificate"] = certificate_document(
+            res.problem, res.solution, res.certificate, system=sysobj, embed_ir=True
+        )
     return rec
 
 
@@ -151,8 +158,16 @@ def _maximize(job: dict[str, Any], sysobj: Any, opts: Any) -> dict[str, Any]:
 
     m = dict(job["maximize"])
     kwargs = {k: m[k] for k in ("lo", "hi", "xtol", "rtol", "max_evals") if m.get(k) is not None}
-    sup = maximize(job["theorem"], sysobj, m["param"], params=job["params"] or None,
-                   backend=job.get("backend") or "clarabel", options=opts, exact=True, **kwargs)
+    sup = maximize(
+        job["theorem"],
+        sysobj,
+        m["param"],
+        params=job["params"] or None,
+        backend=job.get("backend") or "clarabel",
+        options=opts,
+        exact=True,
+        **kwargs,
+    )
     return {
         "outcome": outcome("maximize", sup),
         "status": "converged" if sup.converged else "not converged",
@@ -169,8 +184,9 @@ def _maximize(job: dict[str, Any], sysobj: Any, opts: Any) -> dict[str, Any]:
 def _audit_published(job: dict[str, Any], sysobj: Any, opts: Any) -> dict[str, Any]:
     from lmic.published import audit_published
 
-    rep = audit_published(job["theorem"], sysobj, params=job["params"] or None,
-                          backend=job.get("backend") or "clarabel", options=opts)
+    rep = audit_published(
+        job["theorem"], sysobj, params=job["params"] or None, backend=job.get("backend") or "clarabel", options=opts
+    )
     return {
         "outcome": outcome("audit-published", rep),
         "status": f"exit {rep.exit_code()}",
@@ -223,17 +239,31 @@ def run_job(job: dict[str, Any], time_limit: float | None = None) -> dict[str, A
             from lmic.system import load_system
 
             sysobj = load_system(job["system"], job.get("system_label"))
-            run = {"solve": _solve, "crosscheck": _crosscheck, "maximize": _maximize,
-                   "audit-published": _audit_published}[task]
+            run = {
+                "solve": _solve,
+                "crosscheck": _crosscheck,
+                "maximize": _maximize,
+                "audit-published": _audit_published,
+            }[task]
             rec = run(job, sysobj, opts)
     except LmicError as err:
-        rec = {"outcome": "error", "status": "error", "verdict": None, "objective": None,
-               "message": f"{type(err).__name__}: {' '.join(str(err).split())}"[:500]}
+        rec = {
+            "outcome": "error",
+            "status": "error",
+            "verdict": None,
+            "objective": None,
+            "message": f"{type(err).__name__}: {' '.join(str(err).split())}"[:500],
+        }
     except Exception as err:  # noqa: BLE001 - a crashing job is recorded, not fatal for the study
         tb = traceback.extract_tb(err.__traceback__)
         where = f" at {os.path.basename(tb[-1].filename)}:{tb[-1].lineno}" if tb else ""
-        rec = {"outcome": "error", "status": "error", "verdict": None, "objective": None,
-               "message": f"{type(err).__name__}: {' '.join(str(err).split())}{where}"[:500]}
+        rec = {
+            "outcome": "error",
+            "status": "error",
+            "verdict": None,
+            "objective": None,
+            "message": f"{type(err).__name__}: {' '.join(str(err).split())}{where}"[:500],
+        }
     rec["hash"] = job["hash"]
     rec["time_s"] = time.perf_counter() - t0
     rec["worker"] = worker
