@@ -198,7 +198,7 @@ def run_study(
                     task=job.task,
                     theorem=job.theorem,
                     system=job.system_label,
-                    backend=job.backend or rec.get("backend_used"),
+                    backend=job.backend or "default",
                     params=job.params,
                     point=job.point,
                     attempts=attempts[h],

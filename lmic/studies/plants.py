@@ -5,7 +5,8 @@ gives a 1 x 3 ``C``); optional data (declared with a default) are left out unles
 ``data:``. Entries are independent normals of standard deviation ``scale``; symmetric data are
 symmetrised, positive-definite data are ``G G^T / k + I``. ``spectral_radius: {A: r}`` rescales a
 square matrix to spectral radius ``r`` (discrete-time plants), ``spectral_abscissa: {A: a}``
-shifts it so that its largest real eigenvalue part is ``a`` (continuous time). Plant ``k`` of a
+shifts it so that its largest real eigenvalue part is ``a`` (continuous time), ``shift: {A: c}``
+adds ``c I``. Plant ``k`` of a
 seed is the same whatever the count (``numpy.random.SeedSequence(seed).spawn``).
 
 Examples
@@ -81,7 +82,7 @@ def random_plants(template: Any, spec: dict[str, Any], where: str) -> list[dict[
     fixed_data = spec.get("data") or {}
     shapes = data_shapes(template, spec["dims"], set(fixed_data), where)
     decls = {d.name: d for d in template.data_decls}
-    for key in ("spectral_radius", "spectral_abscissa"):
+    for key in ("spectral_radius", "spectral_abscissa", "shift"):
         for name in spec.get(key) or {}:
             if name not in shapes or shapes[name][0] != shapes[name][1]:
                 raise DataError(f"{where}: random: {key} '{name}' is not a square data matrix of {template.theorem_id}")
@@ -105,6 +106,8 @@ def random_plants(template: Any, spec: dict[str, Any], where: str) -> list[dict[
             if name in (spec.get("spectral_abscissa") or {}):
                 alpha = float(max(np.linalg.eigvals(m).real))
                 m = m + (float(spec["spectral_abscissa"][name]) - alpha) * np.eye(r)
+            if name in (spec.get("shift") or {}):
+                m = m + float(spec["shift"][name]) * np.eye(r)
             data[name] = m.tolist()
         data.update(fixed_data)
         plants.append({"lmic": 1, "name": f"random plant {k} (seed {spec.get('seed', 0)})", "data": data})

@@ -190,8 +190,8 @@ def region_map(records: list[dict[str, Any]], x: str, y: str | None, path: str, 
             for (i, j), counts in cells.items():
                 share = counts.get("certified", 0) / sum(counts.values())
                 ax.text(i, j, f"{share:.0%}", ha="center", va="center", fontsize=7, color="white")
-        step_x, step_y = max(1, len(xs) // 8), max(1, len(ys) // 8)
-        ax.set_xticks(range(0, len(xs), step_x), [_fmt(v) for v in xs[::step_x]])
+        step_x, step_y = max(1, math.ceil(len(xs) / 8)), max(1, math.ceil(len(ys) / 12))
+        ax.set_xticks(range(0, len(xs), step_x), [_fmt(v) for v in xs[::step_x]], rotation=45)
         ax.set_yticks(range(0, len(ys), step_y), [_fmt(v) for v in ys[::step_y]])
         ax.set_xlabel(x)
         ax.set_ylabel(y)

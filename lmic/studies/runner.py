@@ -35,6 +35,15 @@ __all__ = ["Runner", "local_runner", "run_in_runner", "TIME_LIMIT_GRACE"]
 TIME_LIMIT_GRACE = 2.0
 
 
+def grace(time_limit: float) -> float:
+    """How long past ``time_limit`` a job is killed: a quarter of the limit, 0.2 s to 2 s.
+
+    >>> grace(0.4), grace(60)
+    (0.2, 2.0)
+    """
+    return min(TIME_LIMIT_GRACE, max(0.2, 0.25 * float(time_limit)))
+
+
 class JobCrashed(Exception):
     """The child died (killed, out of memory, segfault) while running a job."""
 
@@ -73,7 +82,7 @@ class Runner:
     def run(self, job: dict[str, Any], time_limit: float | None = None) -> dict[str, Any]:
         """Run ``job`` in the child; return its record.
 
-        Past ``time_limit + TIME_LIMIT_GRACE`` seconds the child is killed and the record says
+        Past ``time_limit + grace(time_limit)`` seconds the child is killed and the record says
         ``undecided`` (``time limit``). Raises :class:`JobCrashed` if the child dies.
         """
         proc = self._start()
@@ -87,7 +96,7 @@ class Runner:
         except (BrokenPipeError, OSError):
             self.kill()
             raise JobCrashed(f"worker process {proc.pid} died before the job started") from None
-        deadline = None if time_limit is None else t0 + float(time_limit) + TIME_LIMIT_GRACE
+        deadline = None if time_limit is None else t0 + float(time_limit) + grace(time_limit)
         fd = proc.stdout.fileno()
         while True:
             wait = None if deadline is None else max(0.0, deadline - time.monotonic())

@@ -209,6 +209,21 @@ class _TheoremInfo:
         self.param_names = {p.name for p in self.template.params} | {o.name for o in self.template.options}
         self.hash = template_hash(theorem_id)
 
+    def check_values(self, values: dict[str, Any], where: str, what: str) -> None:
+        """Numbers outside a parameter's declared domain are bad input (before any job runs)."""
+        import sympy
+
+        decls = {p.name: p for p in self.template.params}
+        for name, v in values.items():
+            decl = decls.get(name)
+            if decl is None or not isinstance(v, float):
+                continue
+            inside = decl.domain.contains(sympy.Float(v))
+            if inside not in (sympy.true, sympy.false) and v.is_integer():
+                inside = decl.domain.contains(sympy.Integer(int(v)))
+            if inside == sympy.false:
+                raise DataError(f"{where}: {what} '{name}' = {v:g} is outside its domain {decl.domain} in {self.id}")
+
     def check_names(self, names: list[str], where: str, what: str) -> None:
         for name in names:
             if name not in self.param_names:
@@ -274,6 +289,8 @@ def load_study(src: str | os.PathLike[str] | dict[str, Any], label: str | None =
         raw, where, base, path = _read(p), p.name, p.parent, str(p)
     _validate(raw, where)
     task = raw.get("task", "solve")
+    if task == "maximize" and "maximize" not in raw:
+        raise DataError(f"{where}: task maximize needs maximize: {{param: NAME}}")
     fixed = {k: _number(v) for k, v in (raw.get("params") or {}).items()}
     where_grid = where
     axes = {name: expand_axis(name, spec, where_grid) for name, spec in (raw.get("grid") or {}).items()}
@@ -316,6 +333,9 @@ def load_study(src: str | os.PathLike[str] | dict[str, Any], label: str | None =
             infos[tid] = _TheoremInfo(tid, fixed, where)
             infos[tid].check_names(list(fixed), where, "params:")
             infos[tid].check_names(list(points[0]), where, "grid/sample axis")
+            infos[tid].check_values(fixed, where, "params:")
+            for pt in points:
+                infos[tid].check_values(pt, where, "grid/sample value")
             if task == "maximize":
                 infos[tid].check_names([raw["maximize"]["param"]], where, "maximize: param")
         return infos[tid]
