@@ -87,7 +87,8 @@ def _draw_map(study: Any, records: list[dict[str, Any]], path: str) -> str | Non
             study.grid_axes[0],
             None,
             path,
-            title=f"{study.name}: sup {study.maximize['param']} over {study.grid_axes[0]}",
+            title=study.name,
+            ylabel=f"sup {study.maximize['param']}",
         )
     return None
 

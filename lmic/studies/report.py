@@ -152,13 +152,15 @@ def _fmt(v: Any) -> str:
     return f"{v:.3g}" if isinstance(v, float) else str(v)
 
 
-def region_map(records: list[dict[str, Any]], x: str, y: str | None, path: str, title: str = "") -> str:
+def region_map(
+    records: list[dict[str, Any]], x: str, y: str | None, path: str, title: str = "", ylabel: str = ""
+) -> str:
     """A PNG of the outcome over the grid: cells coloured by outcome (2-D), or the supremum curve.
 
     With ``y`` a grid axis, each cell is coloured by its most frequent outcome (cells with several
     systems or backends show the share of certified jobs in the cell). With ``y`` ``None`` and
-    task ``maximize``, the certified supremum (lower bound) and the smallest value not certified
-    are drawn against ``x``: below the lower curve, every value is certified.
+    task ``maximize``, the largest value certified (a lower bound of the supremum) and the smallest
+    value found not certified are drawn against ``x``.
     """
     import matplotlib
 
@@ -210,18 +212,10 @@ def region_map(records: list[dict[str, Any]], x: str, y: str | None, path: str, 
         xv = [p[0] for p in pts]
         lo = [math.nan if p[1] is None else p[1] for p in pts]
         hi = [math.nan if p[2] is None else p[2] for p in pts]
-        ax.fill_between(
-            xv,
-            [0 if not math.isnan(v) else math.nan for v in lo],
-            lo,
-            color=COLOURS["certified"],
-            alpha=0.25,
-            label="certified (below the supremum)",
-        )
-        ax.plot(xv, lo, "o-", color=COLOURS["certified"], label="certified lower bound of the supremum")
+        ax.plot(xv, lo, "o-", color=COLOURS["certified"], label="largest value certified (lower bound of the supremum)")
         ax.plot(xv, hi, "x--", color=COLOURS["infeasible-certified"], label="smallest value not certified")
         ax.set_xlabel(x)
-        ax.set_ylabel("supremum")
+        ax.set_ylabel(ylabel or "supremum")
         ax.legend(fontsize=8)
     ax.set_title(title or "lmic batch")
     fig.tight_layout()

@@ -147,7 +147,7 @@ def expand_axis(name: str, spec: Any, where: str) -> list[Any]:
         values = np.geomspace(a, b, n)
     else:
         values = np.linspace(a, b, n)
-    return [float(v) for v in values]
+    return [float(f"{v:.12g}") for v in values]  # 0.1, not 0.10000000000000009
 
 
 def _read(path: Path) -> Any:
