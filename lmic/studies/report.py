@@ -107,7 +107,7 @@ def flat_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 def export(records: list[dict[str, Any]], path: str) -> str:
     """Write the records to ``path`` (``.csv`` or ``.parquet``), atomically; return the format."""
-    from lmic.commands._common import write_atomic
+    from lmic.studies.store import write_atomic
 
     rows = flat_rows(records)
     suffix = Path(path).suffix.lower()
@@ -219,7 +219,7 @@ def region_map(
         ax.legend(fontsize=8)
     ax.set_title(title or "lmic batch")
     fig.tight_layout()
-    from lmic.commands._common import write_atomic
+    from lmic.studies.store import write_atomic
 
     write_atomic(path, lambda fh: fig.savefig(fh, format="png"), mode="wb")
     plt.close(fig)

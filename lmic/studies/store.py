@@ -29,7 +29,38 @@ from typing import Any
 
 from lmic.errors import DataError
 
-__all__ = ["Store", "read_results"]
+__all__ = ["Store", "read_results", "write_atomic"]
+
+
+def write_atomic(path: str | os.PathLike[str], write: Any, mode: str = "w") -> None:
+    """Write through a temporary file in the same folder, then rename: nothing half-written.
+
+    >>> import tempfile
+    >>> p = os.path.join(tempfile.mkdtemp(), "x.txt")
+    >>> write_atomic(p, lambda fh: fh.write("ok"))
+    >>> open(p).read()
+    'ok'
+    """
+    import tempfile
+
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    if not folder.is_dir():
+        raise DataError(f"{target}: folder {folder} does not exist")
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=folder)
+    try:
+        with os.fdopen(fd, mode) as fh:
+            write(fh)
+            fh.flush()
+            os.fsync(fh.fileno())
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, target)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
 
 
 def read_results(path: str | os.PathLike[str]) -> list[dict[str, Any]]:
@@ -129,8 +160,6 @@ class Store:
 
     def write_certificate(self, job_hash: str, document: dict[str, Any]) -> str:
         """Write ``certificates/<hash>.json`` atomically; return its path relative to the folder."""
-        from lmic.commands._common import write_atomic
-
         rel = f"certificates/{job_hash}.json"
         write_atomic(self.root / rel, lambda fh: json.dump(document, fh, allow_nan=False))
         return rel
@@ -138,8 +167,6 @@ class Store:
     # -- manifest ---------------------------------------------------------------------------------
     def write_manifest(self, manifest: dict[str, Any]) -> None:
         """``DIR/study.json``: the study's name, settings and jobs (atomically)."""
-        from lmic.commands._common import write_atomic
-
         manifest = {**manifest, "written_at": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
         write_atomic(self.root / "study.json", lambda fh: json.dump(manifest, fh, indent=1, allow_nan=False))
 
