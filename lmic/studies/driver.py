@@ -177,7 +177,7 @@ def run_study(
         try:
             for job in pending:
                 attempts[job.hash] += 1
-                ex.submit(job.to_dict(), study.time_limit)
+            ex.submit_many([job.to_dict() for job in pending], study.time_limit)
             for rec in ex.results():
                 h = rec.get("hash")
                 if h not in by_hash or h in done:

@@ -63,6 +63,11 @@ class Executor(ABC):
     def submit(self, job: dict[str, Any], time_limit: float | None) -> None:
         """Queue one job."""
 
+    def submit_many(self, jobs: list[dict[str, Any]], time_limit: float | None) -> None:
+        """Queue several jobs (an executor may group them to save per-task overhead)."""
+        for job in jobs:
+            self.submit(job, time_limit)
+
     @abstractmethod
     def results(self) -> Iterator[dict[str, Any]]:
         """Records of the submitted jobs as they finish (until none is outstanding)."""
@@ -127,6 +132,9 @@ class LocalExecutor(Executor):
 class DaskExecutor(Executor):
     """Jobs as Dask tasks (``run_in_runner``) on a ``LocalCluster`` or an existing scheduler."""
 
+    #: most jobs in one Dask task (:meth:`submit_many`)
+    MAX_CHUNK = 8
+
     def __init__(self, address: str | None = None, workers: int | None = None) -> None:
         try:
             from distributed import Client, LocalCluster
@@ -151,7 +159,7 @@ class DaskExecutor(Executor):
                 raise DataError(f"--executor {address}: cannot reach the Dask scheduler ({err})") from None
             self.workers = max(1, sum(w.get("nthreads", 1) for w in self._client.scheduler_info()["workers"].values()))
             self.label = f"dask {address} ({self.workers} threads)"
-        self._futures: dict[Any, dict[str, Any]] = {}
+        self._futures: dict[Any, Any] = {}
         from distributed import as_completed
 
         self._ac = as_completed([], with_results=False)
@@ -172,15 +180,44 @@ class DaskExecutor(Executor):
         self._futures[fut.key] = job
         self._ac.add(fut)
 
+    def submit_many(self, jobs: list[dict[str, Any]], time_limit: float | None) -> None:
+        """Group jobs into tasks of up to ``MAX_CHUNK`` (about four tasks per worker at least).
+
+        A Dask task costs some milliseconds of scheduling and messages; grouping short jobs keeps
+        that off each job. Results of a group arrive together; a group lost with its worker is
+        re-run by Dask and the driver keeps the first result of each job.
+        """
+        from lmic.studies.runner import run_many_in_runner
+
+        size = max(1, min(self.MAX_CHUNK, len(jobs) // (4 * self.workers)))
+        for k in range(0, len(jobs), size):
+            chunk = jobs[k : k + size]
+            if len(chunk) == 1:
+                self.submit(chunk[0], time_limit)
+                continue
+            self._count += 1
+            fut = self._client.submit(
+                run_many_in_runner,
+                chunk,
+                time_limit,
+                key=f"lmic-jobs-{chunk[0]['hash'][:16]}-{self._count}",
+                pure=False,
+            )
+            self._futures[fut.key] = chunk
+            self._ac.add(fut)
+
     def results(self) -> Iterator[dict[str, Any]]:
         for fut in self._ac:
-            job = self._futures.pop(fut.key)
+            item = self._futures.pop(fut.key)
+            jobs = item if isinstance(item, list) else [item]
             try:
-                rec = fut.result()
+                out = fut.result()
+                recs = out if isinstance(out, list) else [out]
             except Exception as err:  # noqa: BLE001 - KilledWorker, a lost scheduler ...
-                rec = _crash_record(job, f"{type(err).__name__}: {' '.join(str(err).split())}"[:300])
+                msg = f"{type(err).__name__}: {' '.join(str(err).split())}"[:300]
+                recs = [_crash_record(job, msg) for job in jobs]
             fut.release()
-            yield rec
+            yield from recs
 
     def close(self) -> None:
         try:

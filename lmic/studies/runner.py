@@ -29,7 +29,7 @@ import threading
 import time
 from typing import Any
 
-__all__ = ["Runner", "local_runner", "run_in_runner", "TIME_LIMIT_GRACE"]
+__all__ = ["Runner", "local_runner", "run_in_runner", "run_many_in_runner", "TIME_LIMIT_GRACE"]
 
 #: seconds a job may overrun its limit (the solver's own limit comes first) before it is killed
 TIME_LIMIT_GRACE = 2.0
@@ -185,6 +185,11 @@ def run_in_runner(job: dict[str, Any], time_limit: float | None = None) -> dict[
             "message": str(err),
             "crashed": True,
         }
+
+
+def run_many_in_runner(jobs: list[dict[str, Any]], time_limit: float | None = None) -> list[dict[str, Any]]:
+    """:func:`run_in_runner` for several jobs in turn (one Dask task for a group of short jobs)."""
+    return [run_in_runner(job, time_limit) for job in jobs]
 
 
 def _main() -> None:
