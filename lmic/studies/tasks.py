@@ -235,6 +235,10 @@ def run_job(job: dict[str, Any], time_limit: float | None = None) -> dict[str, A
         opts = _options(time_limit)
         if task == "audit":
             rec = _audit(job)
+        elif task == "reproduce-file":
+            from lmic.studies.parallel import run_reproduce_file
+
+            rec = run_reproduce_file(job)
         else:
             from lmic.system import load_system
 
