@@ -126,10 +126,15 @@ def test_resume_after_killing_the_batch_process(tmp_path):
     ]
     proc = subprocess.Popen(cmd, env=env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     wait_for(lambda: len(lines(out)) >= 3 or proc.poll() is not None, 120, "three results")
+    from lmic.studies.report import status
+
+    st_running = status(str(out))  # while it runs
     proc.kill()
     proc.wait()
     before = {r["hash"]: r for r in lines(out)}
     assert 3 <= len(before) < 40, "the run was killed mid-study"
+    assert st_running["running_pid"] == proc.pid and st_running["total"] == 40
+    assert 3 <= st_running["done"] <= len(before)
     again = subprocess.run([*cmd, "--json"], env=env(), capture_output=True, text=True, timeout=300)
     assert again.returncode == 0, again.stderr
     summary = json.loads(again.stdout)
@@ -231,3 +236,23 @@ def test_grid_map_export_and_status(tmp_path):
     assert json.loads(csv_out.stdout)["ran"] == 0  # resumed: nothing left
     header = (tmp_path / "r.csv").read_text(encoding="utf-8").splitlines()[0].split(",")
     assert {"hash", "outcome", "param.beta", "param.gamma"} <= set(header)
+
+
+def test_ctrl_c_keeps_finished_results(tmp_path):
+    study_file = write_study(tmp_path / "s.yaml", {**LYAP, "systems": {"random": STABLE(40, 8)}})
+    out = tmp_path / "out"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "lmic.cli", "batch", str(study_file), "-o", str(out), "--workers", "1", "--no-progress"],
+        env=env(),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    wait_for(lambda: len(lines(out)) >= 2 or proc.poll() is not None, 120, "two results")
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    assert err.strip().splitlines() == ["lmic: interrupted (finished results are kept; run again to resume)"]
+    recs = lines(out)
+    assert 2 <= len(recs) < 40 and len({r["hash"] for r in recs}) == len(recs)
+    assert all(r["outcome"] == "certified" for r in recs)  # all-Hurwitz plants

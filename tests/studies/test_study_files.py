@@ -144,3 +144,13 @@ def test_by_filename_reads_the_theorem_of_each_example():
     with pytest.raises(DataError, match="cannot be combined"):
         load_study({"theorems": ["by-filename", "qib.thm1"], "systems": {"random": RANDOM}})
     assert math.isclose(len(study.jobs), 2)
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in (REPO / "examples" / "studies").glob("*.yaml")))
+def test_example_studies_are_valid(name):
+    study = load_study(REPO / "examples" / "studies" / name)
+    assert study.jobs and len({j.hash for j in study.jobs}) == len(study.jobs)
+    if name == "qib_monte_carlo.yaml":
+        assert len(study.jobs) == 200
+    if name == "obs_control_map.yaml":
+        assert study.map_axes == ("eps", "alpha") and len(study.jobs) == 144
