@@ -256,3 +256,54 @@ def test_ctrl_c_keeps_finished_results(tmp_path):
     recs = lines(out)
     assert 2 <= len(recs) < 40 and len({r["hash"] for r in recs}) == len(recs)
     assert all(r["outcome"] == "certified" for r in recs)  # all-Hurwitz plants
+
+
+def test_crosscheck_audit_published_and_audit_tasks(tmp_path):
+    """The other tasks: crosscheck against the eigenvalue truth, audit-published against the direct
+    API call, and an audit study over the certificates a solve study wrote."""
+    from study_helpers import REPO
+
+    from lmic.published import audit_published
+    from lmic.studies.tasks import outcome
+
+    xc = load_study(
+        {
+            **LYAP,
+            "task": "crosscheck",
+            "backends": ["clarabel", "cvxopt"],
+            "systems": {"random": {**LYAP["systems"]["random"], "count": 4}},
+        }
+    )
+    assert len(xc.jobs) == 4 and all(j.backends == ["clarabel", "cvxopt"] for j in xc.jobs)
+    run_study(xc, str(tmp_path / "xc"), workers=2, progress=False)
+    truth = _truths(xc)
+    for r in assert_exactly_once(tmp_path / "xc", set(truth)):
+        assert r["outcome"] == truth[r["hash"]] and [row["backend"] for row in r["rows"]] == ["clarabel", "cvxopt"]
+
+    sysfile = REPO / "examples" / "qib.thm2.flexible-joint.yaml"
+    ap = load_study({"theorem": "qib.thm2", "task": "audit-published", "systems": {"files": [str(sysfile)]}})
+    run_study(ap, str(tmp_path / "ap"), workers=1, progress=False)
+    (rec,) = assert_exactly_once(tmp_path / "ap", {ap.jobs[0].hash})
+    assert rec["outcome"] == outcome("audit-published", audit_published("qib.thm2", str(sysfile)))
+
+    solve = load_study({**LYAP, "systems": {"random": {**LYAP["systems"]["random"], "count": 3}}})
+    run_study(solve, str(tmp_path / "s"), workers=1, progress=False)
+    solved = {r["certificate"]: r for r in lines(tmp_path / "s")}
+    audit = load_study({"task": "audit", "systems": {"files": [str(tmp_path / "s" / "certificates" / "*.json")]}})
+    assert len(audit.jobs) == 3
+    run_study(audit, str(tmp_path / "a"), workers=1, progress=False)
+    audited = assert_exactly_once(tmp_path / "a", {j.hash for j in audit.jobs})
+    by_file = {j.hash: os.path.relpath(j.certificate_file, tmp_path / "s") for j in audit.jobs}
+    for r in audited:
+        assert r["outcome"] == solved[by_file[r["hash"]]]["outcome"] and r["status"] == "consistent"
+    # a tampered certificate is rejected by the audit study
+    path = next(iter((tmp_path / "s" / "certificates").glob("*.json")))
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    doc["certificate"]["verdict"] = (
+        "infeasible-certified" if doc["certificate"]["verdict"] == "certified" else "certified"
+    )
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    again = load_study({"task": "audit", "systems": {"files": [str(path)]}})
+    run_study(again, str(tmp_path / "a2"), workers=1, progress=False)
+    (bad,) = lines(tmp_path / "a2")
+    assert bad["outcome"] == "rejected"
