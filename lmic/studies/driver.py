@@ -168,6 +168,7 @@ def run_study(
                 summary.counts[rec.get("outcome", "error")] += 1
         if not pending:
             summary.records = [done[j.hash] for j in study.jobs]
+            summary.elapsed_s = time.perf_counter() - t0
             return summary
         ex = make_executor(executor, workers) if isinstance(executor, str) else executor
         summary.executor, summary.workers = ex.label, ex.workers
@@ -215,10 +216,8 @@ def run_study(
                 bar.close()
             ex.close()
         summary.records = [done[j.hash] for j in study.jobs if j.hash in done]
+        summary.elapsed_s = time.perf_counter() - t0
         return summary
     finally:
-        summary_elapsed = time.perf_counter() - t0
         store.close()
-        if "summary" in locals():
-            summary.elapsed_s = summary_elapsed
         sys.stderr.flush()
