@@ -61,7 +61,14 @@ class RunSummary:
 
 
 def manifest_of(study: Study) -> dict[str, Any]:
-    """The ``study.json`` content for ``study``."""
+    """The ``study.json`` content for ``study``.
+
+    >>> from lmic.studies.spec import load_study
+    >>> m = manifest_of(load_study({"theorem": "thesis.lyapunov",
+    ...                             "systems": {"random": {"count": 2, "dims": {"n": 2}}}}))
+    >>> m["total"], m["task"], sorted(m["jobs"][0])[:3]
+    (2, 'solve', ['backend', 'backends', 'certificate_file'])
+    """
     return {
         "name": study.name,
         "study": study.path,

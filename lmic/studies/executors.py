@@ -34,7 +34,11 @@ __all__ = ["Executor", "LocalExecutor", "DaskExecutor", "make_executor", "defaul
 
 
 def default_workers() -> int:
-    """The number of usable cores."""
+    """The number of usable cores.
+
+    >>> default_workers() >= 1
+    True
+    """
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - not Linux

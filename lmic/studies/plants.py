@@ -39,6 +39,10 @@ def data_shapes(template: Any, dims: dict[str, int], fixed: set[str], where: str
 
     Raises :class:`DataError` when a dimension the data need is missing from ``dims`` or
     ``dims`` names one the theorem does not have.
+
+    >>> from lmic.registry import get_theorem
+    >>> data_shapes(get_theorem("qib.thm1").template(), {"n": 4, "p": 2}, set(), "s")
+    {'A': (4, 4), 'C': (2, 4)}
     """
     known = {str(s) for s in template.dimensions}
     for name in dims:

@@ -106,7 +106,15 @@ def flat_rows(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def export(records: list[dict[str, Any]], path: str) -> str:
-    """Write the records to ``path`` (``.csv`` or ``.parquet``), atomically; return the format."""
+    """Write the records to ``path`` (``.csv`` or ``.parquet``), atomically; return the format.
+
+    >>> import os, tempfile
+    >>> p = os.path.join(tempfile.mkdtemp(), "r.csv")
+    >>> export([{"hash": "a", "outcome": "certified", "params": {"eps": 0.5}}], p)
+    'csv'
+    >>> open(p).readline().strip().split(",")[-1]
+    'param.eps'
+    """
     from lmic.studies.store import write_atomic
 
     rows = flat_rows(records)
