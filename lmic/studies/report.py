@@ -131,8 +131,8 @@ def export(records: list[dict[str, Any]], path: str) -> str:
         return "csv"
     if suffix in (".parquet", ".pq"):
         try:
-            import pyarrow as pa
-            import pyarrow.parquet as pq
+            import pyarrow as pa  # type: ignore[import-untyped]
+            import pyarrow.parquet as pq  # type: ignore[import-untyped]
         except ImportError:
             raise DataError(f'--export {path}: Parquet needs pyarrow (pip install "lmic[dask]")') from None
         for row in rows:  # one type per column: mixed numbers / option names become strings
