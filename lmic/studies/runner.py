@@ -7,6 +7,7 @@ that runs past its time limit by killing the child (a fresh one starts for the n
 without harming itself. Jobs and results travel as one JSON line each (no pickle). The child
 writes results on a private copy of its standard output and sends anything the solvers print to
 standard error, so a chatty solver cannot corrupt the protocol.
+A runner whose parent dies exits within a second, even in the middle of a job.
 
 Examples
 --------
@@ -192,7 +193,16 @@ def run_many_in_runner(jobs: list[dict[str, Any]], time_limit: float | None = No
     return [run_in_runner(job, time_limit) for job in jobs]
 
 
+def _watch_parent(parent: int) -> None:
+    """Exit as soon as the parent is gone (a killed driver or worker leaves no runner behind)."""
+    while True:
+        time.sleep(0.5)
+        if os.getppid() != parent:
+            os._exit(1)
+
+
 def _main() -> None:
+    threading.Thread(target=_watch_parent, args=(os.getppid(),), daemon=True).start()
     proto = os.fdopen(os.dup(1), "w", encoding="utf-8")
     os.dup2(2, 1)  # anything printed by solvers goes to stderr
     sys.stdout = sys.stderr

@@ -135,3 +135,17 @@ class DaskCluster:
                 p.kill()
                 p.wait()
         self.log.close()
+
+
+def runner_pids() -> set[int]:
+    """Process ids of every live job runner (``python -m lmic.studies.runner``) on this machine."""
+    out = set()
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                cmd = (d / "cmdline").read_bytes().split(b"\0")
+            except OSError:
+                continue
+            if b"lmic.studies.runner" in cmd:
+                out.add(int(d.name))
+    return out

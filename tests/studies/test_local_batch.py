@@ -11,7 +11,16 @@ import time
 
 import numpy as np
 import pytest
-from study_helpers import assert_exactly_once, audit_certificates, env, lines, lyapunov_truth, wait_for, write_study
+from study_helpers import (
+    assert_exactly_once,
+    audit_certificates,
+    env,
+    lines,
+    lyapunov_truth,
+    runner_pids,
+    wait_for,
+    write_study,
+)
 
 from lmic.studies.driver import run_study
 from lmic.studies.executors import LocalExecutor
@@ -124,13 +133,17 @@ def test_resume_after_killing_the_batch_process(tmp_path):
         "2",
         "--no-progress",
     ]
+    old_runners = runner_pids()
     proc = subprocess.Popen(cmd, env=env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     wait_for(lambda: len(lines(out)) >= 3 or proc.poll() is not None, 120, "three results")
+    ours = runner_pids() - old_runners
+    assert len(ours) == 2  # the two workers of the killed run
     from lmic.studies.report import status
 
     st_running = status(str(out))  # while it runs
     proc.kill()
     proc.wait()
+    wait_for(lambda: not (runner_pids() & ours), 10, "the runners of the killed driver to exit")
     before = {r["hash"]: r for r in lines(out)}
     assert 3 <= len(before) < 40, "the run was killed mid-study"
     assert st_running["running_pid"] == proc.pid and st_running["total"] == 40
