@@ -21,6 +21,7 @@ Examples
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 from collections import Counter
@@ -29,7 +30,7 @@ from typing import Any
 
 from lmic.studies.executors import Executor, make_executor
 from lmic.studies.spec import Study
-from lmic.studies.store import Store
+from lmic.studies.store import Store, read_results
 from lmic.studies.tasks import OUTCOMES
 
 __all__ = ["RunSummary", "run_study", "manifest_of"]
@@ -161,9 +162,19 @@ def run_study(
     progress : bool
         Draw a progress bar on stderr.
     """
-    store = Store(out_dir)
-    store.lock()
     t0 = time.perf_counter()
+    ex: Executor | None = None if isinstance(executor, str) else executor
+    if ex is None:  # start the executor first: an unreachable scheduler leaves nothing written
+        finished = {r["hash"] for r in read_results(os.path.join(out_dir, "results.jsonl"))}
+        if any(j.hash not in finished for j in study.jobs):
+            ex = make_executor(str(executor), workers)
+    try:
+        store = Store(out_dir)
+        store.lock()
+    except BaseException:
+        if ex is not None:
+            ex.close()
+        raise
     try:
         done = store.done()
         wanted = {j.hash for j in study.jobs}
@@ -173,11 +184,12 @@ def run_study(
         for rec in done.values():
             if rec["hash"] in wanted:
                 summary.counts[rec.get("outcome", "error")] += 1
-        if not pending:
-            summary.records = [done[j.hash] for j in study.jobs]
+        if not pending or ex is None:
+            if ex is not None:
+                ex.close()
+            summary.records = [done[j.hash] for j in study.jobs if j.hash in done]
             summary.elapsed_s = time.perf_counter() - t0
             return summary
-        ex = make_executor(executor, workers) if isinstance(executor, str) else executor
         summary.executor, summary.workers = ex.label, ex.workers
         bar = _Bar(len(study.jobs), summary.skipped, study.name) if progress else None
         by_hash = {j.hash: j for j in pending}

@@ -154,3 +154,16 @@ def test_example_studies_are_valid(name):
         assert len(study.jobs) == 200
     if name == "obs_control_map.yaml":
         assert study.map_axes == ("eps", "alpha") and len(study.jobs) == 144
+
+
+def test_unreachable_scheduler_is_one_line_and_writes_nothing(tmp_path):
+    from study_helpers import free_port
+
+    path = write_study(
+        tmp_path / "s.yaml", {"lmic": 1, "theorem": "qib.thm1", "params": {"beta": 0.01}, "systems": {"random": RANDOM}}
+    )
+    out = tmp_path / "out"
+    proc = _cli("batch", str(path), "-o", str(out), "--executor", f"tcp://127.0.0.1:{free_port()}", "--no-progress")
+    assert proc.returncode == 2 and proc.stderr.count("\n") == 1
+    assert "cannot reach the Dask scheduler" in proc.stderr
+    assert not out.exists()
