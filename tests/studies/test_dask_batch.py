@@ -92,6 +92,25 @@ def test_scheduler_and_worker_processes_run_a_20_job_study(tmp_path):
         recs = assert_exactly_once(tmp_path / "o", {j.hash for j in study.jobs})
         _check_truth(study, recs)
         assert len({r["worker"] for r in recs}) == 1  # one worker, one runner: the plan analysed once
+        # a job that hangs (a bisection to a zero tolerance: ~100 solves) is stopped by its 0.4 s limit,
+        # and the worker goes on with the next study
+        hang = load_study(
+            {
+                "theorem": "qib.thm1",
+                "task": "maximize",
+                "params": {"gamma": 0.0},
+                "maximize": {"param": "beta", "xtol": 1e-300, "rtol": 0, "max_evals": 100},
+                "systems": {"random": {"count": 1, "seed": 1, "dims": {"n": 4, "p": 1}, "spectral_radius": {"A": 0.9}}},
+                "time_limit": 0.4,
+                "retries": 0,
+            }
+        )
+        run_study(hang, str(tmp_path / "h"), executor=cluster.address, progress=False)
+        (rec,) = assert_exactly_once(tmp_path / "h", {hang.jobs[0].hash})
+        assert rec["outcome"] == "undecided" and rec["status"] == "time limit" and rec["time_s"] < 2.0
+        after = load_study(_study(3, 3, seed=24))
+        run_study(after, str(tmp_path / "after"), executor=cluster.address, progress=False)
+        _check_truth(after, assert_exactly_once(tmp_path / "after", {j.hash for j in after.jobs}))
     finally:
         cluster.stop()
 
