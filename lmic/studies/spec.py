@@ -292,8 +292,7 @@ def load_study(src: str | os.PathLike[str] | dict[str, Any], label: str | None =
     if task == "maximize" and "maximize" not in raw:
         raise DataError(f"{where}: task maximize needs maximize: {{param: NAME}}")
     fixed = {k: _number(v) for k, v in (raw.get("params") or {}).items()}
-    where_grid = where
-    axes = {name: expand_axis(name, spec, where_grid) for name, spec in (raw.get("grid") or {}).items()}
+    axes = {name: expand_axis(name, spec, where) for name, spec in (raw.get("grid") or {}).items()}
     points = [dict(zip(axes, combo, strict=True)) for combo in itertools.product(*axes.values())] if axes else [{}]
     if raw.get("samples"):
         samples = raw["samples"]
