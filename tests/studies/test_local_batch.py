@@ -68,7 +68,8 @@ def test_each_worker_analyses_a_theorem_once(tmp_path):
     compile_s = [r["timings"]["compile_s"] for r in recs]
     first = max(compile_s)
     assert len({r["worker"] for r in recs}) == 1
-    assert sorted(compile_s)[:-1] and max(sorted(compile_s)[:-1]) < first / 3
+    later = sorted(compile_s)[:-1]  # every job but the slowest (the one that analysed the template)
+    assert len(later) == 7 and float(np.median(later)) < first / 3
 
 
 def test_killed_runner_is_retried_and_counted_once(tmp_path):
