@@ -1,7 +1,8 @@
 """``lmic reproduce --executor``: one job per example file, on the study executors.
 
 Each example file becomes a job of task ``reproduce-file`` that runs
-:func:`lmic.reproduce.reproduce` restricted to that file in a job runner (local worker or Dask
+:func:`lmic.reproduce.reproduce` restricted to that file in a job runner
+(:func:`lmic.studies.tasks.run_reproduce_file`) (local worker or Dask
 task); the rows come back as JSON and are joined, in the order of the expectations file, into
 the same :class:`~lmic.reproduce.ReproductionReport` the sequential command builds.
 
@@ -23,28 +24,7 @@ from typing import Any
 
 from lmic.errors import DataError
 
-__all__ = ["reproduce_parallel", "run_reproduce_file"]
-
-
-def run_reproduce_file(job: dict[str, Any]) -> dict[str, Any]:
-    """The worker side: reproduce one example file; rows as JSON (``RowResult.to_dict``)."""
-    from lmic.reproduce import reproduce
-
-    options = None
-    if job.get("options"):
-        from lmic.backends.base import SolveOptions
-
-        options = SolveOptions()
-        for key, value in job["options"].items():
-            setattr(options, key, value)
-    rep = reproduce(job["examples"], job["expectations"], only=[job["file"]], backend=job["backend"], options=options)
-    return {
-        "outcome": "certified" if rep.exit_code() == 0 else "undecided",
-        "rows": [r.to_dict() for r in rep.results],
-        "file_times": rep.file_times,
-        "status": f"exit {rep.exit_code()}",
-        "message": "",
-    }
+__all__ = ["reproduce_parallel"]
 
 
 def reproduce_parallel(

@@ -25,7 +25,7 @@ import time
 import traceback
 from typing import Any
 
-__all__ = ["OUTCOMES", "outcome", "run_job"]
+__all__ = ["OUTCOMES", "outcome", "run_job", "run_reproduce_file"]
 
 #: the outcomes a study counts, in display order (HELPERS vocabulary plus ``error``)
 OUTCOMES = ("certified", "infeasible-certified", "infeasible-bounded", "rejected", "undecided", "error")
@@ -209,6 +209,27 @@ def _audit(job: dict[str, Any]) -> dict[str, Any]:
     }
 
 
+def run_reproduce_file(job: dict[str, Any]) -> dict[str, Any]:
+    """The worker side: reproduce one example file; rows as JSON (``RowResult.to_dict``)."""
+    from lmic.reproduce import reproduce
+
+    options = None
+    if job.get("options"):
+        from lmic.backends.base import SolveOptions
+
+        options = SolveOptions()
+        for key, value in job["options"].items():
+            setattr(options, key, value)
+    rep = reproduce(job["examples"], job["expectations"], only=[job["file"]], backend=job["backend"], options=options)
+    return {
+        "outcome": "certified" if rep.exit_code() == 0 else "undecided",
+        "rows": [r.to_dict() for r in rep.results],
+        "file_times": rep.file_times,
+        "status": f"exit {rep.exit_code()}",
+        "message": "",
+    }
+
+
 def run_job(job: dict[str, Any], time_limit: float | None = None) -> dict[str, Any]:
     """Run one job; never raises (a job that raises is an ``error`` record with its message).
 
@@ -236,8 +257,6 @@ def run_job(job: dict[str, Any], time_limit: float | None = None) -> dict[str, A
         if task == "audit":
             rec = _audit(job)
         elif task == "reproduce-file":
-            from lmic.studies.parallel import run_reproduce_file
-
             rec = run_reproduce_file(job)
         else:
             from lmic.system import load_system
