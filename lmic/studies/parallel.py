@@ -8,9 +8,9 @@ the same :class:`~lmic.reproduce.ReproductionReport` the sequential command buil
 
 Examples
 --------
->>> rep = reproduce_parallel(only=["thesis.lyapunov.*"], executor="local", workers=1)  # doctest: +SKIP
->>> [r.finding for r in rep.results]                                                  # doctest: +SKIP
-['certified', 'certified', 'certified']
+>>> rep = reproduce_parallel(only=["thesis.lyapunov.*"], executor="local", workers=1)
+>>> [r.finding for r in rep.results], rep.exit_code()
+(['certified', 'certified', 'certified'], 0)
 """
 
 from __future__ import annotations
