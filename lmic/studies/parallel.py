@@ -32,7 +32,7 @@ def reproduce_parallel(
     expectations: str | os.PathLike[str] | None = None,
     *,
     only: Sequence[str] = (),
-    backend: str = "clarabel",
+    backend: str | None = None,
     options: dict[str, Any] | None = None,
     executor: str = "local",
     workers: int | None = None,
@@ -43,8 +43,10 @@ def reproduce_parallel(
 
     Parameters
     ----------
-    examples, expectations, only, backend
+    examples, expectations, only
         As :func:`lmic.reproduce.reproduce`.
+    backend : str, optional
+        Default: :func:`lmic.reproduce.reproduce`'s own default.
     options : dict, optional
         ``SolveOptions`` fields to set (``tol``, ``time_limit`` ...), sent as numbers.
     executor : str
@@ -93,6 +95,7 @@ def reproduce_parallel(
     by_file: dict[str, list[Any]] = {}
     file_times: dict[str, float] = {}
     done = 0
+    used = backend or ""
     ex = make_executor(executor, workers)
     try:
         ex.submit_many(jobs, time_limit)
@@ -124,13 +127,14 @@ def reproduce_parallel(
                     progress({"done": done, "total": total, "file": f, "row": res})
             by_file[f] = results
             file_times[f] = (rec.get("file_times") or {}).get(f, rec.get("time_s", 0.0))
+            used = rec.get("backend") or used
     finally:
         ex.close()
     return ReproductionReport(
         results=[r for f in listed for r in by_file.get(f, [])],
         unlisted=unlisted,
         missing=missing,
-        backend=backend,
+        backend=used,
         total_s=time.perf_counter() - t0,
         file_times=file_times,
     )

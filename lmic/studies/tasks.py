@@ -220,8 +220,10 @@ def run_reproduce_file(job: dict[str, Any]) -> dict[str, Any]:
         options = SolveOptions()
         for key, value in job["options"].items():
             setattr(options, key, value)
-    rep = reproduce(job["examples"], job["expectations"], only=[job["file"]], backend=job["backend"], options=options)
+    kwargs = {"backend": job["backend"]} if job.get("backend") else {}  # else reproduce's own default
+    rep = reproduce(job["examples"], job["expectations"], only=[job["file"]], options=options, **kwargs)
     return {
+        "backend": rep.backend,
         "outcome": "certified" if rep.exit_code() == 0 else "undecided",
         "rows": [r.to_dict() for r in rep.results],
         "file_times": rep.file_times,
