@@ -158,12 +158,13 @@ def _maximize(job: dict[str, Any], sysobj: Any, opts: Any) -> dict[str, Any]:
 
     m = dict(job["maximize"])
     kwargs = {k: m[k] for k in ("lo", "hi", "xtol", "rtol", "max_evals") if m.get(k) is not None}
+    if job.get("backend"):  # else the API's own default (its decision policy)
+        kwargs["backend"] = job["backend"]
     sup = maximize(
         job["theorem"],
         sysobj,
         m["param"],
         params=job["params"] or None,
-        backend=job.get("backend") or "clarabel",
         options=opts,
         exact=True,
         **kwargs,
@@ -184,9 +185,8 @@ def _maximize(job: dict[str, Any], sysobj: Any, opts: Any) -> dict[str, Any]:
 def _audit_published(job: dict[str, Any], sysobj: Any, opts: Any) -> dict[str, Any]:
     from lmic.published import audit_published
 
-    rep = audit_published(
-        job["theorem"], sysobj, params=job["params"] or None, backend=job.get("backend") or "clarabel", options=opts
-    )
+    kwargs = {"backend": job["backend"]} if job.get("backend") else {}  # else the API's own default
+    rep = audit_published(job["theorem"], sysobj, params=job["params"] or None, options=opts, **kwargs)
     return {
         "outcome": outcome("audit-published", rep),
         "status": f"exit {rep.exit_code()}",
