@@ -41,6 +41,7 @@ COMMANDS = [
     "audit",
     "audit_published",
     "reproduce",
+    "batch",
     "simulate",
     "report",
 ]
