@@ -9,6 +9,7 @@ malformed, truncated, of an unknown schema version, or its theorem or system fil
 Examples
 --------
 >>> import argparse
+import math
 >>> parser = argparse.ArgumentParser(); sub = parser.add_subparsers()
 >>> register(sub)
 >>> parser.parse_args(["audit", "c.json", "--exact"]).exact
@@ -33,7 +34,41 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("certificate", metavar="CERT.json", help="a certificate written by 'lmic solve -o'")
     p.add_argument("--exact", action="store_true", help="also prove every LMI in exact rational arithmetic")
     p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument(
+        "--tol",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="a stricter tolerance to decide with (rel, strict_rel, zero_rel, objective_rel, farkas_rel); "
+        "the file's own tolerances are never used when looser than lmic's defaults",
+    )
     p.set_defaults(func=run)
+
+
+def _tolerances(items: list[str]) -> dict[str, float]:
+    """``NAME=VALUE`` strings -> dict of finite non-negative floats (bad input otherwise).
+
+    >>> _tolerances(["rel=1e-10"])
+    {'rel': 1e-10}
+    """
+    from lmic.certify.check import Tolerances
+    from lmic.errors import DataError
+
+    known = Tolerances().to_dict()
+    out: dict[str, float] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep or name not in known:
+            raise DataError(f"--tol {item!r}: write NAME=VALUE with NAME one of {', '.join(known)}")
+        try:
+            num = float(value)
+        except ValueError:
+            raise DataError(f"--tol {item!r}: {value!r} is not a number") from None
+        if not (math.isfinite(num) and num >= 0):
+            raise DataError(f"--tol {item!r}: must be a finite non-negative number")
+        out[name] = num
+    return out
 
 
 def exit_code(result: AuditResult) -> int:
@@ -59,7 +94,7 @@ def _fmt(v: object) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Audit the certificate; print a table (or JSON); return the exit code."""
-    result = audit_certificate(args.certificate, exact=args.exact)
+    result = audit_certificate(args.certificate, exact=args.exact, tol=_tolerances(args.tol) or None)
     code = exit_code(result)
     if args.json:
         from lmic.commands._common import print_json
