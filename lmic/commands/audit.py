@@ -1,4 +1,8 @@
-"""``lmic audit CERT.json [--exact] [--json]``: recompute a certificate and compare.
+"""``lmic audit CERT.json [--exact] [--json] [--tol NAME=VALUE]``: recompute a certificate and compare.
+
+The audit decides with lmic's default tolerances, or stricter ones given with ``--tol``; a file
+recording looser ones is rejected, naming the tolerance. ``--json`` lists the informational
+fields (the only ones a certificate may change freely).
 
 Exit codes: 0 the certificate is consistent and certifies a solution; 3 it is consistent and
 certifies infeasibility; 1 it was tampered with, no longer matches its system file or theorem,
@@ -9,7 +13,6 @@ malformed, truncated, of an unknown schema version, or its theorem or system fil
 Examples
 --------
 >>> import argparse
-import math
 >>> parser = argparse.ArgumentParser(); sub = parser.add_subparsers()
 >>> register(sub)
 >>> parser.parse_args(["audit", "c.json", "--exact"]).exact
@@ -19,6 +22,7 @@ True
 from __future__ import annotations
 
 import argparse
+import math
 
 from rich.console import Console
 from rich.table import Table
