@@ -323,7 +323,16 @@ def read_certificate(path: str | os.PathLike[str]) -> dict[str, Any]:
     """
     p = Path(path)
     name = p.name
+    from lmic.limits import MAX_INPUT_BYTES, MAX_INT_DIGITS, check_depth
+
+    def parse_int(t: str) -> int:
+        if len(t.lstrip("-")) > MAX_INT_DIGITS:
+            raise ValueError(f"an integer of {len(t.lstrip('-'))} digits (at most {MAX_INT_DIGITS})")
+        return int(t)
+
     try:
+        if p.stat().st_size > MAX_INPUT_BYTES:
+            raise CertificateError(f"{p}: larger than the input limit of {MAX_INPUT_BYTES} bytes")
         text = p.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise CertificateError(f"{p}: no such certificate file") from None
@@ -332,13 +341,16 @@ def read_certificate(path: str | os.PathLike[str]) -> dict[str, Any]:
     if not text.strip():
         raise CertificateError(f"{name}: empty certificate file")
     try:
-        doc = json.loads(text, parse_constant=_reject_constant)
+        doc = json.loads(text, parse_constant=_reject_constant, parse_int=parse_int)
     except json.JSONDecodeError as err:
         raise CertificateError(
             f"{name}: not valid JSON (truncated or corrupted?) at line {err.lineno} column {err.colno}: {err.msg}"
         ) from None
     except ValueError as err:
         raise CertificateError(f"{name}: {err}") from None
+    except RecursionError:
+        raise CertificateError(f"{name}: nested too deeply") from None
+    check_depth(doc, name, CertificateError)
     if not isinstance(doc, dict) or "lmic_certificate" not in doc:
         raise CertificateError(f"{name}: not an lmic certificate (no 'lmic_certificate' key)")
     version = doc["lmic_certificate"]

@@ -130,7 +130,7 @@ class _Header:
         try:
             return lineno, _int(toks[0])
         except ValueError:
-            raise self.fail(lineno, f"expected {what}, got '{toks[0]}'") from None
+            raise self.fail(lineno, f"expected {what}, got '{_short(toks[0])}'") from None
 
     def numbers(self, count: int, what: str, conv: Any) -> list[tuple[int, Any]]:
         """``count`` numbers starting on the next line, possibly spread over several lines.
@@ -149,9 +149,13 @@ class _Header:
                     out.append((lineno, conv(tok)))
                 except ValueError:
                     raise self.fail(
-                        lineno, f"expected {count} {what}; '{tok}' is not a valid number"
+                        lineno, f"expected {count} {what}; '{_short(tok)}' is not a valid number"
                     ) from None
         return out
+
+
+def _short(tok: str) -> str:
+    return tok if len(tok) <= 24 else tok[:21] + "..."
 
 
 def _diagnose(line: str) -> str:
