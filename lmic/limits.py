@@ -226,9 +226,7 @@ class _LimitedLoader(yaml.SafeLoader):
                 size = 1
             if size > MAX_YAML_NODES:
                 line = node.start_mark.line + 1
-                raise yaml.YAMLError(
-                    f"__limit__line {line}: expands to more than {MAX_YAML_NODES} nodes (alias bomb?)"
-                )
+                raise yaml.YAMLError(f"__limit__line {line}: expands to more than {MAX_YAML_NODES} nodes (alias bomb?)")
             self._sizes[key] = size
         return node
 
