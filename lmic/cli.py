@@ -21,12 +21,14 @@ from collections.abc import Sequence
 from lmic import __version__
 from lmic.errors import LmicError
 
-__all__ = ["main", "COMMANDS", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_INFEASIBLE"]
+__all__ = ["main", "COMMANDS", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_INFEASIBLE", "EXIT_INTERRUPTED"]
 
 EXIT_OK = 0
 EXIT_FAILED = 1
 EXIT_USAGE = 2
 EXIT_INFEASIBLE = 3
+#: Ctrl-C (128 + SIGINT, the shell convention)
+EXIT_INTERRUPTED = 130
 
 #: sub-command modules, in the order ``lmic --help`` lists them
 COMMANDS = [
@@ -70,12 +72,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit code."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return EXIT_USAGE
     try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return EXIT_USAGE
         return int(args.func(args))
     except LmicError as err:
         msg = " ".join(str(err).split())
@@ -83,7 +85,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     except KeyboardInterrupt:
         sys.stderr.write("lmic: interrupted\n")
-        return EXIT_FAILED
+        return EXIT_INTERRUPTED
 
 
 def _entry() -> None:

@@ -52,7 +52,6 @@ import hashlib
 import json
 import math
 import os
-import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -269,22 +268,10 @@ def write_certificate(
     'certified'
     """
     doc = certificate_document(problem, solution, certificate, system=system, path=path, embed_ir=embed_ir)
+    from lmic.output import write_output
+
     text = json.dumps(doc, indent=1, allow_nan=False) + "\n"
-    target = Path(path)
-    folder = target.parent if str(target.parent) else Path(".")
-    if not folder.is_dir():
-        raise CertificateError(f"{target}: folder {folder} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, target)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    write_output(path, text)  # atomic; the output-path rules of lmic.output
     return doc
 
 

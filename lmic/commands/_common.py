@@ -12,16 +12,23 @@ import json
 import math
 import os
 import sys
-import tempfile
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from lmic.errors import DataError
 
-__all__ = ["parse_params", "print_json", "to_jsonable", "write_atomic", "add_param_option"]
+__all__ = [
+    "parse_params",
+    "print_json",
+    "to_jsonable",
+    "write_atomic",
+    "add_param_option",
+    "positive_float",
+    "nonnegative_float",
+    "positive_int",
+]
 
 
 def parse_params(items: list[str] | None) -> dict[str, float | str]:
@@ -74,20 +81,80 @@ def print_json(obj: Any) -> None:
 
 
 def write_atomic(path: str | os.PathLike[str], write: Callable[[Any], None], mode: str = "w") -> None:
-    """Write through a temporary file in the same folder, then rename: nothing half-written."""
-    target = Path(path)
-    folder = target.parent if str(target.parent) else Path(".")
-    if not folder.is_dir():
-        raise DataError(f"{target}: folder {folder} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=folder)
+    """Write through :func:`lmic.output.write_output` (atomic, output-path rules, one-line errors).
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> f = os.path.join(tempfile.mkdtemp(), "t.txt")
+    >>> write_atomic(f, lambda fh: fh.write("ok"))
+    >>> open(f).read()
+    'ok'
+    """
+    from lmic.output import write_output
+
+    write_output(path, write, binary="b" in mode)
+
+
+def _number(text: str, kind: type, what: str) -> Any:
+    import argparse
+
     try:
-        with os.fdopen(fd, mode) as fh:
-            write(fh)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the file ordinary permissions
-        os.replace(tmp, target)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+        value = kind(text)
+    except (ValueError, OverflowError):
+        raise argparse.ArgumentTypeError(f"{text!r} is not {what}") from None
+    if isinstance(value, float) and not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not {what}")
+    return value
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite number > 0 (``--time-limit``, ``--tol``).
+
+    >>> positive_float("1e-8")
+    1e-08
+    >>> positive_float("nan")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: 'nan' is not a finite positive number
+    """
+    import argparse
+
+    value = _number(text, float, "a finite positive number")
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite positive number")
+    return value
+
+
+def nonnegative_float(text: str) -> float:
+    """argparse type: a finite number >= 0 (``--margin``).
+
+    >>> nonnegative_float("-1")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: '-1' is not a finite non-negative number
+    """
+    import argparse
+
+    value = _number(text, float, "a finite non-negative number")
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite non-negative number")
+    return value
+
+
+def positive_int(text: str) -> int:
+    """argparse type: an integer >= 1 (``--max-iter``).
+
+    >>> positive_int("0")
+    Traceback (most recent call last):
+    ...
+    argparse.ArgumentTypeError: '0' is not a positive integer
+    """
+    import argparse
+
+    if len(text) > 18:
+        raise argparse.ArgumentTypeError(f"{text[:20]!r}... is not a positive integer")
+    value = _number(text, int, "a positive integer")
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer")
+    return value

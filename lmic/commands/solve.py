@@ -23,10 +23,14 @@ __all__ = ["register", "run", "add_solver_options", "solve_options"]
 
 def add_solver_options(p: argparse.ArgumentParser) -> None:
     """Options shared by ``solve`` and ``crosscheck``: tolerance, limits, margin, verbosity."""
-    p.add_argument("--tol", type=float, default=None, help="solver tolerance (default 1e-8)")
-    p.add_argument("--max-iter", type=int, default=None, help="iteration limit")
-    p.add_argument("--time-limit", type=float, default=None, help="seconds per solve")
-    p.add_argument("--margin", type=float, default=None, help="absolute margin imposed on strict LMIs (fixed-margin)")
+    from lmic.commands._common import nonnegative_float, positive_float, positive_int
+
+    p.add_argument("--tol", type=positive_float, default=None, help="solver tolerance (default 1e-8)")
+    p.add_argument("--max-iter", type=positive_int, default=None, help="iteration limit")
+    p.add_argument("--time-limit", type=positive_float, default=None, help="seconds per solve")
+    p.add_argument(
+        "--margin", type=nonnegative_float, default=None, help="absolute margin imposed on strict LMIs (fixed-margin)"
+    )
     p.add_argument(
         "--strict",
         choices=("auto", "max-margin", "fixed-margin"),
@@ -100,6 +104,10 @@ def run(args: argparse.Namespace) -> int:
     from lmic.api import solve
     from lmic.commands._common import parse_params, print_json
 
+    if args.output:
+        from lmic.output import check_output_path
+
+        check_output_path(args.output)  # before any work
     # -- sup and sweep (lmic.sweep) ---------------------------------------------------------------
     if getattr(args, "maximize", None) or getattr(args, "sweep", None):
         from lmic.sweep import run_cli

@@ -789,11 +789,9 @@ def dump_problem(problem: Problem, path: str | os.PathLike[str]) -> None:
     >>> load_problem_json(f).objective.c
     array([0., 1.])
     """
-    text = problem_to_json(problem)
-    try:
-        Path(path).write_text(text, encoding="utf-8")
-    except OSError as err:
-        raise IRError(f"{os.fspath(path)}: cannot write: {err.strerror or err}") from None
+    from lmic.output import write_output
+
+    write_output(path, problem_to_json(problem))  # atomic: nothing half-written
 
 
 def load_problem_json(path: str | os.PathLike[str]) -> Problem:

@@ -533,8 +533,6 @@ def write_sdpa(problem: Problem, path: str | os.PathLike[str]) -> None:
     >>> (read_sdpa(f).lmis[0].coeffs != p.lmis[0].coeffs).nnz
     0
     """
-    text = sdpa_text(problem)
-    try:
-        Path(path).write_text(text, encoding="utf-8")
-    except OSError as err:
-        raise IRError(f"{os.fspath(path)}: cannot write: {err.strerror or err}") from None
+    from lmic.output import write_output
+
+    write_output(path, sdpa_text(problem))  # atomic: nothing half-written

@@ -148,7 +148,9 @@ def test_failed_write_leaves_the_old_file_intact(raw_cert, lyapunov_point, monke
     monkeypatch.setattr(os, "replace", boom)
     prob, x = lyapunov_point
     sol = Solution("optimal", x=2 * x)
-    with pytest.raises(OSError, match="disk full"):
+    from lmic.output import OutputError
+
+    with pytest.raises(OutputError, match="disk full"):  # one line, exit code 2 on the command line
         write_certificate(path, prob, sol, certify(prob, sol))
     assert path.read_text() == before
     assert sorted(p.name for p in path.parent.iterdir()) == ["raw.json"]
