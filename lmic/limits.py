@@ -268,8 +268,9 @@ def load_yaml_text(text: str, where: str, error: type[LmicError] = DataError) ->
     """
     if len(text) > MAX_INPUT_BYTES:
         raise error(f"{where}: exceeds the input limit of {MAX_INPUT_BYTES} bytes")
-    loader = _LimitedLoader(text)
+    loader = None
     try:
+        loader = _LimitedLoader(text)  # the reader checks the characters here already
         return loader.get_single_data()
     except RecursionError:
         raise error(f"{where}: nested deeper than {MAX_DEPTH} levels") from None
@@ -284,7 +285,8 @@ def load_yaml_text(text: str, where: str, error: type[LmicError] = DataError) ->
     except (ValueError, OverflowError) as err:  # a scalar the constructors cannot convert
         raise error(f"{where}: {' '.join(str(err).split())}") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
 
 
 def check_size(value: int, limit: int, what: str, where: str, error: type[LmicError] = DataError) -> int:
