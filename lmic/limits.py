@@ -19,7 +19,8 @@ MAX_VARIABLES            1,000,000           variables of an IR or SDPA problem
 MAX_NONZEROS             50,000,000          entries of a sparse IR / SDPA problem
 MEMORY_BUDGET_BYTES      2 GiB               dense allocations a reader may make (the sum
                                              of 8 d^2 over the blocks it densifies)
-MAX_SIM_STEPS            10,000,000          steps of a simulation (horizon / dt)
+MAX_SIM_STEPS            200,000             points of a simulation (horizon / dt; the
+                                             simulator's ``MAX_POINTS``)
 =======================  ==================  ==================================================
 
 Numbers: only ASCII digits are digits (``"١٢"`` is text, not 12), integers longer than
@@ -77,7 +78,7 @@ MAX_DIMENSION = 20_000
 MAX_VARIABLES = 1_000_000
 MAX_NONZEROS = 50_000_000
 MEMORY_BUDGET_BYTES = 2 * 2**30
-MAX_SIM_STEPS = 10_000_000
+MAX_SIM_STEPS = 200_000
 
 #: every limit by name (``lmic`` documents them in the README's security section)
 LIMITS = {
