@@ -234,6 +234,8 @@ class _LimitedLoader(yaml.SafeLoader):
     def construct_mapping(self, node: Any, deep: bool = False) -> Any:  # type: ignore[override]
         seen: set[Any] = set()
         for key_node, _ in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge":
+                continue  # '<<: *base' merges; explicit keys may override merged ones
             key = self.construct_object(key_node, deep=True)
             try:
                 dup = key in seen
