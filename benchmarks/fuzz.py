@@ -43,6 +43,9 @@ CHUNKS = [
     b"-1000000000", b"9223372036854775808", b"50000", b"NaN", b"Infinity", b"1" * 100000 + b"x",
 ]  # fmt: skip
 
+#: largest mutant (bytes): the bombs are small files; big ones only fill the disk
+MAX_MUTANT = 1_000_000
+
 WORKER = r"""
 import json, sys, resource, signal, traceback
 resource.setrlimit(resource.RLIMIT_AS, (4 * 2**30, 4 * 2**30))
@@ -109,10 +112,11 @@ def mutate(data: bytes, rng: random.Random) -> bytes:
         elif op == 1:
             del out[i : i + rng.randint(1, 40)]
         elif op == 2:
-            out[i:i] = chunk * rng.choice([1, 10, 1000])
+            times = rng.choice([1, 10, 1000])
+            out[i:i] = chunk * max(1, min(times, MAX_MUTANT // max(1, len(chunk))))
         else:
             out[i:i] = out[max(0, i - 60) : i] * rng.choice([1, 100])
-    return bytes(out)
+    return bytes(out[: max(MAX_MUTANT, len(data))])
 
 
 def bombs(kind: str) -> list[bytes]:
@@ -217,22 +221,25 @@ def main() -> None:
         base = seeds(folder)
         for kind, (data, suffix) in base.items():
             t0 = time.perf_counter()
-            inputs = bombs(kind) + [mutate(data, rng) for _ in range(args.runs)]
-            paths = []
-            for i, blob in enumerate(inputs):
-                p = folder / f"{kind}-{i}{suffix}"
-                p.write_bytes(blob)
-                paths.append(str(p))
+            n_inputs = len(bombs(kind)) + args.runs
             results: dict[str, str] = {}
-            for k in range(0, len(paths), args.batch):
-                results.update(run_batch(kind, paths[k : k + args.batch], args.timeout))
+            for k in range(0, n_inputs, args.batch):
+                paths = []
+                for i in range(k, min(n_inputs, k + args.batch)):
+                    blob = bombs(kind)[i] if i < len(bombs(kind)) else mutate(data, rng)
+                    p = folder / f"{kind}-{i}{suffix}"
+                    p.write_bytes(blob)
+                    paths.append(str(p))
+                results.update(run_batch(kind, paths, args.timeout))
+                for path in paths:
+                    os.unlink(path)
             counts = {"read": 0, "rejected": 0, "crash": 0, "hang": 0, "memory": 0}
             for path, res in results.items():
                 key = res.split(":")[0]
                 counts[key] += 1
                 if key != "read" and key != "rejected" and len(examples) < 10:
                     examples.append(f"{kind} {Path(path).name}: {res}")
-            rows.append((kind, len(paths), counts, time.perf_counter() - t0))
+            rows.append((kind, n_inputs, counts, time.perf_counter() - t0))
     print(
         f"{'reader':<12} {'runs':>6} {'read':>6} {'rejected':>9} {'crashes':>8} {'hangs':>6} {'>4 GB':>6} {'time':>8}"
     )
