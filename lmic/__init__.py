@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+from lmic._version import __version__
 
 __all__ = ["__version__", "solve", "theorem", "theorems", "compile_theorem"]
 
@@ -32,7 +32,7 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 def solve(
-    theorem: str,
+    theorem: str | Theorem,
     system: Any,
     params: dict[str, Any] | None = None,
     backend: str | None = None,
@@ -44,9 +44,10 @@ def solve(
 
     Parameters
     ----------
-    theorem : str
-        A theorem id (``lmic.theorems()`` lists them), or an ``.json`` IR / ``.dat-s`` file
-        (then ``system`` is ``None``).
+    theorem : str or Theorem
+        A theorem id (``lmic.theorems()`` lists them), a :class:`~lmic.template.Theorem`
+        object written in a notebook (``@theorem``-decorated; no packaging or registration
+        needed), or an ``.json`` IR / ``.dat-s`` file (then ``system`` is ``None``).
     system : path, dict, System or StateSpace
         A system file, a dict with its keys (``data``, ``params``; numpy arrays allowed), a
         python-control ``StateSpace`` (its ``A, B, C, D`` fill the theorem's data of those names),

@@ -5,8 +5,9 @@ an IR :class:`~lmic.ir.problem.Problem`. The result carries the status, the obje
 variables, the derived quantities, the certificate and the timings, and maps to the exit codes
 of DESIGN section 7 (:meth:`Result.exit_code`).
 
-``backend="auto"`` follows the route of :func:`lmic.backends.auto.route`: the first backend's
-answer is certified, and the next backend of the route runs only when the certificate fails.
+Every solve goes through the one solve policy (:func:`lmic.policy.decide`): no backend (or
+``"auto"``) is the escalating route (strategies, then the next backend, then exact rescue), a
+named backend is that backend alone. The verdict and exit code follow :mod:`lmic.outcome`.
 
 Examples
 --------
@@ -37,8 +38,8 @@ from lmic.solution import Solution
 
 __all__ = ["Result", "solve", "load_target", "solve_problem", "certify_solution", "EXIT_CODES"]
 
-#: exit codes of DESIGN section 7
-EXIT_CODES = {"certified": 0, "failed": 1, "usage": 2, "infeasible": 3}
+#: exit codes (kept for callers of the old names; the table is :data:`lmic.outcome.EXIT_CODES`)
+EXIT_CODES = {"certified": 0, "failed": 1, "usage": 2, "infeasible": 3, "infeasible-bounded": 4}
 
 _FILE_SUFFIXES = (".json", ".dat-s")
 
@@ -81,11 +82,17 @@ class Result:
     solution: Solution
     params: dict[str, Any] = field(default_factory=dict)
     attempts: list[dict[str, Any]] = field(default_factory=list)
+    outcome: Any = None
 
     @property
     def verdict(self) -> str:
-        """The certificate's verdict (``unverified`` without a certifier)."""
-        return getattr(self.certificate, "verdict", "unverified") if self.certificate else "unverified"
+        """The outcome's verdict (:data:`lmic.outcome.VERDICTS`: ``certified``, ``rejected``,
+        ``undecided``, ``infeasible-certified``, ``infeasible-bounded``)."""
+        if self.outcome is not None:
+            return str(self.outcome.verdict)
+        from lmic.outcome import verdict_of
+
+        return verdict_of(self.problem, self.solution, self.certificate)
 
     @property
     def min_margin(self) -> float | None:
@@ -122,14 +129,11 @@ class Result:
         return result_latex(self)
 
     def exit_code(self) -> int:
-        """0 certified, 3 infeasible, 1 rejected / inaccurate / failed (DESIGN section 7)."""
-        if self.verdict == "certified" and (
-            self.status in ("optimal", "feasible") or self.problem.objective.sense == "feasibility"
-        ):  # a certified point answers a feasibility problem whatever the solver's own status
-            return EXIT_CODES["certified"]
-        if self.status == "infeasible" and self.verdict != "rejected":
-            return EXIT_CODES["infeasible"]
-        return EXIT_CODES["failed"]
+        """:func:`lmic.outcome.exit_code` of the verdict (0 certified, 1 rejected / undecided,
+        3 infeasible-certified, 4 infeasible-bounded)."""
+        from lmic.outcome import exit_code
+
+        return exit_code(self.verdict)
 
     def certificate_dict(self) -> dict[str, Any]:
         """The certificate as JSON-ready dict (``verdict``, ``lmis``, ``checks``, ``exact`` ...)."""
@@ -149,7 +153,8 @@ class Result:
             "lmic": __version__,
             "target": self.target,
             "theorem": self.theorem,
-            "params": self.params,
+            # every parameter and option the compilation used (defaults and file values included)
+            "params": {**(self.problem.meta or {}).get("params", {}), **self.params},
             "backend": self.backend,
             "status": self.status,
             "native_status": sol.native_status,
@@ -160,6 +165,8 @@ class Result:
             "strict": {"strategy": sol.strategy, "margin": sol.margin},
             "certificate": self.certificate_dict(),
             "timings": self.timings,
+            "verdict": self.verdict,
+            "evidence": self.outcome.evidence.to_dict() if self.outcome is not None else None,
             "attempts": self.attempts,
             "exit_code": self.exit_code(),
         }
@@ -184,6 +191,14 @@ def load_target(
         if system is not None or params:
             raise LmicError("a system and parameters apply to a theorem, not to an IR problem")
         return target, target.meta.get("theorem"), time.perf_counter() - t0
+    from lmic.template.theorem import Theorem
+
+    if isinstance(target, Theorem):  # an inline theorem (notebook): no registration needed
+        if system is None:
+            raise LmicError(f"theorem {target.id}: give a system (file, dict or StateSpace) to solve it")
+        from lmic.compile import compile_theorem
+
+        return compile_theorem(target, system, params), target.id, time.perf_counter() - t0
     text = os.fspath(target)
     if text.endswith(_FILE_SUFFIXES) or (Path(text).is_file() and system is None):
         if system is not None:
@@ -288,16 +303,17 @@ def solve(
 
     Parameters
     ----------
-    target : str, path or Problem
-        A theorem id (then ``system`` is required), an ``.json`` IR or ``.dat-s`` SDPA file, or
-        a Problem.
+    target : str, path, Theorem or Problem
+        A theorem id or a :class:`~lmic.template.Theorem` object (an inline theorem, registered
+        or not; then ``system`` is required), an ``.json`` IR or ``.dat-s`` SDPA file, or a
+        Problem.
     system : path, dict or System, optional
     params : dict, optional
         Parameter overrides (theorems only).
     backend : str, Backend or None
-        A backend name (``"clarabel"``, ``"cvxpy:SCS"``, ``"auto"`` ...) or instance. ``None``
-        (the default) is Clarabel, the embedded default, unless Clarabel cannot take the problem
-        (a PSD block too large for its dense KKT system): then the ``auto`` route.
+        A backend name (``"clarabel"``, ``"cvxpy:SCS"`` ...) or instance: that backend alone.
+        ``None`` or ``"auto"`` (the default): the escalating policy of :mod:`lmic.policy`
+        (Clarabel -> CVXOPT -> SDPA -> SCS, skipping what cannot take the problem).
     options : SolveOptions, optional
     exact : bool
         Ask the certifier for an exact rational proof too.
@@ -318,40 +334,23 @@ def solve(
 
         system = as_system(target, system)
     problem, theorem, compile_s = load_target(target, system, params)
-    name = target if isinstance(target, str) else ("<problem>" if isinstance(target, Problem) else os.fspath(target))
-    if backend is None:
-        ok = _backend("clarabel").supports(problem, explain=True)
-        backend = "clarabel" if (ok[0] if isinstance(ok, tuple) else ok) else "auto"
-    spec = backend.label if isinstance(backend, Backend) else str(backend)
-    step_opts = lambda step: options  # noqa: E731 - identity unless auto
-    if spec.split(":")[0].lower() == "auto":
-        from lmic.backends.auto import route, step_options
+    name = theorem if getattr(target, "build", None) is not None else target  # a Theorem object: its id
+    name = name if isinstance(name, str) else ("<problem>" if isinstance(name, Problem) else os.fspath(name))
+    from lmic.policy import decide
 
-        chain: list[str | Backend] = list(route(problem))
-        step_opts = lambda step: step_options(str(step), options)  # noqa: E731
-    else:
-        chain = [backend]
-    attempts: list[dict[str, Any]] = []
-    sol: Solution | None = None
-    cert: Any = None
-    certify_s = 0.0
-    used = spec
-    for k, step in enumerate(chain):
-        sol = solve_problem(problem, step, step_opts(step))
-        t0 = time.perf_counter()
-        cert = certify_solution(problem, sol, exact=exact)
-        certify_s += time.perf_counter() - t0
-        used = sol.backend or str(step)
-        verdict = getattr(cert, "verdict", "unverified") if cert is not None else "unverified"
-        attempts.append({"backend": used, "status": sol.status, "verdict": verdict, "solve_s": sol.solve_s})
-        if verdict in ("certified", "infeasible-certified") or k == len(chain) - 1:
-            break
-    assert sol is not None
+    t0 = time.perf_counter()
+    outcome = decide(problem, backend, options, exact=exact)
+    total = time.perf_counter() - t0
+    sol, cert = outcome.solution, outcome.certificate
+    used = outcome.backend or str(getattr(backend, "label", backend))
+    attempts = [a.to_dict() for a in outcome.attempts]
+    certify_s = sum(a.certify_s for a in outcome.attempts)
+    solve_s = sum(a.solve_s for a in outcome.attempts)
     variables, derived = _values(problem, sol.x, cert)
     timings = {
         "compile_s": compile_s,
-        "lower_s": sol.lower_s,
-        "solve_s": sum(a["solve_s"] for a in attempts),
+        "lower_s": max(0.0, total - solve_s - certify_s),
+        "solve_s": solve_s,
         "certify_s": certify_s,
     }
     return Result(
@@ -367,5 +366,6 @@ def solve(
         problem=problem,
         solution=sol,
         params=dict(params or {}),
-        attempts=attempts if len(chain) > 1 else [],
+        attempts=attempts,
+        outcome=outcome,
     )

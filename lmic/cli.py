@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import traceback
 from collections.abc import Sequence
 
 from lmic import __version__
@@ -35,6 +36,7 @@ COMMANDS = [
     "theorems",
     "backends",
     "show",
+    "check",
     "compile",
     "solve",
     "crosscheck",
@@ -44,6 +46,35 @@ COMMANDS = [
     "simulate",
     "report",
 ]
+
+
+#: one or two examples per command, shown at the end of ``lmic COMMAND --help`` (a command
+#: that sets its own epilog keeps it)
+EXAMPLES = {
+    "theorems": ["lmic theorems", "lmic theorems --json"],
+    "backends": ["lmic backends", "lmic backends --json"],
+    "show": ["lmic show qib.thm1", "lmic show qib.thm1 -p fixed_L=1 --latex"],
+    "check": ["lmic check qib.thm1", "lmic check my_theorems.py --strict"],
+    "compile": ["lmic compile qib.thm1 examples/qib.thm1.flexible-joint.yaml -o qib.json"],
+    "solve": [
+        "lmic solve qib.thm1 examples/qib.thm1.flexible-joint.yaml -o cert.json",
+        "lmic solve thesis.thm3_2_2 examples/thesis.thm3_2_2.ex3_2_2.yaml --maximize gamma",
+    ],
+    "crosscheck": ["lmic crosscheck qib.thm1 examples/qib.thm1.flexible-joint.yaml"],
+    "audit": ["lmic audit cert.json", "lmic audit cert.json --exact"],
+    "audit-published": ["lmic audit-published qib.thm1 examples/qib.thm1.flexible-joint.yaml"],
+    "reproduce": ["lmic reproduce --only 'qib.*'"],
+    "simulate": ["lmic simulate qib.thm1 examples/qib.thm1.flexible-joint.yaml -o sim.png"],
+    "report": ["lmic report qib.thm1 examples/qib.thm1.flexible-joint.yaml -o report.html"],
+}
+
+
+def _add_examples(sub: argparse._SubParsersAction) -> None:
+    for name, parser in sub.choices.items():
+        if parser.epilog or name not in EXAMPLES:
+            continue
+        parser.epilog = "examples:\n" + "\n".join(f"  {line}" for line in EXAMPLES[name])
+        parser.formatter_class = argparse.RawDescriptionHelpFormatter
 
 
 class _Parser(argparse.ArgumentParser):
@@ -58,6 +89,7 @@ def build_parser() -> argparse.ArgumentParser:
     """The full argument parser (every available sub-command)."""
     parser = _Parser(prog="lmic", description="Compile, solve and certify linear matrix inequalities.")
     parser.add_argument("--version", action="version", version=f"lmic {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show the traceback of an error (any command)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name in COMMANDS:
         try:
@@ -67,25 +99,61 @@ def build_parser() -> argparse.ArgumentParser:
                 continue  # command not built yet
             raise
         module.register(sub)
+    _add_examples(sub)
     return parser
+
+
+def _notes_as_lines() -> None:
+    """Show lmic's notes (e.g. unused data keys) as ``lmic: note: ...`` lines on stderr."""
+    import warnings
+
+    from lmic.system import UnusedDataNote
+
+    default = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001
+        if issubclass(category, UnusedDataNote):
+            sys.stderr.write(f"lmic: note: {message}\n")
+        else:
+            default(message, category, filename, lineno, file, line)
+
+    if getattr(warnings.showwarning, "__name__", "") != "show":
+        warnings.showwarning = show
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit code."""
+    _notes_as_lines()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv  # accepted anywhere: lmic --debug solve ..., lmic solve ... --debug
+    argv = [a for a in argv if a != "--debug"]
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
+        args.debug = debug
         if not getattr(args, "func", None):
             parser.print_help()
             return EXIT_USAGE
         return int(args.func(args))
     except LmicError as err:
+        if debug:
+            traceback.print_exception(err)
         msg = " ".join(str(err).split())
         sys.stderr.write(f"lmic: error: {msg}\n")
         return EXIT_USAGE
+    except Exception as err:  # a bug (lmic's or a plugin's): one line; the traceback with --debug
+        if debug:
+            traceback.print_exception(err)
+        msg = " ".join(str(err).split())
+        sys.stderr.write(
+            f"lmic: internal error: {type(err).__name__}: {msg}"
+            + ("" if debug else " (run with --debug for the traceback)")
+            + "\n"
+        )
+        return EXIT_FAILED
     except KeyboardInterrupt:
         sys.stderr.write("lmic: interrupted\n")
-        return EXIT_INTERRUPTED
+        return EXIT_INTERRUPTED  # lmic.outcome.EXIT_CODES["interrupted"]
 
 
 def _entry() -> None:

@@ -1,17 +1,24 @@
-"""Cross-check one problem on several backends: do they agree, and is each answer certified?
+"""Cross-check one problem on several backends: each backend's decision, and do they conflict?
 
-The problem is compiled (or loaded) once; each backend solves it and the certifier checks every
-answer independently. Backends *agree* when their statuses fall in the same class
-(``optimal``/``feasible`` together, ``infeasible``, ``unbounded``) and, for optimisation
-problems, the largest relative objective gap is within ``rtol``. A backend that errors or is
-inaccurate breaks the agreement.
+The problem is compiled (or loaded) once; each backend, alone, runs the one solve policy
+(:func:`lmic.policy.decide` with that backend: its strategies and exact rescue, no other
+backend) and gets an outcome verdict (:mod:`lmic.outcome`). One row per backend.
+
+* A *decision* is ``certified``, ``infeasible-certified`` or ``infeasible-bounded``.
+* ``rejected`` and ``undecided`` rows (and backends that cannot run) are *failures*: listed and
+  counted, never a disagreement.
+* Two decisions *conflict* when one certifies a point and another proves the problem infeasible
+  (globally, or within a radius the certified point lies in), or when two certified optima
+  differ by more than ``rtol`` (relative).
+* ``agree``: at least one decision and no conflict. Exit code 0 then, 1 on a conflict or when
+  no backend decided.
 
 Examples
 --------
 >>> from lmic.testing.conformance import CASES
 >>> report = crosscheck(CASES["max_sense"].build(), backends=["clarabel", "cvxopt"])
->>> report.agree, [r["status"] for r in report.results]
-(True, ['optimal', 'optimal'])
+>>> report.agree, [r["decision"] for r in report.results], report.failures
+(True, ['certified', 'certified'], 0)
 """
 
 from __future__ import annotations
@@ -21,12 +28,17 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from lmic.api import Result, load_target, solve
 from lmic.backends.base import SolveOptions
 from lmic.errors import LmicError
 from lmic.ir.problem import Problem
 
-__all__ = ["CrosscheckReport", "crosscheck", "status_class", "DEFAULT_RTOL", "Progress"]
+__all__ = ["CrosscheckReport", "crosscheck", "status_class", "conflicts", "DEFAULT_RTOL", "DECISIONS", "Progress"]
+
+#: verdicts that are decisions (the others are failures)
+DECISIONS = ("certified", "infeasible-certified", "infeasible-bounded")
 
 #: ``progress(done, total, backend, row)``: called before each backend (``row`` is ``None``) and
 #: after it (``row`` is its result row)
@@ -47,7 +59,7 @@ def status_class(status: str) -> str:
 
 @dataclass
 class CrosscheckReport:
-    """Per-backend results, whether they agree, and the largest relative objective gap."""
+    """Per-backend rows, whether the decisions agree, conflicts, failures, largest objective gap."""
 
     target: str
     results: list[dict[str, Any]]
@@ -55,28 +67,65 @@ class CrosscheckReport:
     max_rel_objective_gap: float | None
     rtol: float = DEFAULT_RTOL
     runs: list[Result] = field(default_factory=list, repr=False)
+    conflicts: list[str] = field(default_factory=list)
+
+    @property
+    def decisions(self) -> int:
+        """Rows with a decision (:data:`DECISIONS`)."""
+        return sum(1 for r in self.results if r["decision"] in DECISIONS)
+
+    @property
+    def failures(self) -> int:
+        """Rows without a decision (rejected, undecided, could not run)."""
+        return len(self.results) - self.decisions
 
     def to_dict(self) -> dict[str, Any]:
-        """The ``lmic crosscheck --json`` object (DESIGN section 7)."""
+        """The ``lmic crosscheck --json`` object."""
         return {
             "target": self.target,
             "results": self.results,
             "agree": self.agree,
+            "decisions": self.decisions,
+            "failures": self.failures,
+            "conflicts": self.conflicts,
             "max_rel_objective_gap": self.max_rel_objective_gap,
             "rtol": self.rtol,
+            "exit_code": self.exit_code(),
         }
 
     def exit_code(self) -> int:
-        """0: agree and every answer certified; 3: agree that it is infeasible; 1 otherwise."""
-        if not self.agree or not self.results:
-            return 1
-        verdicts = {r["verdict"] for r in self.results}
-        classes = {status_class(r["status"]) for r in self.results}
-        if classes == {"solved"} and verdicts == {"certified"}:
-            return 0
-        if classes == {"infeasible"} and "rejected" not in verdicts:
-            return 3
-        return 1
+        """0: at least one decision and no conflict; 1: a conflict, or no backend decided."""
+        return 0 if self.agree else 1
+
+
+def conflicts(rows: list[dict[str, Any]], sense: str, rtol: float) -> tuple[list[str], float | None]:
+    """The conflicts between the rows' decisions, and the largest relative gap of certified optima.
+
+    >>> rows = [{"backend": "a", "decision": "certified", "objective": 1.0, "x_norm": 1.0},
+    ...         {"backend": "b", "decision": "infeasible-bounded", "radius": 10.0, "objective": None}]
+    >>> print(conflicts(rows, "feasibility", 1e-3)[0][0])
+    a certifies a point with ||x||_inf = 1 but b proves no solution with ||x||_inf <= 10
+    """
+    found: list[str] = []
+    points = [r for r in rows if r["decision"] == "certified"]
+    for r in points:
+        for q in rows:
+            if q["decision"] == "infeasible-certified":
+                found.append(f"{r['backend']} certifies a point but {q['backend']} proves the problem infeasible")
+            elif q["decision"] == "infeasible-bounded" and r.get("x_norm") is not None:
+                if q.get("radius") is not None and r["x_norm"] <= q["radius"]:
+                    found.append(
+                        f"{r['backend']} certifies a point with ||x||_inf = {r['x_norm']:.3g} but "
+                        f"{q['backend']} proves no solution with ||x||_inf <= {q['radius']:.3g}"
+                    )
+    gap = None
+    optima = [r["objective"] for r in points if r.get("objective") is not None]
+    if sense != "feasibility" and len(optima) >= 2:
+        lo, hi = min(optima), max(optima)
+        gap = (hi - lo) / max(1.0, max(abs(lo), abs(hi)))
+        if gap > rtol:
+            found.append(f"certified optima differ by {gap:.3g} (relative) > rtol {rtol:g}")
+    return found, gap
 
 
 def crosscheck(
@@ -90,11 +139,12 @@ def crosscheck(
 ) -> CrosscheckReport:
     """Solve ``target`` on every backend in ``backends`` (default: every available one).
 
-    Each backend's failure (unavailable, cannot take the problem) is a row with status
-    ``error`` and the reason, not an exception, so one missing solver does not hide the others.
-    Every row has ``backend, status, objective, verdict, min_margin`` (the certifier's smallest
-    LMI margin), ``strategy`` and ``margin`` (how strict LMIs were reduced and the margin the
-    backend reported), ``solve_s`` and ``message``. ``progress`` (see :data:`Progress`) is
+    Each backend's failure (unavailable, cannot take the problem) is a row with decision
+    ``undecided`` and the reason, not an exception, so one missing solver does not hide the
+    others. Every row has ``backend, decision`` (its outcome verdict), ``status``,
+    ``objective`` (certified rows), ``radius`` (bounded rows), ``x_norm``, ``min_margin`` (the
+    certifier's smallest LMI margin), ``strategy`` and ``margin`` (how strict LMIs were
+    reduced), ``solve_s``, ``attempts`` and ``message``. ``progress`` (see :data:`Progress`) is
     told about each backend before and after it runs (``lmic crosscheck`` draws a progress bar
     with it).
 
@@ -106,7 +156,7 @@ def crosscheck(
     ...                progress=lambda done, total, name, row: seen.append((done, name, row is None)))
     >>> seen
     [(0, 'clarabel', True), (1, 'clarabel', False), (1, 'scs', True), (2, 'scs', False)]
-    >>> [(row["strategy"], row["verdict"]) for row in r.results]
+    >>> [(row["strategy"], row["decision"]) for row in r.results]
     [('max-margin', 'certified'), ('fixed-margin', 'certified')]
     """
     from lmic.backends.registry import available_backend_names
@@ -125,47 +175,49 @@ def crosscheck(
         except LmicError as err:
             row: dict[str, Any] = {
                 "backend": name,
+                "decision": "undecided",
                 "status": "error",
                 "objective": None,
-                "verdict": "unverified",
+                "verdict": "undecided",
+                "radius": None,
+                "x_norm": None,
                 "min_margin": None,
                 "strategy": None,
                 "margin": None,
                 "solve_s": 0.0,
+                "attempts": [],
                 "message": " ".join(str(err).split()),
             }
         else:
             runs.append(res)
+            x = res.solution.x
+            decision = res.verdict
             row = {
                 "backend": res.backend,
+                "decision": decision,
                 "status": res.status,
-                "objective": res.objective,
-                "verdict": res.verdict,
+                "objective": res.objective if decision == "certified" else None,
+                "verdict": decision,
+                "radius": res.outcome.evidence.radius if decision == "infeasible-bounded" else None,
+                "x_norm": float(np.max(np.abs(x))) if decision == "certified" and x is not None and len(x) else None,
                 "min_margin": res.min_margin,
                 "strategy": res.solution.strategy,
                 "margin": res.solution.margin,
                 "solve_s": res.timings["solve_s"],
-                "message": res.solution.message,
+                "attempts": res.attempts,
+                "message": res.solution.message if decision not in DECISIONS else "",
             }
+            if decision not in DECISIONS:
+                row["message"] = res.outcome.reason or res.solution.message
         rows.append(row)
         if progress is not None:
             progress(k + 1, len(names), name, row)
-    classes = {status_class(r["status"]) for r in rows}
-    objectives = [r["objective"] for r in rows if r["objective"] is not None]
-    gap = None
-    if len(objectives) >= 2:
-        lo, hi = min(objectives), max(objectives)
-        gap = (hi - lo) / max(1.0, max(abs(lo), abs(hi)))
-    agree = (
-        len(classes) == 1
-        and not classes & {"error", "inaccurate"}
-        and (gap is None or gap <= rtol)
-        and not (classes == {"solved"} and problem.objective.sense != "feasibility" and len(objectives) != len(rows))
-    )
+    found, gap = conflicts(rows, problem.objective.sense, rtol)
+    agree = not found and any(r["decision"] in DECISIONS for r in rows)
     label = target if isinstance(target, str) else ("<problem>" if isinstance(target, Problem) else os.fspath(target))
     if system is not None:
         if isinstance(system, str | os.PathLike):
             label = f"{label} {os.fspath(system)}"
         else:  # a dict, a System or a plant object
             label = f"{label} {getattr(system, 'path', None) or '<system>'}"
-    return CrosscheckReport(str(label), rows, agree, gap, rtol, runs)
+    return CrosscheckReport(str(label), rows, agree, gap, rtol, runs, found)

@@ -48,14 +48,14 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from lmic.errors import DataError, IRError, LmicError
-from lmic.ir.problem import LinearConstraints, Objective, Problem, Variable
+from lmic.ir.problem import Problem
+from lmic.reductions.fix import fix_variables
 
 __all__ = [
     "Claim",
@@ -184,7 +184,7 @@ class AuditReport:
         raise KeyError(f"no {kind or ''} claim for published '{key}'".replace("  ", " "))
 
     def exit_code(self) -> int:
-        """0 certified, 1 rejected or not reproducible, 3 proven infeasible (module docstring)."""
+        """0 certified, 1 rejected or not reproducible, 3 proven infeasible, 4 bounded infeasibility only."""
         decisive = [c for c in self.claims if c.decisive]
         if decisive:
             findings = [c.finding for c in decisive]
@@ -192,6 +192,8 @@ class AuditReport:
                 return 1
             if "infeasible" in findings:
                 return 3
+            if "infeasible-bounded" in findings and all(f in ("certified", "infeasible-bounded") for f in findings):
+                return 4  # lmic.outcome: "no solution with ||x||_inf <= R" only
             if any(f != "certified" for f in findings):
                 return 1
             return 0
@@ -217,62 +219,6 @@ class AuditReport:
 
 # --------------------------------------------------------------------------------------------
 # IR helpers
-
-
-def fix_variables(problem: Problem, values: Mapping[str, Any]) -> tuple[Problem, np.ndarray, np.ndarray]:
-    """The problem in the remaining variables, with ``values`` substituted for some of them.
-
-    The fixed variables' values are added to the problem's ``data`` (so derived quantities and
-    checks still evaluate). Returns ``(restricted, x_fixed, free)``: ``x_fixed`` is the full-length
-    vector with the fixed entries filled in, ``free`` the indices of the remaining entries; a point
-    ``z`` of the restricted problem is ``x = x_fixed; x[free] = z`` in the original.
-
-    Examples
-    --------
-    >>> import scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI
-    >>> p = Problem([Variable("a", "scalar", (1, 1)), Variable("b", "scalar", (1, 1), offset=1)],
-    ...             [LMI("a + b - 1 > 0", 1, sp.csc_matrix([[-1., 1., 1.]]))],
-    ...             LinearConstraints.empty(2), Objective("feasibility", [0, 0, 0]))
-    >>> q, x0, free = fix_variables(p, {"a": 3.0})
-    >>> [v.name for v in q.variables], q.lmis[0].matrix([0.5]), [int(i) for i in free]
-    (['b'], array([[2.5]]), [1])
-    """
-    x_fixed = np.zeros(problem.n)
-    mask = np.zeros(problem.n, dtype=bool)
-    names = {v.name for v in problem.variables}
-    for name, value in values.items():
-        if name not in names:
-            raise IRError(f"no variable named '{name}'")
-        var = problem.variable(name)
-        x_fixed[var.slice] = var.pack(value)
-        mask[var.slice] = True
-    free = np.flatnonzero(~mask)
-    fixed = np.flatnonzero(mask)
-    variables, offset = [], 0
-    for v in problem.variables:
-        if v.name in values:
-            continue
-        variables.append(Variable(v.name, v.kind, v.shape, offset, v.blocks, v.sign))
-        offset += v.size
-
-    def cut(M: sp.spmatrix) -> sp.spmatrix:
-        M = sp.csc_matrix(M)
-        c0 = M[:, [0]] + M[:, (1 + fixed).tolist()] @ sp.csc_matrix(x_fixed[fixed].reshape(-1, 1))
-        return sp.hstack([c0, M[:, (1 + free).tolist()]], format="csc")
-
-    lmis = [replace(lmi, coeffs=cut(lmi.coeffs)) for lmi in problem.lmis]
-    lin = problem.linear
-    linear = LinearConstraints(sp.csr_matrix(cut(lin.A)), list(lin.kinds), list(lin.strict), list(lin.names))
-    c = problem.objective.c
-    obj = Objective(problem.objective.sense, np.concatenate([[c[0] + c[1 + fixed] @ x_fixed[fixed]], c[1 + free]]))
-    data = dict(problem.data)
-    for name in values:
-        data[name] = problem.variable(name).value(x_fixed)
-    meta = dict(problem.meta)
-    meta["fixed_variables"] = sorted(values)
-    restricted = Problem(variables, lmis, linear, obj, data, list(problem.derived), list(problem.checks), meta)
-    return restricted, x_fixed, free
 
 
 def _match_inverse(tree: Any) -> tuple[str, str, str] | None:
@@ -307,7 +253,7 @@ def recover_variables(problem: Problem, known: Mapping[str, Any], published: Map
 
     Examples
     --------
-    >>> from lmic.ir.problem import NamedExpr
+    >>> from lmic.ir.problem import LinearConstraints, NamedExpr, Objective, Variable
     >>> import scipy.sparse as sp
     >>> p = Problem([Variable("P", "symmetric", (1, 1)), Variable("G", "full", (1, 1), offset=1)], [],
     ...             LinearConstraints.empty(2), Objective("feasibility", [0, 0, 0]),
@@ -418,7 +364,9 @@ def _print_resolution(values: np.ndarray) -> float:
 
 
 def _finding_of(outcome: str) -> str:
-    return {"feasible": "certified", "infeasible": "infeasible"}.get(outcome, "not reproducible")
+    return {"feasible": "certified", "infeasible": "infeasible", "infeasible-bounded": "infeasible-bounded"}.get(
+        outcome, "not reproducible"
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -629,7 +577,7 @@ class _Auditor:
             kind="status",
             route="the theorem solved for the file's parameters",
             finding=_finding_of(pt.outcome),
-            agrees=None if pt.outcome == "undecided" else (pt.outcome == claimed),
+            agrees=None if pt.outcome in ("undecided", "infeasible-bounded") else (pt.outcome == claimed),
             published=word,
             computed=pt.outcome,
         )
@@ -782,7 +730,7 @@ def audit_published(
     system: Any,
     params: Mapping[str, Any] | None = None,
     *,
-    backend: Any = "clarabel",
+    backend: Any = None,
     options: Any = None,
     rtol: float = 0.05,
 ) -> AuditReport:

@@ -57,7 +57,16 @@ __all__ = [
 ]
 
 _COMPUTE_KINDS = ("claim", "solve", "at_published", "maximize", "sweep", "gain")
-_VERDICTS = ("certified", "infeasible", "rejected", "not reproducible", "matches", "differs", "skipped")
+_VERDICTS = (
+    "certified",
+    "infeasible",
+    "infeasible-bounded",
+    "rejected",
+    "not reproducible",
+    "matches",
+    "differs",
+    "skipped",
+)
 
 
 def theorem_of(filename: str) -> str:
@@ -191,7 +200,7 @@ class ReproductionReport:
     results: list[RowResult]
     unlisted: list[str] = field(default_factory=list)
     missing: list[str] = field(default_factory=list)
-    backend: str = "clarabel"
+    backend: str = "auto"
     total_s: float = 0.0
     file_times: dict[str, float] = field(default_factory=dict)
 
@@ -315,7 +324,9 @@ class _Runner:
 
 
 def _outcome_finding(outcome: str) -> str:
-    return {"feasible": "certified", "infeasible": "infeasible"}.get(outcome, "not reproducible")
+    return {"feasible": "certified", "infeasible": "infeasible", "infeasible-bounded": "infeasible-bounded"}.get(
+        outcome, "not reproducible"
+    )
 
 
 def _point_value(row: Row, problem: Any, pt: Any) -> tuple[Any, str]:
@@ -463,7 +474,7 @@ def reproduce(
     expectations: str | os.PathLike[str] | None = None,
     *,
     only: Sequence[str] = (),
-    backend: str = "clarabel",
+    backend: str = "auto",
     options: Any = None,
     progress: Callable[[dict[str, Any]], None] | None = None,
 ) -> ReproductionReport:

@@ -50,11 +50,10 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
 from lmic.errors import DataError, LmicError
 from lmic.ir.problem import Objective, Problem
-from lmic.ir.svec import tril_rows_cols
+from lmic.reductions.precondition import precondition
 from lmic.solution import Solution
 
 __all__ = [
@@ -70,8 +69,9 @@ __all__ = [
     "run_cli",
 ]
 
-#: outcomes of one point
-OUTCOMES = ("feasible", "infeasible", "undecided")
+#: outcomes of one point (``infeasible``: a global proof; ``infeasible-bounded``: only "no solution
+#: with ||x||_inf <= R")
+OUTCOMES = ("feasible", "infeasible", "infeasible-bounded", "undecided")
 
 Progress = Callable[[dict[str, Any]], None]
 
@@ -149,9 +149,12 @@ class SupResult:
         Smallest value tried above ``lower`` that was not certified (``None``: none found, the
         parameter was feasible up to the end of its domain or of the search).
     upper_kind : str
-        ``infeasible-certified``, ``infeasible (solver)``, ``t* <= 0``, ``undecided`` or ``none``.
+        ``infeasible-certified`` (a GLOBAL proof at ``upper``: the supremum is proven below it),
+        ``infeasible-bounded`` (only "no solution with ``||x||_inf <= R``" at ``upper``: the
+        supremum may lie above), ``undecided`` or ``none``.
     upper_proven : float or None
-        Smallest value with a verified infeasibility certificate (may be above ``upper``).
+        Smallest value with a GLOBAL infeasibility proof (may be above ``upper``); bounded rays
+        never count. ``None``: no proven upper end (the supremum may be infinite).
     converged : bool
         ``upper - lower <= max(xtol, rtol * |upper|)``.
     """
@@ -188,12 +191,11 @@ class SupResult:
         return self.lower if self.upper is None else 0.5 * (self.lower + self.upper)
 
     def exit_code(self) -> int:
-        """0 a certified lower bound, 3 every value tried proven infeasible, 1 otherwise."""
+        """0 a certified lower bound; else 3 / 4 / 1 as :func:`lmic.outcome.exit_code` of the points
+        (every value globally infeasible / every value at least bounded-infeasible / otherwise)."""
         if self.lower is not None:
             return 0
-        if self.points and all(p.outcome == "infeasible" for p in self.points):
-            return 3
-        return 1
+        return _points_exit(self.points)
 
     def to_dict(self) -> dict[str, Any]:
         """The ``--json`` object."""
@@ -210,6 +212,7 @@ class SupResult:
             "upper": self.upper,
             "upper_kind": self.upper_kind,
             "upper_proven": self.upper_proven,
+            "bracket_proven": self.upper_kind == "infeasible-certified",
             "estimate": self.estimate,
             "width": self.width,
             "converged": self.converged,
@@ -228,8 +231,10 @@ class SupResult:
 class SweepResult:
     """Every grid point, and the best certified one.
 
-    ``best`` is the certified point with the best objective (``min``/``max`` theorems) or, for a
-    feasibility theorem, the largest relative margin.
+    ``best`` is the certified point with the best objective (``min``/``max`` theorems). For a
+    feasibility theorem it is the certified point at the edge of feasibility when the certified
+    points are one run at the start (or the end) of the grid (e.g. the largest certified
+    Lipschitz constant), otherwise the largest relative margin; ``best_rule`` says which.
     """
 
     theorem: str
@@ -240,14 +245,14 @@ class SweepResult:
     backend: str
     plan_s: float
     total_s: float
+    #: how ``best`` was chosen: ``objective``, ``edge of the certified range``, ``largest margin``
+    best_rule: str = ""
 
     def exit_code(self) -> int:
-        """0 some point certified, 3 every point proven infeasible, 1 otherwise."""
+        """0 some point certified; else 3 / 4 / 1 as for :meth:`SupResult.exit_code`."""
         if self.best is not None:
             return 0
-        if self.points and all(p.outcome == "infeasible" for p in self.points):
-            return 3
-        return 1
+        return _points_exit(self.points)
 
     def to_dict(self) -> dict[str, Any]:
         """The ``--json`` object."""
@@ -261,6 +266,7 @@ class SweepResult:
             "backend": self.backend,
             "sense": self.sense,
             "best": None if self.best is None else self.best.to_dict(),
+            "best_rule": self.best_rule,
             "points": [p.to_dict() for p in self.points],
             "timings": _timings(self.plan_s, [p.bind_s for p in self.points], self.points, self.total_s),
             "exit_code": self.exit_code(),
@@ -268,19 +274,25 @@ class SweepResult:
 
 
 def _kind(pt: PointResult) -> str:
-    """What a non-certified point is: ``infeasible-certified``, ``infeasible (local)``,
-    ``infeasible (solver)``, ``t* <= 0`` or ``undecided``."""
-    if pt.outcome != "infeasible":
-        return "undecided" if pt.outcome == "undecided" else "feasible"
-    for prefix, kind in (
-        ("infeasible-certified", "infeasible-certified"),
-        ("infeasible (local)", "infeasible (local)"),
-        ("infeasible (solver)", "infeasible (solver)"),
-        ("t* =", "t* <= 0"),
-    ):
-        if pt.proof.startswith(prefix):
-            return kind
-    return "infeasible (solver)"
+    """What a point is: ``feasible``, ``infeasible-certified`` (global proof),
+    ``infeasible-bounded`` (no solution with ``||x||_inf <= R`` only) or ``undecided``."""
+    if pt.outcome == "feasible":
+        return "feasible"
+    if pt.outcome == "infeasible":
+        return "infeasible-certified"
+    if pt.outcome == "infeasible-bounded" or pt.verdict == "infeasible-bounded":
+        return "infeasible-bounded"
+    return "undecided"
+
+
+def _points_exit(points: list[PointResult]) -> int:
+    """3 every point proven infeasible (global), 4 every point at least bounded-infeasible, 1 otherwise."""
+    kinds = {_kind(p) for p in points}
+    if points and kinds == {"infeasible-certified"}:
+        return 3
+    if points and kinds <= {"infeasible-certified", "infeasible-bounded"}:
+        return 4
+    return 1
 
 
 def _timings(plan_s: float, binds: list[float], points: list[PointResult], total_s: float) -> dict[str, float]:
@@ -310,51 +322,6 @@ def _zero_objective(problem: Problem) -> Problem:
     return replace(problem, objective=Objective("min", np.zeros(problem.n + 1)))
 
 
-def precondition(problem: Problem, x_ref: np.ndarray, floor: float = 1e-12) -> tuple[Problem, list[np.ndarray]]:
-    """Each LMI ``F`` replaced by the congruence ``D F D``, ``D = diag(F(x_ref))^-1/2``.
-
-    A congruence with a positive diagonal ``D`` keeps exactly the same feasible ``x`` (strict and
-    non-strict); it only equilibrates the blocks for the solver. Diagonal entries below
-    ``floor * max`` are clipped. Returns the scaled problem and the ``D`` of every LMI (a dual
-    ``Z`` of the scaled LMI is ``D Z D`` for the original one).
-
-    Examples
-    --------
-    >>> import scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Variable
-    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
-    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
-    >>> q, ds = precondition(p, np.array([4.0]))
-    >>> float(q.lmis[0].matrix([4.0])[0, 0]), float(ds[0][0])
-    (1.0, 0.5)
-    """
-    lmis, scales = [], []
-    for lmi in problem.lmis:
-        diag = np.abs(np.diag(lmi.matrix(x_ref)))
-        top = float(diag.max()) if diag.size else 0.0
-        if not np.isfinite(top) or top <= 0:
-            d = np.ones(lmi.dim)
-        else:
-            d = 1.0 / np.sqrt(np.maximum(diag, floor * top))
-        i, j = tril_rows_cols(lmi.dim)
-        lmis.append(replace(lmi, coeffs=sp.diags(d[i] * d[j]) @ lmi.coeffs))
-        scales.append(d)
-    return replace(problem, lmis=lmis), scales
-
-
-def _unscale_duals(sol: Solution, scales: list[np.ndarray]) -> None:
-    """Map the LMI duals / Farkas blocks of a preconditioned solve back: ``Z -> D Z D``."""
-    for holder in (sol.duals, sol.farkas):
-        if not holder or holder.get("lmis") is None:
-            continue
-        mats = list(holder["lmis"])
-        for k, d in enumerate(scales[: len(mats)]):
-            if mats[k] is not None:
-                Z = np.asarray(mats[k], dtype=float)
-                mats[k] = d[:, None] * Z * d[None, :]
-        holder["lmis"] = mats
-
-
 def _scalar_derived(cert: Any) -> dict[str, float]:
     out: dict[str, float] = {}
     for item in getattr(cert, "derived", None) or []:
@@ -371,78 +338,16 @@ def _rel_margin(cert: Any) -> float | None:
 
 
 def _exact_rescue(problem: Problem, sol: Solution, cert: Any) -> Any | None:
-    """An exact proof at a point the float certificate rejected only for its tiny margins.
+    """An exact proof at a point the float certificate rejected only for its tiny margins
+    (:func:`lmic.policy.exact_rescue_point`)."""
+    from lmic.policy import exact_rescue_point
 
-    Returns the exact certificate when every LMI and row is proven exactly and every derived
-    quantity and check holds; ``None`` otherwise.
-    """
-    from lmic.certify import certify
-
-    if sol.x is None or cert.verdict != "rejected":
-        return None
-    if any(r.get("min_eig") is None or r["min_eig"] <= 0 for r in cert.lmis):
-        return None  # a negative eigenvalue in float: an exact proof will not help
-    if not all(c.get("ok") for c in cert.checks) or not all(d.get("ok") for d in cert.derived):
-        return None
-    if cert.objective is not None and not cert.objective.get("ok", True):
-        return None
-    try:
-        exact = certify(problem, sol, exact=True)
-    except LmicError:
-        return None
-    return exact if exact.exact and exact.exact.get("proven") else None
-
-
-def _attempt(
-    label: str,
-    target: Problem,
-    judge: Problem,
-    backend: Any,
-    options: Any,
-    scales: list[np.ndarray] | None,
-    exact: bool,
-) -> tuple[str, str, Solution, Any, float, float]:
-    """Solve ``target``, certify on ``judge``; return (outcome, proof, solution, cert, times)."""
-    from lmic.api import solve_problem
-    from lmic.certify import certify
-
-    t0 = time.perf_counter()
-    try:
-        sol = solve_problem(target, backend, options)
-    except LmicError as err:
-        if "cannot take" in str(err):
-            raise
-        sol = Solution("error", message=str(err))
-    if scales is not None:
-        _unscale_duals(sol, scales)
-    if sol.x is not None and judge.objective.sense != "feasibility":
-        sol.objective = judge.objective.value(sol.x)
-    elif judge.objective.sense == "feasibility":
-        sol.objective = None
-    t1 = time.perf_counter()
-    cert = certify(judge, sol)
-    outcome, proof = "undecided", ""
-    if cert.verdict == "certified":
-        outcome, proof = "feasible", "certified"
-    elif exact:
-        rescued = _exact_rescue(judge, sol, cert)
-        if rescued is not None:
-            cert = rescued
-            outcome, proof = "feasible", "certified (exact)"
-    if outcome == "undecided":
-        if sol.status == "infeasible":
-            outcome = "infeasible"
-            proof = "infeasible-certified" if cert.verdict == "infeasible-certified" else "infeasible (solver)"
-            if sol.strategy == "max-margin" and sol.margin is not None and sol.margin > 0:
-                outcome, proof = "undecided", f"max margin t* = {sol.margin:.3g} > 0 but below the solver tolerance"
-        else:
-            proof = cert.reason or sol.message or sol.status
-    return outcome, proof, sol, cert, t1 - t0, time.perf_counter() - t1
+    return exact_rescue_point(problem, sol, cert)
 
 
 def decide(
     problem: Problem,
-    backend: Any = "clarabel",
+    backend: Any = None,
     options: Any = None,
     *,
     reference: np.ndarray | None = None,
@@ -453,16 +358,19 @@ def decide(
 ) -> PointResult:
     """Decide one compiled problem: feasible (certified), infeasible, or undecided.
 
-    Attempts, until one decides: the problem preconditioned at ``reference`` (if given), then
-    preconditioned at the point that attempt returned, then as compiled, then (feasibility only)
-    the max-margin problem. A solver's infeasibility without a verified Farkas certificate does not
-    stop the attempts; it is the outcome only if nothing else decides.
+    Runs the one solve policy (:func:`lmic.policy.decide`) on ``problem`` (the objective dropped
+    unless ``keep_objective``): the problem preconditioned at ``reference`` first (if given),
+    then as compiled, the other strict reduction, the problem preconditioned at the returned
+    point, the next backend of the route, exact rescue. ``infeasible`` means a GLOBAL proof
+    (verdict ``infeasible-certified``); a bounded ray ("no solution with ``||x||_inf <= R``",
+    verdict ``infeasible-bounded``) leaves the point ``undecided`` with the radius recorded.
 
     Parameters
     ----------
     problem : Problem
         The IR at this parameter value.
-    backend : str or Backend
+    backend : str, Backend or None
+        ``None``/``"auto"``: the escalating route; a backend: that backend alone.
     options : SolveOptions, optional
     reference : numpy.ndarray, optional
         A certified point at a nearby value: the LMIs are preconditioned at it
@@ -474,10 +382,8 @@ def decide(
     value : float
         The parameter value (for the report).
     scale : float, optional
-        ``||x||_inf`` of the certified points seen so far. A Farkas certificate that only
-        excludes feasible points with ``||x||_inf`` below ``100 * scale`` is reported as
-        ``infeasible (local)`` (a verified float certificate of infeasibility is quantitative:
-        it holds within a radius, see :mod:`lmic.certify.farkas`).
+        ``||x||_inf`` of the certified points seen so far (reported next to a bounded ray's
+        radius).
 
     Returns
     -------
@@ -493,66 +399,45 @@ def decide(
     >>> r.outcome, r.proof
     ('feasible', 'certified')
     """
-    from lmic.backends.base import SolveOptions
+    from lmic.policy import decide as policy_decide
 
-    options = options or SolveOptions()
     judge = problem if keep_objective else _feasibility(problem)
     base = problem if keep_objective else _zero_objective(problem)
-    labels = (["scaled", "rescaled"] if reference is not None and problem.lmis else []) + ["plain"]
-    if not keep_objective or problem.objective.sense == "feasibility":
-        labels.append("max-margin")
-    result = PointResult(value=value, outcome="undecided", proof="")
-    fallback: dict[str, Any] | None = None
-    last_x: np.ndarray | None = None
-    for label in labels:
-        scales = None
-        if label == "scaled":
-            target, scales = precondition(base, reference)  # type: ignore[arg-type]
-        elif label == "rescaled":
-            if last_x is None:
-                continue
-            target, scales = precondition(base, last_x)
-        elif label == "plain":
-            target = base
-        else:
-            target = _feasibility(problem)
-        outcome, proof, sol, cert, solve_s, cert_s = _attempt(label, target, judge, backend, options, scales, exact)
-        result.solve_s += solve_s
-        result.certify_s += cert_s
-        if label == "scaled":
-            last_x = sol.x
-        farkas = cert.farkas or {}
-        radius = farkas.get("radius") if farkas.get("verified") else None
-        if label == "max-margin" and sol.status == "infeasible" and sol.margin is not None and sol.margin <= 0:
-            outcome, proof = "infeasible", f"t* = {sol.margin:.3g} <= 0"
-        if outcome == "infeasible" and radius is not None and math.isfinite(radius) and farkas.get("kind") == "closed":
-            proof += f" (Farkas: no feasible x with ||x||_inf < {radius:.3g})"
-            if scale is not None and radius < 100.0 * scale:
-                proof = "infeasible (local): " + proof + f"; certified points reach ||x||_inf = {scale:.3g}"
-        result.attempts.append(f"{label}: {sol.status}, {cert.verdict} -> {outcome}")
-        record = {
-            "outcome": outcome,
-            "proof": proof,
-            "status": sol.status,
-            "verdict": cert.verdict,
-            "rel_margin": _rel_margin(cert),
-            "farkas_radius": radius,
-            "certificate": cert,
-        }
-        if outcome == "infeasible" and proof.startswith(("infeasible (solver)", "infeasible (local)", "t* =")):
-            fallback = fallback or record  # not a proof: let the next attempt decide
-            continue
-        for key, val in record.items():
-            setattr(result, key, val)
-        if outcome == "feasible":
-            result.x = sol.x
-            result.objective = sol.objective if keep_objective else None
-            result.derived = _scalar_derived(cert)
-        if outcome != "undecided":
-            return result
-    if fallback is not None:
-        for key, val in fallback.items():
-            setattr(result, key, val)
+    t0 = time.perf_counter()
+    out = policy_decide(
+        judge,
+        None if backend in (None, "auto") else backend,
+        options,
+        solve_as=base,
+        reference=reference,
+        rescue=exact,
+    )
+    total = time.perf_counter() - t0
+    cert = out.certificate
+    result = PointResult(value=value, outcome="undecided", proof=out.reason or out.verdict)
+    result.attempts = [a.line() for a in out.attempts]
+    result.solve_s = sum(a.time_s for a in out.attempts)
+    result.certify_s = max(0.0, total - result.solve_s)
+    result.status = out.solution.status if out.solution is not None else ""
+    result.verdict = out.verdict
+    result.certificate = cert
+    result.rel_margin = _rel_margin(cert)
+    if out.verdict == "certified":
+        exact_used = bool(getattr(cert, "exact", None) and cert.exact.get("proven"))
+        result.outcome, result.proof = "feasible", "certified (exact)" if exact_used else "certified"
+        result.x = out.solution.x
+        result.objective = out.solution.objective if keep_objective else None
+        result.derived = _scalar_derived(cert)
+    elif out.verdict == "infeasible-certified":
+        result.outcome = "infeasible"
+        result.proof = "infeasible-certified: " + out.evidence.statement
+    elif out.verdict == "infeasible-bounded":
+        # never called infeasible: only "no solution with ||x||_inf <= R"
+        result.outcome = "infeasible-bounded"
+        result.farkas_radius = out.evidence.radius
+        result.proof = "infeasible-bounded: " + out.evidence.statement
+        if scale is not None and out.evidence.radius is not None:
+            result.proof += f"; certified points reach ||x||_inf = {scale:.3g}"
     return result
 
 
@@ -664,7 +549,7 @@ def maximize(
     xtol: float = 1e-6,
     rtol: float = 1e-5,
     params: Mapping[str, Any] | None = None,
-    backend: Any = "clarabel",
+    backend: Any = None,
     options: Any = None,
     exact: bool = True,
     max_evals: int = 100,
@@ -816,6 +701,11 @@ def maximize(
         message = f"stopped after {len(ev.points)} points (--max-evals) before the tolerance"
     proven = [p.value for p in ev.points if _kind(p) == "infeasible-certified" and (lower is None or p.value > lower)]
     upper_kind = "none" if upper_pt is None else _kind(upper_pt)
+    if upper is not None and upper_kind != "infeasible-certified" and not message:
+        message = (
+            f"the bisection's upper end {upper:g} is {upper_kind}, not a proof: the supremum is >= "
+            f"{lower if lower is not None else '-'} and may be larger (even infinite)"
+        )
     return SupResult(
         theorem=plan.id,
         param=param,
@@ -828,7 +718,7 @@ def maximize(
         rtol=rtol,
         iterations=iterations,
         points=ev.points,
-        backend=str(getattr(backend, "label", backend)),
+        backend=str(getattr(backend, "label", backend) or "auto"),
         plan_s=plan_s,
         total_s=time.perf_counter() - t_start,
         message=message,
@@ -892,7 +782,7 @@ def sweep(
     values: Sequence[float],
     *,
     params: Mapping[str, Any] | None = None,
-    backend: Any = "clarabel",
+    backend: Any = None,
     options: Any = None,
     exact: bool = True,
     progress: Progress | None = None,
@@ -928,20 +818,30 @@ def sweep(
         ev(float(v), "sweep", iteration=k + 1)
     certified = [p for p in ev.points if p.outcome == "feasible"]
     best: PointResult | None = None
+    best_rule = ""
     sense = ev.sense
     if certified:
+        ok = [p.outcome == "feasible" for p in ev.points]
+        k = len(certified)
         if sense in ("min", "max") and all(p.objective is not None for p in certified):
             pick = min if sense == "min" else max
             best = pick(certified, key=lambda p: float(p.objective))  # type: ignore[arg-type]
+            best_rule = "objective"
+        elif k < len(ok) and (all(ok[:k]) or all(ok[-k:])):
+            # one certified run at an end of the grid: the interesting point is where it stops
+            best = certified[-1] if all(ok[:k]) else certified[0]
+            best_rule = "edge of the certified range"
         else:
             best = max(certified, key=lambda p: -math.inf if p.rel_margin is None else p.rel_margin)
+            best_rule = "largest margin"
     return SweepResult(
         theorem=plan.id,
         param=param,
         sense=sense,
         points=ev.points,
         best=best,
-        backend=str(getattr(backend, "label", backend)),
+        best_rule=best_rule,
+        backend=str(getattr(backend, "label", backend) or "auto"),
         plan_s=plan_s,
         total_s=time.perf_counter() - t_start,
     )
@@ -1089,17 +989,26 @@ def _print_sup(r: SupResult) -> None:
     if r.lower is None:
         out.print(f"[red]no certified value of {r.param}[/]: {r.message}")
     else:
-        out.print(f"[bold]sup {r.param} in [{_fmt(r.lower, 10)}, {_fmt(r.upper, 10)}][/]   ({tol})")
+        if r.upper_kind == "infeasible-certified":
+            out.print(f"[bold]sup {r.param} in [{_fmt(r.lower, 10)}, {_fmt(r.upper, 10)}][/]   ({tol})")
+        elif r.upper_proven is not None:
+            out.print(f"[bold]sup {r.param} in [{_fmt(r.lower, 10)}, {_fmt(r.upper_proven, 10)}][/]   (proven ends)")
+        else:
+            out.print(
+                f"[bold]sup {r.param} >= {_fmt(r.lower, 10)}[/]   (no proven upper end: may be larger, even infinite)"
+            )
         lower_pt = next((p for p in r.points if p.value == r.lower and p.outcome == "feasible"), None)
         how = lower_pt.proof if lower_pt else "certified"
         out.print(f"  lower    {_fmt(r.lower, 10)}  {how}")
         if r.upper is not None:
-            kind = {"undecided": "not certified (neither certified nor proven infeasible)"}.get(
-                r.upper_kind, r.upper_kind
-            )
-            out.print(f"  upper    {_fmt(r.upper, 10)}  {kind}")
+            kind = {
+                "undecided": "not certified (neither certified nor proven infeasible): not an upper bound",
+                "infeasible-bounded": "infeasible-bounded (no solution with ||x||_inf <= R only): not an upper bound",
+                "infeasible-certified": "infeasible-certified (global proof)",
+            }.get(r.upper_kind, r.upper_kind)
+            out.print(f"  bisection upper {_fmt(r.upper, 10)}  {kind}")
         if r.upper_proven is not None and r.upper_proven != r.upper:
-            out.print(f"  proven infeasible from {_fmt(r.upper_proven, 10)}")
+            out.print(f"  proven infeasible (global) from {_fmt(r.upper_proven, 10)}")
     if r.message:
         out.print(f"  note     {r.message}")
     binds = [p.bind_s for p in r.points]
@@ -1142,6 +1051,8 @@ def _print_sweep(r: SweepResult) -> None:
             if r.sense in ("min", "max")
             else "relative margin " + _fmt(r.best.rel_margin, 3)
         )
+        if r.best_rule == "edge of the certified range":
+            what = f"the edge of the certified range; {what}"
         out.print(f"best certified point: {r.param} = {_fmt(r.best.value)} ({what})")
     binds = [p.bind_s for p in r.points]
     out.print(

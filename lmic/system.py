@@ -37,7 +37,45 @@ import numpy as np
 from lmic.errors import DataError
 from lmic.limits import MAX_DIMENSION, MAX_INT_DIGITS, check_depth, load_json_text, load_yaml_text, read_text
 
-__all__ = ["System", "load_system", "parse_matrix", "canonical_json"]
+__all__ = ["System", "load_system", "parse_matrix", "canonical_json", "UnusedDataNote", "edit_distance", "near_miss"]
+
+
+class UnusedDataNote(UserWarning):
+    """Data keys of a system file that the theorem does not take (shown as a note, not an error).
+
+    One plant file may serve several theorems; the command line prints ``lmic: note: ...``.
+    """
+
+
+def edit_distance(a: str, b: str) -> int:
+    """Levenshtein distance (insertions, deletions, substitutions).
+
+    >>> edit_distance("gama", "gamma"), edit_distance("Cw", "Cv"), edit_distance("B", "D")
+    (1, 1, 1)
+    """
+    prev = list(range(len(b) + 1))
+    for i, ca in enumerate(a, 1):
+        cur = [i]
+        for j, cb in enumerate(b, 1):
+            cur.append(min(prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (ca != cb)))
+        prev = cur
+    return prev[-1]
+
+
+def near_miss(key: str, candidates: list[str]) -> str | None:
+    """The candidate ``key`` is probably a typo of: edit distance <= 2, and at most half the
+    longer name (so that one-letter plant keys such as ``B`` and ``D`` are not typos of each other).
+
+    >>> near_miss("Cv", ["Cw", "L"]), near_miss("B", ["D"]), near_miss("gama", ["gamma"])
+    ('Cw', None, 'gamma')
+    """
+    best = None
+    for c in candidates:
+        d = edit_distance(key, c)
+        if d <= min(2, max(len(key), len(c)) // 2) and (best is None or d < best[0]):
+            best = (d, c)
+    return None if best is None else best[1]
+
 
 SUPPORTED_VERSIONS = (1,)
 

@@ -64,5 +64,6 @@ def test_auto_falls_back_when_the_certificate_fails(monkeypatch):
     # SCS stopped after 5 iterations cannot be certified; Clarabel then is
     r = solve(CASES["bounded_real"].build(), backend="auto", options=SolveOptions(max_iter=5))
     assert [a["backend"] for a in r.attempts][0] == "scs"
-    assert r.attempts[0]["verdict"] != "certified"
-    assert r.backend == "clarabel" and len(r.attempts) == 2
+    assert all(a["verdict"] != "certified" for a in r.attempts if a["backend"] == "scs")
+    backends = [a["backend"] for a in r.attempts]
+    assert "clarabel" in backends and backends.index("clarabel") > 0  # escalated to the next backend

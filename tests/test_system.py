@@ -70,7 +70,7 @@ def test_wrong_shape_names_matrix_expected_and_given_shape():
 def test_missing_and_unknown_data_and_parameters():
     with pytest.raises(DataError, match=r"theorem qib.thm1, <system>: missing data 'C' \(p x n\)"):
         compile_theorem("qib.thm1", {"data": {"A": [[1.0]]}, "params": {"beta": 0.1}})
-    with pytest.raises(DataError, match=r"unknown data key 'Z' \(the theorem takes: A, C\)"):
+    with pytest.warns(UserWarning, match=r"data 'Z' not used by the theorem \(it takes: A, C\)"):
         compile_theorem("qib.thm1", {**QIB, "data": {**QIB["data"], "Z": [[1.0]]}})
     with pytest.raises(DataError, match="missing parameter 'beta'"):
         compile_theorem("qib.thm1", {"data": QIB["data"]})

@@ -1,4 +1,4 @@
-"""Theorem discovery through entry points: duplicates rejected, broken plugins reported."""
+"""Theorem discovery through entry points: ambiguous ids refused, broken plugins reported."""
 
 from __future__ import annotations
 
@@ -21,9 +21,15 @@ def _make(tid):
     return build
 
 
+class _Dist:
+    def __init__(self, name, version):
+        self.name, self.version = name, version
+
+
 class _EP:
-    def __init__(self, name, obj=None, error=None):
+    def __init__(self, name, obj=None, error=None, dist=("pkg", "1.0")):
         self.name, self.value, self._obj, self._error = name, f"pkg.{name}", obj, error
+        self.dist = _Dist(*dist)
 
     def load(self):
         if self._error:
@@ -58,10 +64,74 @@ def test_broken_plugin_is_reported_by_name_without_breaking_others(monkeypatch):
     assert broken.name == "bad (pkg.bad)" and "ImportError: no module named x" in broken.reason
 
 
-def test_duplicate_ids_are_rejected_naming_both_plugins(monkeypatch):
-    reg = _registry_with(monkeypatch, [_EP("a", [_make("fam.x")]), _EP("b", [_make("fam.x")])])
-    assert [t.id for t in reg.all()] == ["fam.x"]
-    assert "registered by both a (pkg.a) and b (pkg.b)" in reg.broken()[0].reason
+def test_duplicate_id_is_ambiguous_and_refused_naming_both_providers(monkeypatch):
+    reg = _registry_with(
+        monkeypatch,
+        [
+            _EP("a", [_make("fam.x"), _make("fam.y")], dist=("alpha", "1.2")),
+            _EP("b", [_make("fam.x")], dist=("beta", "0.3")),
+        ],
+    )
+    assert [t.id for t in reg.all()] == ["fam.y"]  # the other id keeps working
+    with pytest.raises(DataError) as err:
+        reg.get("fam.x")
+    msg = str(err.value)
+    assert (
+        "ambiguous" in msg and "alpha 1.2 (entry point a = pkg.a)" in msg and "beta 0.3 (entry point b = pkg.b)" in msg
+    )
+    assert [c.id for c in reg.conflicts()] == ["fam.x"]
+    # the verdict does not depend on the order the entry points come in
+    reg2 = _registry_with(
+        monkeypatch,
+        [_EP("b", [_make("fam.x")], dist=("beta", "0.3")), _EP("a", [_make("fam.x")], dist=("alpha", "1.2"))],
+    )
+    with pytest.raises(DataError, match="ambiguous"):
+        reg2.get("fam.x")
+
+
+def test_the_same_theorem_object_from_two_entry_points_is_not_a_conflict(monkeypatch):
+    thm = _make("fam.same")
+    reg = _registry_with(monkeypatch, [_EP("a", [thm]), _EP("b", [thm])])
+    assert reg.get("fam.same") is thm and reg.conflicts() == []
+
+
+def test_provider_is_recorded(monkeypatch):
+    reg = _registry_with(monkeypatch, [_EP("a", [_make("fam.p")], dist=("alpha", "1.2"))])
+    p = reg.get("fam.p").provider
+    assert (p.distribution, p.version, p.entry_point) == ("alpha", "1.2", "a = pkg.a")
+    assert get_theorem("qib.thm1").provider.distribution == "lmic"
+
+
+@pytest.mark.parametrize("exc", [SystemExit(0), SystemExit(3), GeneratorExit(), RuntimeError("boom")])
+def test_plugin_raising_anything_but_keyboardinterrupt_is_broken_not_fatal(monkeypatch, exc):
+    good = types.ModuleType("good")
+    good.THEOREMS = [_make("fam.ok")]
+    reg = _registry_with(monkeypatch, [_EP("aaa", error=exc), _EP("good", good)])
+    assert [t.id for t in reg.all()] == ["fam.ok"]
+    (broken,) = reg.broken()
+    assert broken.name == "aaa (pkg.aaa)" and type(exc).__name__ in broken.reason
+
+
+def test_keyboardinterrupt_while_loading_passes(monkeypatch):
+    reg = _registry_with(monkeypatch, [_EP("aaa", error=KeyboardInterrupt())])
+    with pytest.raises(KeyboardInterrupt):
+        reg.all()
+
+
+def test_unknown_theorem_names_the_plugins_that_failed_to_load(monkeypatch):
+    reg = _registry_with(monkeypatch, [_EP("bad", error=ImportError("no module named scipyy"))])
+    with pytest.raises(DataError, match=r"unknown theorem 'bad.thm1'.*failed to load: bad \(pkg.bad\): ImportError"):
+        reg.get("bad.thm1")
+
+
+def test_undecorated_function_is_named_with_a_hint(monkeypatch):
+    def build(t):
+        pass
+
+    reg = _registry_with(monkeypatch, [_EP("plain", [build])])
+    reg.all()
+    reason = reg.broken()[0].reason
+    assert "'build'" in reason and "plain function" in reason and "@theorem(" in reason
 
 
 def test_entry_point_giving_non_theorems_is_broken(monkeypatch):
@@ -74,7 +144,17 @@ def test_autoload_can_be_disabled(monkeypatch):
     monkeypatch.setenv("LMIC_DISABLE_PLUGIN_AUTOLOAD", "1")
     reg = Registry()
     assert reg.all() == []
-    reg.register(_make("fam.manual"))
+    thm = _make("fam.manual")
+    reg.register(thm)
     assert [t.id for t in reg.all()] == ["fam.manual"]
-    with pytest.raises(LmicError, match="registered by both"):
-        reg.register(_make("fam.manual"))
+    reg.register(thm)  # the same object again (a notebook) is fine
+    again = _make("fam.manual")  # a re-run notebook cell replaces its own earlier theorem
+    reg.register(again)
+    assert reg.get("fam.manual") is again
+
+
+def test_api_registration_never_replaces_an_installed_theorem(monkeypatch):
+    reg = _registry_with(monkeypatch, [_EP("a", [_make("fam.x")], dist=("alpha", "1.2"))])
+    with pytest.raises(LmicError, match="ambiguous.*alpha 1.2.*inline theorem"):
+        reg.register(_make("fam.x"))
+    assert reg.get("fam.x").provider.distribution == "alpha"

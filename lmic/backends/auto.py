@@ -16,8 +16,8 @@ The rule (measured numbers in ``docs/backends.md``):
   installed, or cannot take the problem (Clarabel refuses PSD blocks whose dense KKT block would
   not fit in memory), are left out of the route.
 
-:class:`AutoBackend` runs the first backend of the route; :func:`lmic.api.solve` runs the rest
-of the route when the first answer is not certified.
+:class:`AutoBackend` runs the first backend of the route; the solve policy (:mod:`lmic.policy`)
+starts from this route and escalates through the rest of its order.
 
 Examples
 --------
@@ -30,8 +30,8 @@ from __future__ import annotations
 from typing import ClassVar
 
 from lmic.backends.base import Backend, SolveOptions
-from lmic.backends.strict import has_strict
 from lmic.ir.problem import Problem
+from lmic.reductions.strict import has_strict
 from lmic.solution import Solution
 
 __all__ = ["AutoBackend", "route", "choose", "step_options", "SMALL", "SMALL_N", "FIRST_ORDER_TOL"]

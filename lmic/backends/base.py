@@ -6,7 +6,7 @@ pip package), ``STATUS_MAP`` (native status -> :data:`lmic.solution.STATUSES`) a
 :meth:`Backend.solve`. Native solver modules are imported inside methods, never at import time.
 
 :meth:`Backend.solve` is the same for every backend: it validates the problem, applies the
-strict-inequality reduction (:mod:`lmic.backends.strict`), calls the backend's
+strict-inequality reduction (:mod:`lmic.reductions.strict`), calls the backend's
 :meth:`Backend._solve` on the resulting *closed* problem (no strict constraints), maps the answer
 back, and turns any exception or time-out into a ``status="error"`` :class:`Solution` carrying
 the message. Backends only implement ``_solve``.
@@ -33,7 +33,7 @@ import time
 import traceback
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
@@ -41,6 +41,8 @@ import scipy.sparse as sp
 
 from lmic.ir.problem import Problem
 from lmic.ir.svec import tril_rows_cols, tril_size
+from lmic.options import SolveOptions
+from lmic.reductions.eliminate import eliminate_unused, independent_columns, restore_eliminated
 from lmic.solution import Solution
 
 __all__ = [
@@ -56,61 +58,6 @@ __all__ = [
     "independent_columns",
     "restore_eliminated",
 ]
-
-
-@dataclass
-class SolveOptions:
-    """Options every backend understands (each maps them onto its solver's own names).
-
-    Parameters
-    ----------
-    tol : float
-        Relative accuracy (gap and feasibility) asked of the solver.
-    max_iter : int or None
-    time_limit : float or None
-        Seconds. Solvers without a native time limit run in a child process that is stopped
-        when the limit is reached (status ``error``, message ``time limit ... exceeded``).
-    verbose : bool
-    margin : float
-        Absolute margin imposed on strict inequalities (``F(x) >= margin I``) by the
-        ``fixed-margin`` reduction of optimisation problems and of feasibility problems that are
-        not scale-free (:mod:`lmic.backends.strict`).
-    strict : {"auto", "max-margin", "fixed-margin"}
-        How strict inequalities of a feasibility problem are reduced (:mod:`lmic.backends.strict`):
-        ``max-margin`` maximises the margin ``t`` (decides feasibility and infeasibility in one
-        solve, ~3x the interior-point iterations), ``fixed-margin`` asks for a point with a
-        fixed margin (fast; an infeasible answer only says that margin is out of reach),
-        ``auto`` combines them.
-    relative_margin : float
-        Margin of the ``fixed-margin`` feasibility solve of a scale-free problem, relative to
-        the mean eigenvalue under the trace normalisation (default ``1e-4``).
-    extra : dict
-        Solver-specific settings passed through unchanged.
-
-    Examples
-    --------
-    >>> SolveOptions(max_iter=50).max_iter
-    50
-    >>> SolveOptions(strict="fixed-margin").strict
-    'fixed-margin'
-    """
-
-    tol: float = 1e-8
-    max_iter: int | None = None
-    time_limit: float | None = None
-    verbose: bool = False
-    margin: float = 1e-7
-    strict: str = "auto"
-    relative_margin: float = 1e-4
-    extra: dict[str, Any] = field(default_factory=dict)
-
-    def __post_init__(self) -> None:
-        from lmic.errors import LmicError
-
-        if self.strict not in ("auto", "max-margin", "fixed-margin"):
-            raise LmicError(f"strict strategy '{self.strict}' unknown; choose auto, max-margin or fixed-margin")
-        if not 0.0 < self.relative_margin < 1.0:
-            raise LmicError(f"relative_margin must be in (0, 1), got {self.relative_margin}")
 
 
 def problem_kinds(problem: Problem) -> set[str]:
@@ -317,153 +264,6 @@ def quiet_native(active: bool = True) -> Iterator[None]:
             os.close(fd)
 
 
-def independent_columns(M: sp.spmatrix) -> np.ndarray:
-    """Mask of a maximal set of linearly independent columns of the sparse matrix ``M``.
-
-    Zero columns are dropped. Then, repeatedly, a column that is the only non-zero of some
-    row (among the columns not yet decided) cannot take part in any linear dependency and is
-    kept ("peeling": ``P > 0`` makes every entry of ``P`` such a column). The rest is split
-    into the connected components of its column-interaction graph and each component is
-    ranked by LAPACK's pivoted Cholesky (``dpstrf``, default tolerance ``n eps``) of its
-    column-normalised Gram matrix. On ``qib.thm1`` at n = 40 (1621 columns) this takes
-    ~20 ms; a dense rank decision on all columns took 0.7 s.
-
-    Examples
-    --------
-    >>> M = sp.csc_matrix(np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, -1.0, 0.0]]))
-    >>> independent_columns(M).tolist()
-    [True, True, False, False]
-    """
-    import scipy.linalg as la
-    from scipy.sparse.csgraph import connected_components
-
-    M = sp.csc_matrix(M)
-    n = M.shape[1]
-    pattern = M.copy()
-    pattern.eliminate_zeros()
-    pattern.data = np.ones_like(pattern.data)
-    active = np.diff(pattern.indptr) > 0
-    pattern = pattern.tocsr()
-    keep = np.zeros(n, dtype=bool)
-    index = np.arange(1, n + 1, dtype=float)
-    while True:
-        a = active.astype(float)
-        single = (pattern @ a) == 1
-        if not single.any():
-            break
-        cols = np.unique(np.rint(pattern[single] @ (a * index)).astype(int) - 1)
-        keep[cols] = True
-        active[cols] = False
-    rest = np.flatnonzero(active)
-    if len(rest) == 0:
-        return keep
-    R = M[:, rest]
-    norms = np.sqrt(np.asarray(R.multiply(R).sum(axis=0)).ravel())
-    R = (R @ sp.diags(1.0 / norms)).tocsc()
-    G = (R.T @ R).tocsr()
-    n_comp, labels = connected_components(G, directed=False)
-    order = np.argsort(labels, kind="stable")
-    bounds = np.searchsorted(labels[order], np.arange(n_comp + 1))
-    Gp = G[order][:, order].tocsr()
-    for c in range(n_comp):
-        b0, b1 = int(bounds[c]), int(bounds[c + 1])
-        comp = order[b0:b1]
-        if len(comp) == 1:
-            keep[rest[comp]] = True
-            continue
-        _, piv, rank, _ = la.lapack.dpstrf(Gp[b0:b1][:, b0:b1].toarray(), tol=-1.0)
-        keep[rest[comp[piv[:rank] - 1]]] = True
-    return keep
-
-
-def eliminate_unused(problem: Problem, dependent: bool = False) -> tuple[Problem, np.ndarray | None]:
-    """Drop entries of ``x`` that the constraints and the objective cannot see.
-
-    Always dropped: entries that appear in no constraint and not in the objective (free and
-    irrelevant). With ``dependent=True`` also entries whose coefficient column (over every LMI,
-    every row and the objective) is a linear combination of the others' (:func:`independent_columns`),
-    e.g. the skew-symmetric part of ``Lbar[:2, :2]`` when only ``Lbar C + C^T Lbar^T`` with
-    ``C = [I 0]`` appears (``thesis.thm3_2_2``). Such directions leave every constraint and the
-    objective unchanged, so the problem's feasible and optimal sets are unbounded along them:
-    CVXOPT, whose KKT systems need ``rank [G; A] = n``, either refuses the problem (``Rank(A) <
-    p or Rank([G; A]) < n``) or follows them to ``|x| ~ 1e18`` and stops at its iteration
-    limit or with a ``ZeroDivisionError``. Setting the dropped entries to 0 restricts the problem
-    without losing any constraint value, so the kept problem has the same feasible constraint
-    values and optimal value. Returns the problem on the kept entries and their indices
-    (``None`` when nothing is dropped, or when every entry would be); the dropped entries come
-    back as ``0`` (:func:`restore_eliminated`).
-
-    Examples
-    --------
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
-    >>> p = Problem([Variable("x", "full", (2, 1))], [LMI("x1 > 0", 1, sp.csc_matrix([[0., 1., 0.]]))],
-    ...             LinearConstraints.empty(2), Objective("feasibility", [0, 0, 0]))
-    >>> kept, keep = eliminate_unused(p)
-    >>> kept.n, keep
-    (1, array([0]))
-    """
-    objective = problem.objective.c[1:] if problem.objective.sense != "feasibility" else None
-    if dependent:
-        blocks = [lmi.coeffs[:, 1:] for lmi in problem.lmis]
-        if len(problem.linear):
-            blocks.append(problem.linear.A[:, 1:])
-        if objective is not None:
-            blocks.append(sp.csr_matrix(objective.reshape(1, -1)))
-        used = independent_columns(sp.vstack(blocks, format="csc")) if blocks else np.zeros(problem.n, dtype=bool)
-    else:
-        used = np.zeros(problem.n, dtype=bool)
-        for lmi in problem.lmis:
-            used |= np.diff(lmi.coeffs.tocsc().indptr)[1:] > 0
-        if len(problem.linear):
-            used |= np.diff(problem.linear.A.tocsc().indptr)[1:] > 0
-        if objective is not None:
-            used |= objective != 0
-    if used.all() or not used.any():
-        return problem, None
-    from dataclasses import replace as _replace
-
-    from lmic.ir.problem import LinearConstraints, Objective, Variable
-
-    keep = np.flatnonzero(used)
-    cols = np.concatenate([[0], keep + 1])
-    lmis = [_replace(lmi, coeffs=lmi.coeffs.tocsc()[:, cols]) for lmi in problem.lmis]
-    lin = problem.linear
-    linear = LinearConstraints(lin.A.tocsc()[:, cols].tocsr(), list(lin.kinds), list(lin.strict), list(lin.names))
-    kept = Problem(
-        variables=[Variable("x_used", "full", (len(keep), 1))],
-        lmis=lmis,
-        linear=linear,
-        objective=Objective(problem.objective.sense, problem.objective.c[cols]),
-        meta=dict(problem.meta),
-    )
-    return kept, keep
-
-
-def restore_eliminated(sol: Solution, keep: np.ndarray, problem: Problem) -> None:
-    """Put a solution of the reduced problem of :func:`eliminate_unused` back into ``x``.
-
-    >>> s = Solution("optimal", x=np.array([2.0]))
-    >>> from lmic.testing.conformance import lyapunov_problem
-    >>> restore_eliminated(s, np.array([1]), lyapunov_problem(-np.eye(2)))
-    >>> s.x.tolist(), s.info["eliminated"]
-    ([0.0, 2.0, 0.0], {'count': 2, 'variables': ['P'], 'indices': [0, 2]})
-    """
-
-    def expand(v: Any) -> Any:
-        if v is None or len(v) != len(keep):
-            return v
-        full = np.zeros(problem.n)
-        full[keep] = v
-        return full
-
-    sol.x = expand(sol.x)
-    if "ray" in sol.info:
-        sol.info["ray"] = expand(np.asarray(sol.info["ray"], dtype=float))
-    dropped = np.setdiff1d(np.arange(problem.n), keep)
-    names = [v.name for v in problem.variables if np.any((dropped >= v.offset) & (dropped < v.offset + v.size))]
-    sol.info["eliminated"] = {"count": int(len(dropped)), "variables": names, "indices": dropped.tolist()}
-
-
 def _child(conn: Any, backend: Backend, problem: Problem, options: SolveOptions) -> None:
     try:
         conn.send(backend._solve(problem, options))
@@ -558,12 +358,12 @@ class Backend(ABC):
         Decision-variable entries that appear in no constraint and not in the objective (and,
         for backends with :attr:`full_rank`, linearly dependent ones) are removed first
         (:func:`eliminate_unused`; they come back as ``0``). Strict constraints
-        are handled by :func:`lmic.backends.strict.solve` (recorded in ``Solution.strategy``
+        are handled by :func:`lmic.reductions.strict.solve` (recorded in ``Solution.strategy``
         and ``Solution.margin``). ``solve_s`` is the time inside the solver (summed over the
         attempts of the strict strategy), ``lower_s`` everything else lmic did: elimination,
         reduction, lowering, result mapping and the check of a fixed-margin point.
         """
-        from lmic.backends import strict
+        from lmic.reductions import strict
 
         options = options or SolveOptions()
         if options.tol < self.tol_floor:
@@ -573,8 +373,8 @@ class Backend(ABC):
         try:
             for module in self.requires:  # import time is not lmic's overhead
                 importlib.import_module(module)
-            # used by the strict strategies and the elimination of dependent entries
-            for module in ("lmic.certify.check", "lmic.certify.farkas", "scipy.linalg", "scipy.sparse.csgraph"):
+            # used by the strict reductions and the elimination of dependent entries
+            for module in ("lmic.reductions.strict", "scipy.linalg", "scipy.sparse.csgraph"):
                 importlib.import_module(module)
         except ImportError as err:
             return Solution(

@@ -9,7 +9,9 @@ Discovery loads each entry point and validates the class (a :class:`Backend` sub
 ``name`` is the entry-point name, with a ``STATUS_MAP`` into the shared vocabulary). A plugin
 that fails to import or validate is reported by name (:func:`broken_backends`, ``lmic
 backends``) without breaking the others; a second plugin claiming a name already taken is
-rejected. ``LMIC_DISABLE_PLUGIN_AUTOLOAD=1`` skips third-party entry points (only lmic's own
+rejected. Plugin code that raises anything while loading (``SystemExit`` included; only
+``KeyboardInterrupt`` passes) marks that plugin broken: it never ends lmic or decides its exit
+code. ``LMIC_DISABLE_PLUGIN_AUTOLOAD=1`` skips third-party entry points (only lmic's own
 load); :func:`register` adds a backend class explicitly.
 
 Examples
@@ -138,8 +140,10 @@ def _discover() -> dict[str, type[Backend]]:
         try:
             classes[name] = _validate(name, _load(value), value)
             _sources[name] = value
-        except Exception as err:  # noqa: BLE001 - a broken plugin must not break the others
-            _broken[name] = f"plugin '{name}' ({value}) failed to load: {type(err).__name__}: {err}"
+        except KeyboardInterrupt:
+            raise
+        except BaseException as err:  # noqa: BLE001 - plugin code never decides lmic's fate (SystemExit too)
+            _broken[name] = f"plugin '{name}' ({value}) failed to load: {_one_line(err)}"
             _sources[name] = value
     _classes = classes
     return classes
@@ -177,10 +181,18 @@ def broken_backends() -> dict[str, str]:
     return dict(_broken)
 
 
+def _one_line(err: BaseException) -> str:
+    if isinstance(err, SystemExit):
+        return f"SystemExit({err.code!r}) raised by plugin code"
+    return f"{type(err).__name__}: {' '.join(str(err).split())}"
+
+
 def _instance(cls: type[Backend]) -> Backend | None:
     try:
         return cls()
-    except Exception:  # noqa: BLE001
+    except KeyboardInterrupt:
+        raise
+    except BaseException:  # noqa: BLE001 - plugin code (SystemExit included) never ends lmic
         return None
 
 
@@ -189,7 +201,12 @@ def backend_infos() -> list[BackendInfo]:
     rows = []
     for name, cls in _discover().items():
         inst = _instance(cls)
-        missing = inst.missing_packages() if inst is not None else []
+        try:
+            missing = inst.missing_packages() if inst is not None else []
+        except KeyboardInterrupt:
+            raise
+        except BaseException:  # noqa: BLE001 - plugin code (SystemExit included) never ends lmic
+            inst, missing = None, []
         rows.append(
             BackendInfo(
                 name=name,
@@ -218,9 +235,14 @@ def available_backend_names(expand_variants: bool = False) -> list[str]:
         cls = _discover()[info.name]
         if expand_variants and cls.variants:
             for v in cls.variants:
-                inst = cls(v)
-                if inst.is_available():
-                    names.append(inst.label)
+                try:
+                    inst = cls(v)
+                    if inst.is_available():
+                        names.append(inst.label)
+                except KeyboardInterrupt:
+                    raise
+                except BaseException:  # noqa: BLE001 - plugin code (SystemExit included) never ends lmic
+                    continue
         else:
             names.append(info.name)
     return names
@@ -244,8 +266,15 @@ def get_backend(spec: str) -> Backend:
     cls = classes[name]
     if variant and not cls.variants:
         raise BackendUnavailable(f"backend '{name}' takes no ':{variant}' variant")
-    backend = cls(variant or None)
-    missing = backend.missing_packages()
+    try:
+        backend = cls(variant or None)
+        missing = backend.missing_packages()
+    except KeyboardInterrupt:
+        raise
+    except BaseException as err:  # noqa: BLE001 - plugin code (SystemExit included) never ends lmic
+        raise BackendUnavailable(
+            f"backend '{name}' ({_sources.get(name, '?')}) failed to start: {_one_line(err)}"
+        ) from None
     if missing:
         pkgs = " ".join(missing)
         raise BackendUnavailable(

@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from lmic import __version__
+from lmic._version import __version__
 from lmic.certify.check import Certificate, Tolerances, _jsonable, certify
 from lmic.errors import CertificateError, LmicError
 from lmic.ir.problem import Problem
@@ -82,7 +82,9 @@ __all__ = [
 #: version of the certificate file format (the ``lmic_certificate`` key)
 SCHEMA_VERSION = 1
 
-_VOLATILE_META = ("system_path",)
+#: ``provider`` is checked on its own (:func:`theorem_changes`): a new plugin version whose
+#: template is unchanged compiles to the same IR
+_VOLATILE_META = ("system_path", "provider")
 
 #: python packages behind each backend name (for the ``versions`` record)
 _PACKAGES = {
@@ -185,6 +187,8 @@ def certificate_document(
     theorem = (
         {"id": str(theorem_id), "title": meta.get("title"), "citation": meta.get("citation")} if theorem_id else None
     )
+    if theorem is not None:  # who provided the theorem, and a hash of its analysed template
+        theorem.update(_theorem_identity(meta))
     sys_entry = None
     sys_path = getattr(system, "path", None) if system is not None else meta.get("system_path")
     if system is not None or sys_path:
@@ -229,6 +233,8 @@ def certificate_document(
             "iterations": solution.iterations,
             "solve_s": solution.solve_s,
             "versions": _versions(solution.backend or "", solution.info or {}),
+            # every solve the policy ran (lmic.policy): backend, reduction, statuses, verdict, time
+            "attempts": list((solution.info or {}).get("attempts", [])),
         },
         "solution": {
             "x": None if x is None else x.tolist(),
@@ -242,6 +248,59 @@ def certificate_document(
     doc = _jsonable(doc)
     doc["integrity"] = integrity_of(doc)
     return doc
+
+
+def _theorem_identity(meta: dict[str, Any]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    if meta.get("provider") is not None:
+        out["provider"] = meta["provider"]
+    template = meta.get("template") or {}
+    if template.get("sha256"):
+        out["template_hash"] = template["sha256"]
+        out["template_parts"] = dict(template.get("parts") or {})
+    return out
+
+
+def theorem_changes(recorded: dict[str, Any] | None, problem: Problem) -> tuple[str | None, str]:
+    """Compare a certificate's ``theorem`` section with a recompiled problem.
+
+    Returns ``(message, note)``: ``message`` is one line naming what changed in the template
+    (``None`` when nothing did, or when the certificate predates template hashes); ``note``
+    mentions a provider change that left the template as it was.
+
+    >>> meta = {"template": {"sha256": "b", "parts": {"LMI (7)": "2", "check c": "3"}}}
+    >>> rec = {"id": "a.b", "template_hash": "a", "template_parts": {"LMI (7)": "1", "derive L": "4"}}
+    >>> from lmic.ir.problem import LinearConstraints, Objective, Problem
+    >>> p = Problem([], [], LinearConstraints.empty(0), Objective("feasibility", [0.0]), meta=meta)
+    >>> theorem_changes(rec, p)[0].split(": ", 1)[1]
+    'LMI (7) differs; derive L removed; check c added'
+    """
+    if not recorded or not recorded.get("template_hash"):
+        return None, ""
+    meta = problem.meta or {}
+    now = (meta.get("template") or {}).get("sha256")
+    old_p, new_p = recorded.get("provider") or {}, meta.get("provider") or {}
+    moved = ""
+    key = ("distribution", "version")
+    if old_p and new_p and [old_p.get(k) for k in key] != [new_p.get(k) for k in key]:
+        moved = (
+            f"provider {old_p.get('distribution') or 'inline'} {old_p.get('version') or ''} -> "
+            f"{new_p.get('distribution') or 'inline'} {new_p.get('version') or ''}"
+        ).replace("  ", " ")
+    if now == recorded["template_hash"]:
+        return None, (f"{moved} (template unchanged)" if moved else "")
+    old, new = recorded.get("template_parts") or {}, (meta.get("template") or {}).get("parts") or {}
+    what = [f"{k} differs" for k in old if k in new and old[k] != new[k]]
+    what += [f"{k} removed" for k in old if k not in new]
+    what += [f"{k} added" for k in new if k not in old]
+    if moved:
+        what.append(moved)
+    detail = "; ".join(what) or "template hash differs"
+    return (
+        f"theorem {recorded.get('id')} changed since the certificate was written (plugin or recorded "
+        f"parameters): {detail}",
+        "",
+    )
 
 
 def write_certificate(
@@ -374,6 +433,7 @@ INFORMATIONAL = (
 #: They are covered by the integrity hashes; every other field is recomputed and compared.
 CLAIMED = (
     "lmic",
+    "theorem.provider",  # a new plugin version with the same template is a note (theorem_changes)
     "system.path",
     "ir.embedded",
     "backend",
@@ -614,7 +674,9 @@ def _rebuild(doc: dict[str, Any], base: Path) -> tuple[Problem, str, Any]:
 
     try:
         thm = get_theorem(theorem["id"])
-    except LmicError:
+    except LmicError as err:
+        if "ambiguous" in str(err):  # two plugins offer the id: refuse rather than guess
+            raise CertificateError(str(err)) from None
         raise CertificateError(f"theorem '{theorem['id']}' is not installed here") from None
     sys_path = Path(doc["system"]["path"])
     if not sys_path.is_absolute():
@@ -808,6 +870,12 @@ def audit_certificate(
     if problem is None:
         return _fail(doc, "system.sha256", label, **common)
     checked = ["schema", "tolerances", "system.sha256" if doc["ir"]["embedded"] is None else "embedded IR"]
+    if doc["ir"]["embedded"] is None:  # recompiled from the installed theorem: is it the same theorem?
+        changed, note = theorem_changes(doc["theorem"], problem)
+        if changed:
+            return _fail(doc, "theorem.template_hash", changed, checked=checked, **common)
+        if doc["theorem"] and doc["theorem"].get("template_hash"):
+            checked.append("theorem.template_hash" + (f" ({note})" if note else ""))
     if ir_hash(problem) != doc["ir"]["sha256"]:
         why = (
             "the embedded IR was modified"

@@ -79,7 +79,10 @@ Verdicts
 ``rejected``             some criterion fails; ``reason`` names the first violated constraint
                          (LMIs, then linear rows, then derived quantities and checks, then the
                          objective) and by how much.
-``infeasible-certified`` the status is ``infeasible`` and the Farkas certificate verifies.
+``infeasible-certified`` the status is ``infeasible`` and the Farkas certificate is a GLOBAL proof
+                         (exact, or homogeneous problem: :func:`lmic.certify.farkas.scope`).
+``infeasible-bounded``   the Farkas certificate verifies in float but only excludes solutions with
+                         ``||x||_inf <= R`` (never called infeasible).
 ``unverified``           nothing to check: ``infeasible`` without a verifiable certificate,
                          ``unbounded``, or an ``error`` without a point.
 
@@ -125,8 +128,8 @@ from lmic.solution import Solution
 
 __all__ = ["VERDICTS", "Tolerances", "Certificate", "certify", "lmi_report", "evaluate_checks"]
 
-#: The four verdicts of the certifier.
-VERDICTS = ("certified", "rejected", "infeasible-certified", "unverified")
+#: The verdicts of the certifier (``infeasible-bounded``: only "no solution with ||x||_inf <= R").
+VERDICTS = ("certified", "rejected", "infeasible-certified", "infeasible-bounded", "unverified")
 
 _U = float(np.finfo(float).eps) / 2.0  # unit round-off of float64
 
@@ -729,17 +732,29 @@ def certify(
                 from lmic.certify.farkas import prove_infeasible
 
                 cert.exact = prove_infeasible(problem, solution.farkas, cert.farkas)
-            if cert.farkas["verified"]:
+            # global (exact, or homogeneous) or bounded ("no solution with ||x|| <= R"): farkas.scope
+            from lmic.certify.farkas import scope
+
+            cert.farkas["scope"] = scope(problem, cert.farkas, cert.exact)
+            kind = cert.farkas["scope"]["scope"]
+            if kind == "global" and cert.farkas["verified"]:
                 cert.verdict = "infeasible-certified"
                 cert.reason = cert.farkas["reason"]
                 if cert.exact is not None:
                     cert.reason += "; exact proof: " + cert.exact["reason"]
-            elif cert.exact is not None and cert.exact["proven"]:
+            elif kind == "global":
                 # the float tolerances failed but an exact certificate exists: a theorem
                 cert.verdict = "infeasible-certified"
                 cert.reason = cert.exact["reason"] + " (the float verification failed: " + cert.farkas["reason"] + ")"
+            elif kind == "bounded":
+                cert.verdict = "infeasible-bounded"
+                cert.reason = cert.farkas["scope"]["statement"]
+                if cert.exact is not None:
+                    cert.reason += "; exact proof failed: " + cert.exact["reason"]
             else:
-                cert.reason = "infeasibility not verified: " + cert.farkas["reason"]
+                cert.reason = "infeasibility not verified: " + (
+                    cert.farkas["reason"] if not cert.farkas["verified"] else cert.farkas["scope"]["statement"]
+                )
         cert.time_s = time.perf_counter() - t0
         return cert
     if solution.x is None:

@@ -24,7 +24,7 @@ feasible ``x`` the left side of (*) is ``>= 0``.
   sum_{r strict} y_r``. If ``F_i(x) >= mu I`` on the strict LMIs and ``l_r(x) >= mu`` on the
   strict rows, the left side of (*) is ``>= mu tau``, so ``mu <= g_0 / tau <= 0``. This is the
   certificate of a homogeneous strict LMI (``F0 = 0``, ``g_0 = 0``, e.g. ``A^T P + P A < 0,
-  P > 0`` for an unstable ``A``) and of the max-margin reduction of :mod:`lmic.backends.strict`.
+  P > 0`` for an unstable ``A``) and of the max-margin reduction of :mod:`lmic.reductions.strict`.
 
 With floating-point certificates the equalities hold only approximately. The verifier first
 projects each ``Z_i`` onto the PSD cone and clips ``y`` on ``ge`` rows to ``>= 0`` (the part
@@ -42,6 +42,36 @@ no feasible ``x`` with ``||x||_inf < radius = -g_0 / ||g_{1:}||_1``; for the str
 ``x`` with margin ``mu > margin_bound = (g_0 + ||g_{1:}||_1 ||x||_inf) / tau`` (reported for
 ``||x||_inf = 1``; the margin bound scales with ``||x||`` for homogeneous problems, so it is a
 bound on the *relative* margin).
+
+Global or bounded: what a certificate proves about the ORIGINAL problem
+-----------------------------------------------------------------------
+Backends reduce strict constraints before solving (:mod:`lmic.reductions.strict`): the
+``max-margin`` problem adds a margin ``t``, a cap ``t <= 1`` and, for scale-free problems, a
+trace normalisation ``tr F_i(x) <= d_i``. The dual of such a problem carries multipliers of those
+extra rows (the "box term"); :func:`verify_farkas` is always run on the ORIGINAL problem with
+the multipliers of the original constraints only, so no box multiplier can enter ``g``. What
+remains is the float residual ``g_k != 0`` (``k >= 1``), and that is what decides the scope
+(:func:`scope`):
+
+* **exact proof** (:func:`prove_farkas`): ``g_k = 0`` for ``k >= 1`` in rational arithmetic,
+  ``Z_i >= 0`` and the separation exactly. Then (*) holds for every ``x`` with no ``x`` term,
+  so no ``x`` at all is feasible: a **global** proof.
+* **homogeneous problems** (every ``F_i^(0) = 0`` and ``a_r0 = 0``: the strict feasible set is
+  an open cone, e.g. Lyapunov LMIs) with a verified *strict* certificate: ``g_0 = 0`` exactly
+  (a sum of exact zeros), and (*) gives ``mu tau <= ||x||_inf ||g_{1:}||_1`` for every ``x``
+  with margin ``mu``. Since ``x -> s x`` (``s > 0``) maps the feasible cone onto itself, the
+  trace normalisation of the reduction loses nothing, and the bound is scale-free: no point
+  *at any scale* has relative margin ``mu / ||x||_inf`` above ``rho = ||g_{1:}||_1 / tau``
+  (recorded). lmic treats this as **global** (the coordinator's rule for scale-free cones);
+  the recorded ``rho`` says how far that float statement goes.
+* **everything else** (an inhomogeneous problem with a float certificate): (*) gives
+  ``0 <= g_0 + ||x||_inf ||g_{1:}||_1`` at any feasible ``x``, so only points with
+  ``||x||_inf < R = -g_0 / ||g_{1:}||_1`` are excluded: a **bounded** proof, "no solution with
+  ``||x||_inf <= R``", never called infeasible. This is not a formality: the problem
+  ``[[x, 1], [1, 1e-5]] > 0`` is feasible exactly for ``x > 1e5``, and SDPA and SCS return
+  certificates that verify to ``1e-6`` with ``R ~ 4e4`` (``tests/test_engine.py``). To go
+  further: an exact proof (``--exact``), another backend (another ray), or a larger ``R``
+  (a more accurate ray).
 
 Repair of inaccurate certificates
 ---------------------------------
@@ -69,8 +99,18 @@ A verified float certificate still has ``g_k ~ 1e-14`` instead of ``0``. :func:`
 turns it into an exact one: on the certificate's face (``Z_i = V_i S_i V_i^T``, ``V_i`` the
 eigenvectors above ``1e-9`` of the largest multiplier, rounded to rationals ``2^-50``; ``y_r``
 on the rows it uses) the conditions ``g_k = 0`` are linear in ``(S_i, y)`` with exact rational
-coefficients. The rounded ``(S_i, y)`` is projected exactly onto their solution space (over an
-independent subset of the equations, python-flint), and then, exactly: every ``S_i`` is
+coefficients. Entries of ``V_i`` below ``2^-40`` are LAPACK's round-off on coordinates the face
+does not touch (a zero row of ``Z_i``) and are set to exact zeros before the rounding: kept,
+they tilt the face out of its coordinate subspace, an equation that vanishes identically on the
+true face binds in exact arithmetic, and the projection below has to cancel an O(1) part of the
+multiplier (how much noise LAPACK leaves depends on its build: this decided the SDPA test case
+on one machine and not on another). The rounded ``(S_i, y)`` is projected exactly onto their
+solution space (over an independent subset of the equations, python-flint). When that leaves
+the cone (an eigenvalue of ``S_i`` smaller than the projection's correction), a second attempt
+first moves the float point towards the analytic centre of the face's certificates (log-det
+barrier, Newton steps in the null space of the float equations): by the smallest step of a
+grid that leaves every eigenvalue a float margin, so the certificate stays close to the
+solver's. Either way the result is only a candidate; then, exactly: every ``S_i`` is
 positive semidefinite (so is ``Z_i``), ``y_r >= 0`` on ``ge`` rows, ``g_k = 0`` for
 ``k >= 1`` by construction, and ``g_0 < 0`` (closed) or ``g_0 <= 0`` with ``tau > 0``
 (strict). Nothing is left to tolerance: the problem is infeasible as stated by its IR.
@@ -102,6 +142,8 @@ from lmic.ir.svec import tril_rows_cols
 
 __all__ = [
     "verify_farkas",
+    "scope",
+    "is_homogeneous",
     "repair_farkas",
     "prove_farkas",
     "prove_infeasible",
@@ -587,18 +629,24 @@ def prove_farkas(
     t0 = time.perf_counter()
     out: dict[str, Any] = {}
     for rel in rel_face:
-        attempt = _prove_farkas(problem, farkas, rel, keep_certificate)
-        if attempt["face"] is not None:
-            attempt["face"]["threshold"] = rel
-        if not out or attempt["proven"]:
-            out = attempt
-        if attempt["proven"]:
+        for center in (False, True):
+            attempt = _prove_farkas(problem, farkas, rel, keep_certificate, center)
+            if attempt["face"] is not None:
+                attempt["face"]["threshold"] = rel
+                attempt["face"]["centered"] = center
+            if not out or attempt["proven"]:
+                out = attempt
+            if attempt["proven"]:
+                break
+        if out.get("proven"):
             break
     out["time_s"] = time.perf_counter() - t0
     return out
 
 
-def _prove_farkas(problem: Problem, farkas: dict[str, Any], rel_face: float, keep: bool) -> dict[str, Any]:
+def _prove_farkas(
+    problem: Problem, farkas: dict[str, Any], rel_face: float, keep: bool, center: bool = False
+) -> dict[str, Any]:
     from fractions import Fraction
 
     from lmic.certify.exact import _flint, prove_psd
@@ -627,8 +675,22 @@ def _prove_farkas(problem: Problem, farkas: dict[str, Any], rel_face: float, kee
     u0: list[Any] = []
     blocks: list[tuple[int, np.ndarray, int]] = []  # (lmi index, W_i as python ints, r)
     ranks: list[int] = []
-    for i, (lmi, (w, V)) in enumerate(zip(problem.lmis, eigs, strict=True)):
-        sel = w > thr
+    sels = [w > thr for w, _ in eigs]
+    rows = [r for r in range(len(y)) if (not ge[r]) or y[r] > thr]
+    # the float starting point: S_i = diag(w) on the face, y on the rows used
+    parts = []
+    for (w, _), sel in zip(eigs, sels, strict=True):
+        ia, ib = np.triu_indices(int(np.sum(sel)))
+        parts.append(np.where(ia == ib, w[sel][ia], 0.0))
+    u0f = np.concatenate([*parts, y[rows]])
+    if center and u0f.size:
+        moved = _towards_center(problem, eigs, sels, rows, ge, u0f, top)
+        if moved is None:
+            return dict(fail, reason="no point inside the face's certificates was found (float centering)")
+        u0f = moved
+    k0 = 0
+    for i, (lmi, (_w, V)) in enumerate(zip(problem.lmis, eigs, strict=True)):
+        sel = sels[i]
         r = int(np.sum(sel))
         ranks.append(r)
         if not r:
@@ -636,7 +698,7 @@ def _prove_farkas(problem: Problem, farkas: dict[str, Any], rel_face: float, kee
         t = lmi.dim * (lmi.dim + 1) // 2
         if (1 + n) * t * r * (r + 1) // 2 > EXACT_MAX_ENTRIES:
             return dict(fail, reason=f"the face of LMI '{lmi.name}' is too large for an exact proof")
-        W = np.rint(np.ldexp(V[:, sel], _FACE_BITS)).astype(np.int64).astype(object)
+        W = np.rint(np.ldexp(_snap(V[:, sel]), _FACE_BITS)).astype(np.int64).astype(object)
         ri, ci = tril_rows_cols(lmi.dim)
         ia, ib = np.triu_indices(r)
         P, Q = W[ri], W[ci]
@@ -651,15 +713,16 @@ def _prove_farkas(problem: Problem, farkas: dict[str, Any], rel_face: float, kee
             columns.append([Jl[k][col] for k in range(1 + n)])
         # V diag(w) V^T = W (diag(w) 2^-100) W^T
         scale = flint.fmpq(1, 1 << (2 * _FACE_BITS))
-        u0 += [q(float(w[sel][a])) * scale if a == b else q(0.0) for a, b in zip(ia, ib, strict=True)]
+        u0 += [q(float(v)) * scale for v in u0f[k0 : k0 + len(ia)]]
+        k0 += len(ia)
         blocks.append((i, W, r))
-    rows = [r for r in range(len(y)) if (not ge[r]) or y[r] > thr]
     if rows:
         A = lin.A.tocsc()
         Ad = A.toarray()
         for r in rows:
             columns.append([q(v) for v in Ad[r]])
-            u0.append(q(float(y[r])))
+            u0.append(q(float(u0f[k0])))
+            k0 += 1
     if not columns:
         return dict(fail, reason="the certificate has an empty face")
     m = len(columns)
@@ -754,11 +817,222 @@ def _prove_farkas(problem: Problem, farkas: dict[str, Any], rel_face: float, kee
     return dict(base, proven=False, kind=None, reason=f"no exact separation: g_0 = {float(g0):.3g}")
 
 
-def prove_infeasible(problem: Problem, farkas: dict[str, Any], verification: dict[str, Any]) -> dict[str, Any]:
+def _snap(V: np.ndarray) -> np.ndarray:
+    """Face basis with its round-off entries set to exact zeros.
+
+    An entry below ``2^-(_FACE_BITS - 10)`` of a unit basis vector is LAPACK's noise on a
+    coordinate the face does not touch (a zero row of ``Z_i``, a block of a block-diagonal
+    ``Z_i``). Rounded to ``2^-_FACE_BITS`` it would survive as a few units and tilt the face out
+    of that coordinate subspace: an equation ``<M, Z_i> = 0`` that holds identically on the
+    true face (``M`` vanishing there) would then bind in exact arithmetic, and the exact
+    projection would have to cancel an O(1) component of the multiplier along it.
+    """
+    return np.where(np.abs(V) < 2.0 ** -(_FACE_BITS - 10), 0.0, V)
+
+
+def _face_jacobian(problem: Problem, eigs: list, sels: list, rows: list[int]) -> np.ndarray:
+    """Float ``d g_k / d u`` (``k = 0 .. n``) for the face unknowns of :func:`_prove_farkas`.
+
+    The unknowns are ``svec(S_i)`` (upper triangle, each off-diagonal entry once) with
+    ``Z_i = V_i S_i V_i^T`` (``V_i`` the orthonormal face basis), then ``y`` on ``rows``.
+    """
+    cols = []
+    for lmi, (_, V), sel in zip(problem.lmis, eigs, sels, strict=True):
+        r = int(np.sum(sel))
+        if not r:
+            continue
+        U = _snap(V[:, sel])
+        ri, ci = tril_rows_cols(lmi.dim)
+        ia, ib = np.triu_indices(r)
+        P, Q = U[ri], U[ci]
+        T = P[:, ia] * Q[:, ib] + P[:, ib] * Q[:, ia]
+        T[:, ia == ib] *= 0.5
+        cols.append(np.asarray(lmi.coeffs.tocsc().T @ (_weights(lmi.dim)[:, None] * T)))
+    if rows:
+        cols.append(np.asarray(problem.linear.A.tocsr()[rows].T.toarray()))
+    return np.hstack(cols)
+
+
+def _center_on_face(
+    J: np.ndarray, u0: np.ndarray, sizes: list[int], ge_rows: np.ndarray, separate: bool, max_iter: int = 30
+) -> np.ndarray | None:
+    """A point deep inside the face's slice of the certificate cone, in floats.
+
+    Maximises ``sum_i log det S_i + sum_{ge rows} log y_r (+ log(-g_0) when separate)`` subject
+    to ``g_k = 0`` (``k >= 1``) and ``sum_i tr S_i + sum_{ge rows} y_r`` fixed, by infeasible-start
+    Newton steps from ``u0`` (which must be strictly inside the cone). Returns ``None`` when no
+    strictly interior point was reached (the face is larger than the certificates' face).
+    """
+    m = u0.size
+    tri = [np.triu_indices(r) for r in sizes]
+    nS = sum(len(a) for a, _ in tri)
+    # trace row of the normalisation; svec -> S for every block
+    N = np.zeros(m)
+    k = 0
+    for a, b in tri:
+        N[k : k + len(a)] = (a == b).astype(float)
+        k += len(a)
+    N[nS:] = ge_rows.astype(float)
+    A = np.vstack([J[1:], N[None, :]])
+    c0 = J[0]
+    scale = np.maximum(np.linalg.norm(A, axis=1), 1e-300)
+    A = A / scale[:, None]  # rows of unit norm: the KKT system is better balanced
+    b = np.zeros(A.shape[0])
+    b[-1] = float(N @ u0) / scale[-1]
+
+    def split(u: np.ndarray) -> list[np.ndarray]:
+        out, k = [], 0
+        for r, (a, bb) in zip(sizes, tri, strict=True):
+            S = np.zeros((r, r))
+            S[a, bb] = u[k : k + len(a)]
+            S[bb, a] = u[k : k + len(a)]
+            out.append(S)
+            k += len(a)
+        return out
+
+    def inside(u: np.ndarray) -> bool:
+        if separate and not float(c0 @ u) < 0:
+            return False
+        if np.any(u[nS:][ge_rows] <= 0):
+            return False
+        return all(np.linalg.eigvalsh(S)[0] > 0 for S in split(u) if S.size)
+
+    def derivatives(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        grad, H = np.zeros(m), np.zeros((m, m))
+        k = 0
+        for r, (a, bb), S in zip(sizes, tri, split(u), strict=True):
+            t = len(a)
+            E = np.zeros((t, r, r))
+            E[np.arange(t), a, bb] = 1.0
+            E[np.arange(t), bb, a] = 1.0
+            Si = np.linalg.inv(S)
+            M = Si @ E
+            grad[k : k + t] = -np.einsum("kii->k", M)
+            H[k : k + t, k : k + t] = np.einsum("kij,lji->kl", M, M)
+            k += t
+        yr = np.flatnonzero(ge_rows) + nS
+        grad[yr] -= 1.0 / u[yr]
+        H[yr, yr] += 1.0 / u[yr] ** 2
+        if separate:
+            h = -float(c0 @ u)
+            grad += c0 / h
+            H += np.outer(c0, c0) / h**2
+        return grad, H
+
+    # feasible-start Newton on the null space of the equality rows (orthonormal basis B)
+    _, sv, Vt = np.linalg.svd(A)
+    rank = int(np.sum(sv > 1e-10 * sv[0])) if sv.size else 0
+    B = Vt[rank:].T
+    dp = -np.linalg.lstsq(A, A @ u0 - b, rcond=1e-10)[0]  # least-norm move onto the slice
+    if not inside(u0) or not B.shape[1]:
+        return None
+    # phase 1 (infeasible start): u = u0 + s dp + B z; each step takes the rest of dp and the
+    # barrier's Newton correction in the null space, damped to stay inside the cone, until s = 1
+    u, s = u0.copy(), 0.0
+    for _ in range(max_iter):
+        grad, H = derivatives(u)
+        rest = (1.0 - s) * dp
+        Hz = B.T @ H @ B
+        dz = -np.linalg.solve(Hz + 1e-14 * np.trace(Hz) * np.eye(len(Hz)) / len(Hz), B.T @ (grad + H @ rest))
+        t = 1.0
+        while t > 1e-6 and not inside(u + t * (rest + B @ dz)):
+            t *= 0.5
+        if t <= 1e-6:
+            return None
+        u = u + t * (rest + B @ dz)
+        s = 1.0 if t == 1.0 else s + t * (1.0 - s)
+        if s == 1.0:
+            break
+    if s < 1.0:
+        return None
+
+    def value(u: np.ndarray) -> float:
+        f = -sum(float(np.linalg.slogdet(S)[1]) for S in split(u) if S.size)
+        f -= float(np.sum(np.log(u[nS:][ge_rows])))
+        return f - (math.log(-float(c0 @ u)) if separate else 0.0)
+
+    f = value(u)
+    for _ in range(max_iter):
+        grad, H = derivatives(u)
+        gz, Hz = B.T @ grad, B.T @ H @ B
+        dz = -np.linalg.solve(Hz + 1e-14 * np.trace(Hz) * np.eye(len(gz)) / len(gz), gz)
+        dec = -float(gz @ dz)  # Newton decrement squared
+        if not dec > 1e-8:  # near enough to the centre: only a margin is needed
+            break
+        du, t = B @ dz, 1.0
+        while t > 1e-6:
+            un = u + t * du
+            if inside(un):
+                fn = value(un)
+                if fn <= f - 0.25 * t * dec:
+                    break
+            t *= 0.5
+        if t <= 1e-6:
+            break
+        u, f = un, fn
+    return u
+
+
+def _towards_center(
+    problem: Problem, eigs: list, sels: list, rows: list[int], ge: np.ndarray, u0: np.ndarray, top: float
+) -> np.ndarray | None:
+    """Move the face point ``u0`` towards the centre of the face's certificates, just enough.
+
+    ``u0`` fails the exact test when an eigenvalue of some ``S_i`` (or a ``y_r``) is smaller
+    than the correction the exact projection makes. The analytic centre ``u_c`` of the face's
+    certificates (:func:`_center_on_face`) has every eigenvalue well inside; the returned point
+    is ``(1 - theta) u_a + theta u_c`` with ``u_a`` the float projection of ``u0`` on
+    ``g_k = 0`` and the smallest ``theta`` of a geometric grid whose float margin is at least
+    ``1e-6 top`` and a quarter of the centre's (a convex combination: the separation and the
+    trace conditions stay those of ``u0`` and ``u_c``).
+    """
+    sizes = [int(np.sum(sel)) for sel in sels]
+    J = _face_jacobian(problem, eigs, sels, rows)
+    ge_rows = np.array([bool(ge[r]) for r in rows], dtype=bool)
+    separate = float(J[0] @ u0) < 0
+    try:
+        uc = _center_on_face(J, u0, sizes, ge_rows, separate)
+    except np.linalg.LinAlgError:  # a singular block: the slice has no interior here
+        uc = None
+    if uc is None:
+        return None
+    ua = u0 - np.linalg.lstsq(J[1:], J[1:] @ u0, rcond=1e-13)[0]
+    nS = sum(r * (r + 1) // 2 for r in sizes)
+
+    def margin(u: np.ndarray) -> float:
+        out, k = [], 0
+        for r in sizes:
+            ia, ib = np.triu_indices(r)
+            S = np.zeros((r, r))
+            S[ia, ib] = S[ib, ia] = u[k : k + len(ia)]
+            k += len(ia)
+            if r:
+                out.append(float(np.linalg.eigvalsh(S)[0]))
+        out += [float(v) for v in u[nS:][ge_rows]]
+        return min(out, default=math.inf)
+
+    if not margin(uc) > 1e-9 * top:  # the centre is on the boundary: the face is too large
+        return None
+    want = min(0.25 * margin(uc), 1e-6 * top)
+    for theta in (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 0.03, 0.1, 0.3):
+        u = (1 - theta) * ua + theta * uc
+        if margin(u) >= want:
+            return u
+    return uc
+
+
+def prove_infeasible(
+    problem: Problem,
+    farkas: dict[str, Any],
+    verification: dict[str, Any],
+    rel_face: tuple[float, ...] | None = None,
+) -> dict[str, Any]:
     """The exact proof :func:`lmic.certify.certify` runs for an ``infeasible`` answer.
 
     Tries the repaired certificate (when :func:`verify_farkas` repaired one), then the
-    solver's certificate in the orientation that verified (or both when none did).
+    solver's certificate in the orientation that verified (or both when none did). ``rel_face``
+    (default: :func:`prove_farkas`'s) limits the face thresholds tried (each try costs seconds on
+    problems with a few dozen variables).
 
     Returns
     -------
@@ -788,7 +1062,7 @@ def prove_infeasible(problem: Problem, farkas: dict[str, Any], verification: dic
     candidates += [("solver", {"lmis": [sg * Z for Z in mats], "linear": sg * y}) for sg in signs]
     out: dict[str, Any] = {}
     for source, cand in candidates:
-        r = prove_farkas(problem, cand)
+        r = prove_farkas(problem, cand) if rel_face is None else prove_farkas(problem, cand, rel_face=rel_face)
         r["source"] = source
         if not out or r["proven"]:
             out = r
@@ -796,3 +1070,109 @@ def prove_infeasible(problem: Problem, farkas: dict[str, Any], verification: dic
             break
     out["denominator"] = "rational" if out["proven"] else "-"  # sizes in denominator_bits
     return out
+
+
+def is_homogeneous(problem: Problem) -> bool:
+    """True when every LMI has ``F0 = 0`` and every linear row ``a0 = 0`` (a conic feasible set).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> is_homogeneous(p)
+    True
+    """
+    for lmi in problem.lmis:
+        col0 = lmi.coeffs.tocsc()[:, 0]
+        if col0.nnz and np.any(col0.toarray()):
+            return False
+    if len(problem.linear):
+        a0 = problem.linear.A.tocsc()[:, 0]
+        if a0.nnz and np.any(a0.toarray()):
+            return False
+    return True
+
+
+def scope(problem: Problem, verification: dict[str, Any] | None, exact: dict[str, Any] | None = None) -> dict[str, Any]:
+    """What a Farkas certificate proves about the original problem: global, bounded or nothing.
+
+    Rules in the module docstring ("Global or bounded").
+
+    Parameters
+    ----------
+    problem : Problem
+        The original problem (never a reduction of it).
+    verification : dict or None
+        :func:`verify_farkas`'s report.
+    exact : dict or None
+        :func:`prove_infeasible`'s report, when an exact proof was tried.
+
+    Returns
+    -------
+    dict
+        ``scope`` (``"global"``, ``"bounded"`` or ``None``), ``radius`` (bounded: no solution with
+        ``||x||_inf <= radius``; ``inf`` for global), ``basis`` (``"exact"``, ``"homogeneous"``,
+        ``"float"``), ``rho`` (homogeneous: relative-margin bound) and ``statement`` (one line).
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))],
+    ...             [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]])), LMI("-p > 0", 1, sp.csc_matrix([[0., -1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> f = {"lmis": [np.eye(1), np.eye(1)]}
+    >>> scope(p, verify_farkas(p, f))["scope"]
+    'global'
+    >>> q = Problem([Variable("p", "scalar", (1, 1))],
+    ...             [LMI("p >= 0", 1, sp.csc_matrix([[0., 1.]]), strict=False),
+    ...              LMI("-1 - p >= 0", 1, sp.csc_matrix([[-1., -1.0000001]]), strict=False)],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> s = scope(q, verify_farkas(q, {"lmis": [np.eye(1), np.eye(1)]}, repair=False))
+    >>> s["scope"], round(s["radius"])
+    ('bounded', 10000000)
+    """
+    if exact is not None and exact.get("proven"):
+        return {
+            "scope": "global",
+            "radius": math.inf,
+            "basis": "exact",
+            "rho": None,
+            "statement": f"infeasible: exact rational Farkas certificate ({exact.get('kind')})",
+        }
+    v = verification or {}
+    if not v.get("verified"):
+        return {"scope": None, "radius": None, "basis": None, "rho": None, "statement": "no verified certificate"}
+    g0, tau = float(v.get("g0") or 0.0), float(v.get("tau") or 0.0)
+    radius = float(v.get("radius") or 0.0)
+    if v.get("kind") == "strict" and tau > 0 and is_homogeneous(problem):
+        mb = v.get("margin_bound")
+        rho = float(mb) if mb is not None else None
+        return {
+            "scope": "global",
+            "radius": math.inf,
+            "basis": "homogeneous",
+            "rho": rho,
+            "statement": (
+                "infeasible: homogeneous (scale-free) problem; at any scale no point has relative "
+                f"margin above {rho:.3g} (strict Farkas certificate)"
+            ),
+        }
+    if g0 < 0 and radius > 0:
+        return {
+            "scope": "bounded",
+            "radius": radius,
+            "basis": "float",
+            "rho": None,
+            "statement": (
+                f"no solution with ||x||_inf <= {radius:.6g} (float Farkas certificate, residual "
+                f"{float(v.get('rel_residual') or 0.0):.2g}); a larger solution is not excluded"
+            ),
+        }
+    return {
+        "scope": None,
+        "radius": None,
+        "basis": "float",
+        "rho": None,
+        "statement": "the certificate bounds the margin only (separation >= 0): no infeasibility shown",
+    }

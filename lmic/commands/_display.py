@@ -21,6 +21,8 @@ _VERDICT_STYLE = {
     "infeasible-certified": "bold blue",
     "rejected": "bold red",
     "unverified": "bold yellow",
+    "undecided": "bold yellow",
+    "infeasible-bounded": "bold cyan",
 }
 
 
@@ -58,8 +60,10 @@ def print_result(
     if sol.strategy != "none":
         head.add_row("strict", f"{sol.strategy}, margin {format_value(sol.margin)}")
     cert = result.certificate_dict()
-    verdict = cert.get("label") or result.verdict
-    reason = cert.get("reason") or ""
+    label = str(cert.get("label") or "")
+    verdict = label if label.startswith(result.verdict) else result.verdict  # e.g. "certified (exact)"
+    outcome = getattr(result, "outcome", None)
+    reason = (outcome.reason if outcome is not None else "") or cert.get("reason") or ""
     style = _VERDICT_STYLE.get(result.verdict, "bold")
     head.add_row("verdict", f"[{style}]{verdict}[/{style}]" + (f": {reason}" if reason else ""))
     c.print(head)
@@ -95,8 +99,16 @@ def print_result(
         for k, v in gains.items():
             g.add_row(k, format_value(v))
         c.print(g)
-    for att in result.attempts:
-        c.print(f"  tried {att['backend']}: {att['status']}, {att['verdict']}")
+    if len(result.attempts) > 1:
+        c.print("attempts (the solve policy, docs/backends.md):")
+    for att in result.attempts if len(result.attempts) > 1 else []:
+        native = f" ({att['native_status']})" if att.get("native_status") else ""
+        note = f"; {att['note']}" if att.get("note") else ""
+        c.print(
+            f"  {att['backend']} / {att['reduction']}: {att['status']}{native} -> {att['verdict']} "
+            f"({att['time_s']:.2f} s{note})",
+            markup=False,
+        )
     t = result.timings
     times = ", ".join(f"{k[:-2]} {v:.3f} s" for k, v in t.items() if isinstance(v, float))
     c.print(f"[dim]timings  {times}[/dim]")

@@ -39,7 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("theorem", help="theorem id")
     p.add_argument("system", help="system file with a 'published:' section")
     add_param_option(p)
-    p.add_argument("--backend", "-b", default="clarabel", help="backend (see 'lmic backends')")
+    p.add_argument("--backend", "-b", default=None, help="backend alone (default: the escalating policy)")
     p.add_argument(
         "--rtol",
         type=float,

@@ -1,8 +1,9 @@
 """``lmic crosscheck THEOREM SYSTEM | FILE [--backends a,b,...] [--json]``.
 
-Solves one problem on several backends, certifies each answer and says whether they agree.
-Exit code: 0 when they agree and every answer is certified, 3 when they agree the problem is
-infeasible, 1 otherwise, 2 for bad input.
+Decides one problem on each backend alone (one row per backend with its decision) and says
+whether the decisions agree (:mod:`lmic.crosscheck`). Failed or undecided backends are listed
+and counted as failures, not as disagreement. Exit code: 0 when at least one backend decided
+and no two decisions conflict, 1 on a conflict (or when no backend decided), 2 for bad input.
 """
 
 from __future__ import annotations
@@ -51,7 +52,7 @@ def _progress_bar(enabled: bool) -> Iterator[Any]:
 
         def log(done: int, total: int, name: str, row: dict | None) -> None:
             if row is not None:
-                sys.stderr.write(f"[{done}/{total}] {name}: {row['status']}, {row['verdict']}\n")
+                sys.stderr.write(f"[{done}/{total}] {name}: {row['status']}, {row['decision']}\n")
                 sys.stderr.flush()
 
         yield log
@@ -73,7 +74,7 @@ def _progress_bar(enabled: bool) -> Iterator[Any]:
         if row is None:
             bar.update(task, completed=done, description=f"solving with {name}")
         else:
-            bar.update(task, completed=done, description=f"{name}: {row['status']}, {row['verdict']}")
+            bar.update(task, completed=done, description=f"{name}: {row['status']}, {row['decision']}")
 
     with bar:
         yield update
@@ -112,19 +113,27 @@ def run(args: argparse.Namespace) -> int:
     table.add_column("status", no_wrap=True)
     if with_objective:
         table.add_column("objective", justify="right", no_wrap=True)
-    table.add_column("verdict", no_wrap=True)
+    table.add_column("decision", no_wrap=True)
     table.add_column("strict: margin", no_wrap=True)
     table.add_column("min margin", justify="right", no_wrap=True)
     table.add_column("time (s)", justify="right", no_wrap=True)
     for r in report.results:
-        colour = {"certified": "green", "infeasible-certified": "green", "rejected": "red"}.get(r["verdict"], "yellow")
+        colour = {
+            "certified": "green",
+            "infeasible-certified": "green",
+            "infeasible-bounded": "cyan",
+            "rejected": "red",
+        }.get(r["decision"], "yellow")
         strategy = r.get("strategy")
         strict = f"{strategy}: {_fmt(r.get('margin'), '.3g')}" if strategy not in (None, "none") else "-"
         cells = [r["backend"], r["status"]]
         if with_objective:
             cells.append(_fmt(r["objective"], ".8g"))
+        decision = r["decision"]
+        if decision == "infeasible-bounded" and r.get("radius") is not None:
+            decision += f" (R = {r['radius']:.3g})"
         cells += [
-            f"[{colour}]{r['verdict']}[/{colour}]",
+            f"[{colour}]{decision}[/{colour}]",
             strict,
             _fmt(r["min_margin"], ".3g"),
             _fmt(r["solve_s"], ".3f"),
@@ -135,9 +144,19 @@ def run(args: argparse.Namespace) -> int:
         console.width = 160
     console.print(table)
     gap = report.max_rel_objective_gap
-    verdict = "[green]agree[/green]" if report.agree else "[red]disagree[/red]"
-    console.print(f"{verdict}; max relative objective gap {_fmt(gap, '.2e')} (rtol {report.rtol:g})")
+    if report.agree:
+        verdict = "[green]agree[/green]"
+    elif report.conflicts:
+        verdict = "[red]conflict[/red]"
+    else:
+        verdict = "[yellow]no decision[/yellow]"
+    console.print(
+        f"{verdict}: {report.decisions} decision(s), {report.failures} failure(s); "
+        f"max relative gap of certified optima {_fmt(gap, '.2e')} (rtol {report.rtol:g})"
+    )
+    for c in report.conflicts:
+        console.print(f"  conflict: {c}", markup=False)
     for r in report.results:
-        if r.get("message") and r["status"] in ("error", "inaccurate"):
-            console.print(f"  {r['backend']}: {r['message']}", markup=False)
+        if r["decision"] not in ("certified", "infeasible-certified", "infeasible-bounded"):
+            console.print(f"  failure {r['backend']}: {r['decision']}: {r.get('message') or r['status']}", markup=False)
     return report.exit_code()

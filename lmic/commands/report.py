@@ -30,7 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("system", help="system file")
     p.add_argument("-o", "--output", required=True, help="the HTML file to write")
     add_param_option(p)
-    p.add_argument("--backend", "-b", default="clarabel", help="backend of the main solve")
+    p.add_argument("--backend", "-b", default=None, help="main solve: this backend alone (default: the policy)")
     p.add_argument("--backends", default=None, help="comma-separated cross-check backends (default: every available)")
     p.add_argument("--no-crosscheck", action="store_true", help="leave the cross-check out")
     p.add_argument("--no-simulation", action="store_true", help="leave the simulation out")
@@ -46,7 +46,8 @@ def run(args: argparse.Namespace) -> int:
 
     _check_output(args.output)
     names = [b.strip() for b in args.backends.split(",") if b.strip()] if args.backends else None
-    get_backend(args.backend)
+    if args.backend is not None:
+        get_backend(args.backend)
     for name in names or []:
         get_backend(name)  # an unknown or missing backend is bad input (exit 2)
     report = build_report(

@@ -43,7 +43,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="PATTERN",
         help="only example files matching this glob (repeatable)",
     )
-    p.add_argument("--backend", "-b", default="clarabel", help="backend (see 'lmic backends')")
+    p.add_argument("--backend", "-b", default="auto", help="backend alone (default auto: the escalating policy)")
     p.add_argument("-o", "--output", default=None, help="write the Markdown table here")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

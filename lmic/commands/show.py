@@ -1,42 +1,62 @@
-"""``lmic show THEOREM [--latex] [--json] [-p option=value]``: a theorem as the paper prints it."""
+"""``lmic show THEOREM [--latex] [--json] [-p option=value]``: a theorem as the paper prints it.
+
+After printing, runs the checks of ``lmic check`` (bilinear terms, asymmetric blocks, shape
+mismatches; ``lmic check`` also lists unused declarations): a mistake is one line on stderr and
+exit 2.
+"""
 
 from __future__ import annotations
 
 import argparse
+import sys
 
 from rich.console import Console
 
-from lmic.commands._common import add_param_option, parse_params, print_json
+from lmic.commands._common import parse_params, print_json
 from lmic.registry import get_theorem
 from lmic.template.render import describe, theorem_latex
+from lmic.template.theorem import Theorem
 
 __all__ = ["register", "run"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``show`` sub-command."""
-    p = sub.add_parser("show", help="show a theorem: data, parameters, variables, LMIs")
+    p = sub.add_parser(
+        "show",
+        help="show a theorem: data, parameters, variables, LMIs (and check it)",
+        epilog="examples:\n  lmic show qib.thm1\n  lmic show qib.thm1 -p fixed_L=1 --latex",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("theorem", help="theorem id (see 'lmic theorems')")
     p.add_argument("--latex", action="store_true", help="print the LMIs as LaTeX")
     p.add_argument("--json", action="store_true", help="print JSON")
-    add_param_option(p)
+    p.add_argument(
+        "-p",
+        "--param",
+        action="append",
+        default=[],
+        metavar="K=V",
+        help="choose a structural option of the theorem (e.g. fixed_L=1, psi1=corrected)",
+    )
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
     """Print the theorem's declarations and LMIs."""
     thm = get_theorem(args.theorem)
-    t = thm.template(parse_params(args.param))
+    options = parse_params(args.param)
+    t = thm.template(options)
     if args.json:
         print_json(describe(thm, t))
-        return 0
+        return _validate(thm, options)
     if args.latex:
         print(theorem_latex(thm, t))
-        return 0
+        return _validate(thm, options)
     d = describe(thm, t)
     c = Console(highlight=False, soft_wrap=True)
     c.print(f"[bold]{thm.id}[/bold] — {thm.title}")
-    c.print(f"{thm.citation}  (kind {thm.kind}: {thm.objective})")
+    c.print(f"{thm.citation}  ({thm.kind_word}: {thm.objective})")
     if thm.notes:
         c.print(f"[dim]{thm.notes}[/dim]")
     c.print("\n[bold]data[/bold]")
@@ -72,4 +92,14 @@ def run(args: argparse.Namespace) -> int:
         c.print("[bold]checks[/bold]")
         for x in d["checks"]:
             c.print(f"  {x['name']} ({x['kind']})")
-    return 0
+    return _validate(thm, options)
+
+
+def _validate(thm: Theorem, options: dict) -> int:
+    """The checks of ``lmic check`` (one line each on stderr); 2 when a mistake is found."""
+    from lmic.commands.check import check_theorem, report_lines
+
+    report = check_theorem(thm, options)
+    for line in report_lines(report, warnings=False):  # unused declarations: see lmic check
+        sys.stderr.write(f"lmic check: {line}\n")
+    return 2 if report.findings else 0

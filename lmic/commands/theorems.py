@@ -1,47 +1,76 @@
-"""``lmic theorems [--json]``: the registered theorems."""
+"""``lmic theorems [--json]``: the registered theorems; broken or conflicting plugins fail it.
+
+Broken plugins (failed to load) and ambiguous ids (offered by two providers) are reported on
+stderr, one line each, and make the command exit 2, so that CI catches them.
+"""
 
 from __future__ import annotations
 
 import argparse
+import sys
 
 from rich.console import Console
 from rich.table import Table
 
 from lmic.commands._common import print_json
-from lmic.registry import broken_plugins, list_theorems
+from lmic.registry import broken_plugins, conflicts, list_theorems
 
 __all__ = ["register", "run"]
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``theorems`` sub-command."""
-    p = sub.add_parser("theorems", help="list the registered theorems")
+    p = sub.add_parser(
+        "theorems",
+        help="list the registered theorems",
+        description="List the registered theorems. Exit 2 (with one line each on stderr) when a plugin "
+        "failed to load or two plugins offer the same id.",
+        epilog="examples:\n  lmic theorems\n  lmic theorems --json | jq '.theorems[].id'",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("--json", action="store_true", help="print JSON")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    """List id, title, citation and objective of every theorem (and broken plugins)."""
+    """List id, title, citation and objective of every theorem; report broken plugins."""
     thms = list_theorems()
     broken = broken_plugins()
+    clashes = conflicts()
     if args.json:
         print_json(
             {
                 "theorems": [
-                    {"id": t.id, "title": t.title, "citation": t.citation, "kind": t.kind, "objective": t.objective}
+                    {
+                        "id": t.id,
+                        "title": t.title,
+                        "citation": t.citation,
+                        "kind": t.kind,
+                        "objective": t.objective,
+                        "provider": t.provider.to_dict() if t.provider else None,
+                    }
                     for t in thms
                 ],
                 "broken_plugins": [{"name": b.name, "reason": b.reason} for b in broken],
+                "conflicts": [
+                    {"id": c.id, "providers": [p.to_dict() for p in c.providers], "message": c.message()}
+                    for c in clashes
+                ],
             }
         )
-        return 0
-    console = Console()
-    table = Table(title=f"{len(thms)} theorems")
-    for col in ("id", "kind", "title", "citation", "objective"):
-        table.add_column(col, overflow="fold")
-    for t in thms:
-        table.add_row(t.id, t.kind, t.title, t.citation, t.objective)
-    console.print(table)
+    else:
+        console = Console(highlight=False, soft_wrap=True)
+        table = Table(title=f"{len(thms)} theorems")
+        # ids are never cut, whatever the terminal width (the other columns fold)
+        table.add_column("id", no_wrap=True, min_width=max((len(t.id) for t in thms), default=2))
+        table.add_column("kind", no_wrap=True, min_width=9)
+        for col in ("title", "citation", "objective"):
+            table.add_column(col, overflow="fold")
+        for t in thms:
+            table.add_row(t.id, t.kind_word, t.title, t.citation, t.objective)
+        console.print(table)
     for b in broken:
-        console.print(f"[yellow]plugin {b.name} failed to load: {b.reason}[/yellow]")
-    return 0
+        sys.stderr.write(f"lmic: error: plugin {b.name} failed to load: {b.reason}\n")
+    for c in clashes:
+        sys.stderr.write(f"lmic: error: {c.message()}\n")
+    return 2 if broken or clashes else 0

@@ -30,9 +30,10 @@ import scipy.sparse as sp
 import sympy
 from sympy.matrices.expressions import Identity, MatrixSymbol, Transpose
 
-from lmic import __version__
+from lmic._version import __version__
+from lmic.compile.inputs import Inputs, dim_value, resolve_inputs
 from lmic.compile.plan import LinearForm, LmiPlan, Plan, Term
-from lmic.errors import DataError, LmicError, TemplateError
+from lmic.errors import DataError, TemplateError
 from lmic.ir.expr import evaluate
 from lmic.ir.problem import (
     LMI,
@@ -45,184 +46,11 @@ from lmic.ir.problem import (
 )
 from lmic.ir.svec import tril_index, tril_size
 from lmic.system import System, load_system
-from lmic.template.builder import normalise_option
-from lmic.template.convert import as_expr
 from lmic.template.totree import to_tree
 
 __all__ = ["bind", "resolve_inputs", "Inputs"]
 
 _SYM_TOL = 1e-9
-
-
-class Inputs:
-    """Numbers resolved for one bind: dimensions, data, parameters and constants."""
-
-    def __init__(self) -> None:
-        self.dims: dict[sympy.Symbol, int] = {}
-        self.values: dict[str, Any] = {}  # data, params, consts (numbers / arrays)
-        self.params: dict[str, Any] = {}  # every parameter and option value used
-
-
-def _dim_value(expr: Any, dims: Mapping[sympy.Symbol, int]) -> int | None:
-    if isinstance(expr, int):
-        return expr
-    v = as_expr(as_expr(expr).xreplace(dict(dims)))
-    return int(v) if v.is_Integer else None
-
-
-def _in_domain(value: float, domain: sympy.Set) -> bool:
-    """Whether ``value`` lies in ``domain`` (integer sets are decided on integral values)."""
-    verdict = domain.contains(sympy.Float(value))
-    if verdict not in (sympy.true, sympy.false) and float(value).is_integer():
-        verdict = domain.contains(sympy.Integer(int(value)))
-    return verdict == sympy.true
-
-
-def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | None = None) -> Inputs:
-    """Validate data and parameters against the template and compute the constants.
-
-    Raises :class:`DataError` naming the theorem, the key and the rule broken.
-    """
-    t = plan.template
-    tid = t.theorem_id
-    where = f"theorem {tid}, {system.label}"
-    out = Inputs()
-    params = dict(system.params)
-    params.update(overrides or {})
-
-    # parameters and options
-    known = {p.name for p in t.params} | {o.name for o in t.options}
-    for key in params:
-        if key not in known:
-            expected = ", ".join(sorted(known)) or "none"
-            raise DataError(f"{where}: unknown parameter '{key}' (the theorem takes: {expected})")
-    for o in t.options:
-        value = normalise_option(params.get(o.name, o.default))
-        if value != o.value:
-            raise DataError(f"{where}: option {o.name} = {value!r} does not match the analysed plan")
-        out.params[o.name] = o.value
-    for p in t.params:
-        if p.name in params:
-            value = params[p.name]
-            if isinstance(value, str):
-                try:
-                    value = float(value)
-                except ValueError:
-                    raise DataError(f"{where}: parameter '{p.name}' = {value!r} is not a number") from None
-        elif p.default is not None:
-            value = p.default
-        else:
-            raise DataError(f"{where}: missing parameter '{p.name}'" + (f" ({p.doc})" if p.doc else ""))
-        value = float(value)
-        if not np.isfinite(value):
-            raise DataError(f"{where}: parameter '{p.name}' is {value}")
-        if not _in_domain(value, p.domain):
-            raise DataError(f"{where}: parameter {p.name} = {value:g} is outside its domain {p.domain}")
-        out.params[p.name] = value
-        out.values[p.name] = value
-
-    # data and dimensions
-    declared = {d.name for d in t.data_decls}
-    for key in system.data:
-        if key not in declared:
-            raise DataError(
-                f"{where}: unknown data key '{key}' (the theorem takes: {', '.join(sorted(declared))})"
-            )
-    origin: dict[sympy.Symbol, str] = {}
-    arrays: dict[str, np.ndarray] = {}
-    for d in t.data_decls:
-        if d.name in system.data:
-            arrays[d.name] = system.data[d.name]
-    # first pass: bind plain dimension symbols from the data present
-    for d in t.data_decls:
-        if d.name not in arrays:
-            continue
-        for axis, s in enumerate(d.shape):
-            s = as_expr(s)
-            if isinstance(s, sympy.Symbol) and s not in out.dims:
-                out.dims[s] = int(arrays[d.name].shape[axis])
-                origin[s] = f"{'rows' if axis == 0 else 'columns'} of {d.name}"
-    # defaults for missing data
-    for d in t.data_decls:
-        if d.name in arrays:
-            continue
-        if d.default is None:
-            shape = " x ".join(str(s) for s in d.shape)
-            raise DataError(f"{where}: missing data '{d.name}' ({shape})" + (f": {d.doc}" if d.doc else ""))
-        for s in d.shape:  # a dimension only absent optional data would fix is 0
-            s = as_expr(s)
-            if isinstance(s, sympy.Symbol) and s not in out.dims:
-                out.dims[s] = 0
-                origin[s] = f"absent optional data {d.name}"
-        r, c = (_dim_value(s, out.dims) for s in d.shape)
-        if r is None or c is None:
-            raise DataError(f"{where}: cannot size the default of data '{d.name}' (dimensions unknown)")
-        if callable(d.default):
-            arr = np.atleast_2d(np.asarray(d.default({**out.values, **arrays}, r, c), dtype=float))
-        else:
-            arr = float(d.default) * np.eye(r, c)
-        arrays[d.name] = arr
-    for d in t.data_decls:
-        arr = arrays[d.name]
-        expected = []
-        for s in d.shape:
-            val = _dim_value(s, out.dims)
-            if val is None:
-                raise DataError(f"{where}: dimension {s} of data '{d.name}' cannot be determined")
-            expected.append(val)
-        if tuple(expected) != arr.shape:
-            shape_sym = " x ".join(str(s) for s in d.shape)
-            bound = ", ".join(f"{s} = {out.dims[s]} from {origin.get(s, 'defaults')}" for s in sorted(
-                (s for s in sympy.Matrix(list(d.shape)).free_symbols if s in out.dims), key=str))
-            raise DataError(
-                f"{where}: data '{d.name}' has shape {arr.shape[0]}x{arr.shape[1]}, expected "
-                f"{shape_sym} = {expected[0]}x{expected[1]}" + (f" ({bound})" if bound else "")
-            )
-        if d.symmetric:
-            scale = max(1.0, float(np.max(np.abs(arr))))
-            if arr.shape[0] != arr.shape[1] or np.max(np.abs(arr - arr.T)) > 1e-9 * scale:
-                raise DataError(f"{where}: data '{d.name}' must be symmetric")
-        if d.positive_definite and np.linalg.eigvalsh(0.5 * (arr + arr.T))[0] <= 0:
-            raise DataError(f"{where}: data '{d.name}' must be positive definite")
-        out.values[d.name] = arr
-
-    # data-derived constants, in order
-    for c in t.consts:
-        try:
-            value = c.fn(dict(out.values))
-        except DataError as err:
-            msg = str(err)
-            raise DataError(msg if msg.startswith(f"theorem {tid}") else f"{where}: {msg}") from None
-        except LmicError:
-            raise
-        except Exception as err:
-            raise DataError(f"{where}: constant '{c.name}' cannot be computed: {type(err).__name__}: {err}") from None
-        if c.shape is None:
-            arr = np.asarray(value, dtype=float)
-            if arr.size != 1:
-                raise TemplateError(f"{tid}: constant '{c.name}' is declared scalar but has shape {arr.shape}")
-            value = float(arr.reshape(-1)[0])
-            if not np.isfinite(value):
-                raise DataError(f"{where}: constant '{c.name}' is {value} for this data")
-        else:
-            value = np.atleast_2d(np.asarray(value, dtype=float))
-            exp = tuple(_dim_value(s, out.dims) for s in c.shape)
-            if value.shape != exp:
-                raise TemplateError(f"{tid}: constant '{c.name}' has shape {value.shape}, declared {exp}")
-            if not np.all(np.isfinite(value)):
-                raise DataError(f"{where}: constant '{c.name}' is not finite for this data")
-        out.values[c.name] = value
-    for req in t.requirements:
-        try:
-            ok = bool(req.predicate(dict(out.values)))
-        except LmicError:
-            raise
-        except Exception as err:
-            why = f"{type(err).__name__}: {err}"
-            raise DataError(f"{where}: requirement '{req.name}' cannot be checked: {why}") from None
-        if not ok:
-            raise DataError(f"{where}: requirement '{req.name}' fails" + (f" ({req.doc})" if req.doc else ""))
-    return out
 
 
 class _Binder:
@@ -253,7 +81,7 @@ class _Binder:
         return float(self.env[s.name])
 
     def _size(self, expr: Any, what: str) -> int:
-        v = _dim_value(expr, self.dims)
+        v = dim_value(expr, self.dims)
         if v is None or v < 0:
             raise DataError(f"theorem {self.tid}: cannot size {what} ({expr}) from the data")
         return v
@@ -387,12 +215,10 @@ class _Binder:
                 f"theorem {self.tid}: term '{term.text}' is {out_r}x{out_c}, its block is {rows}x{cols}"
             )
         # the basis entry E_ij contributes the outer product L[:, i] R[j, :]
-        if L is None and R is None:
-            vals = np.ones(len(bi))
+        if L is None:
+            vals = np.ones(len(bi)) if R is None else R[bj, :].ravel()
         elif R is None:
             vals = L[:, bi].T.ravel()
-        elif L is None:
-            vals = R[bj, :].ravel()
         else:
             vals = (L[:, bi].T[:, :, None] * R[bj, :][:, None, :]).ravel()
         self._products[key] = vals
@@ -606,13 +432,8 @@ class _Binder:
         objective = Objective(sense, self.linear_row(form) if sense != "feasibility" else np.zeros(1 + self.n))
         t = plan.template
         derived = [NamedExpr(d.name, to_tree(d.expr, self.dims), d.doc) for d in t.derived]
-        checks = [
-            Check(c.name, c.spec.kind, to_tree(c.spec.expr, self.dims), c.spec.bound, c.doc) for c in t.checks
-        ]
-        data = {
-            k: (v.copy() if isinstance(v, np.ndarray) else float(v))
-            for k, v in self.env.items()
-        }
+        checks = [Check(c.name, c.spec.kind, to_tree(c.spec.expr, self.dims), c.spec.bound, c.doc) for c in t.checks]
+        data = {k: (v.copy() if isinstance(v, np.ndarray) else float(v)) for k, v in self.env.items()}
         meta = {
             "theorem": plan.id,
             "title": plan.theorem.title,
@@ -624,11 +445,31 @@ class _Binder:
             "system_path": system.path,
             "data_hash": system.data_hash(),
             "lmic_version": __version__,
+            # which theorem this is: its provider and a hash of the analysed template (certificates)
+            **template_identity(plan),
         }
         if t.observer_decl is not None:
             ob = t.observer_decl
             meta["observer"] = {"model": ob.model, "time": ob.time, "roles": dict(ob.roles)}
         return Problem(list(self.vars.values()), lmis, linear, objective, data, derived, checks, meta)
+
+
+def template_identity(plan: Plan) -> dict[str, Any]:
+    """``provider`` (distribution, version) and ``template`` (hash and per-declaration parts) of a plan.
+
+    >>> from lmic.compile import plan_for
+    >>> ident = template_identity(plan_for("thesis.lyapunov"))
+    >>> ident["provider"]["distribution"], len(ident["template"]["sha256"])
+    ('lmic', 64)
+    """
+    from lmic.template.builder import template_hash
+    from lmic.template.theorem import Provider
+
+    parts = plan.cache.get("template_parts")
+    if parts is None:
+        parts = plan.cache["template_parts"] = plan.template.fingerprint()
+    provider = plan.theorem.provider or Provider.api(plan.theorem)
+    return {"provider": provider.to_dict(), "template": {"sha256": template_hash(parts), "parts": dict(parts)}}
 
 
 def bind(plan: Plan, system: Any, params: Mapping[str, Any] | None = None) -> Problem:
@@ -644,4 +485,3 @@ def bind(plan: Plan, system: Any, params: Mapping[str, Any] | None = None) -> Pr
     sysobj = load_system(system)
     inputs = resolve_inputs(plan, sysobj, params)
     return _Binder(plan, inputs).problem(sysobj)
-

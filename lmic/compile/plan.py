@@ -163,11 +163,8 @@ class _Analyser:
     def _has_var(self, e: Any) -> bool:
         if isinstance(e, MatrixSymbol):
             return e.name in self.matrix_vars
-        syms = getattr(e, "free_symbols", set())
-        return any(
-            (isinstance(s, MatrixSymbol) and s.name in self.matrix_vars) or s in self.scalar_vars
-            for s in syms
-        )
+        syms: set[Any] = getattr(e, "free_symbols", set())
+        return any((isinstance(s, MatrixSymbol) and s.name in self.matrix_vars) or s in self.scalar_vars for s in syms)
 
     def _check_names(self, e: Any) -> None:
         for s in getattr(e, "free_symbols", set()):
@@ -200,17 +197,13 @@ class _Analyser:
             return [(sympy.Integer(1), [e])]
         if isinstance(e, Inverse | MatPow) or not self._has_var(e):
             if self._has_var(e):
-                raise TemplateError(
-                    f"{self.t.theorem_id}: {self.where}: '{e}' is not linear in the decision variables"
-                )
+                raise TemplateError(f"{self.t.theorem_id}: {self.where}: '{e}' is not linear in the decision variables")
             return [(sympy.Integer(1), [e])]
-        raise TemplateError(
-            f"{self.t.theorem_id}: {self.where}: unsupported expression '{e}' ({type(e).__name__})"
-        )
+        raise TemplateError(f"{self.t.theorem_id}: {self.where}: unsupported expression '{e}' ({type(e).__name__})")
 
     def split_scalar(self, coef: sympy.Expr, text: str) -> list[tuple[sympy.Expr, str | None]]:
         """Split a scalar coefficient into (parameter part, scalar variable or None)."""
-        out = []
+        out: list[tuple[sympy.Expr, str | None]] = []
         for mono in sympy.Add.make_args(sympy.expand(coef)):
             vs = [s for s in mono.free_symbols if s in self.scalar_vars]
             if not vs:
@@ -236,18 +229,19 @@ class _Analyser:
         out: list[Term] = []
         for coef, factors in self.expand(e):
             text = str(sympy.MatMul(coef, *factors)) if factors else str(coef)
-            var_pos = [k for k, f in enumerate(factors) if _atom_var(f) in self.matrix_vars]
+            var_atoms = [(k, name) for k, f in enumerate(factors) if (name := _atom_var(f)) in self.matrix_vars]
+            var_pos = [k for k, _ in var_atoms]
             for part, svar in self.split_scalar(coef, text):
                 if part == 0:
                     continue
                 if svar is not None and var_pos:
-                    names = [svar] + [_atom_var(factors[k]) for k in var_pos]
+                    names = [svar] + [name for _, name in var_atoms if name is not None]
                     raise TemplateError(
                         f"{self.t.theorem_id}: {self.where}: product of decision variables "
                         f"{' and '.join(names)} in term '{text}'"
                     )
                 if len(var_pos) > 1:
-                    names = [_atom_var(factors[k]) for k in var_pos]
+                    names = [name for _, name in var_atoms if name is not None]
                     raise TemplateError(
                         f"{self.t.theorem_id}: {self.where}: product of decision variables "
                         f"{' and '.join(names)} in term '{text}'"

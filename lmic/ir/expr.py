@@ -62,18 +62,18 @@ def _is_scalar(v: Value) -> bool:
 def _add(*args: Value) -> Value:
     out: Value = 0.0
     for a in args:
-        if _is_scalar(out) and _is_scalar(a):
+        if isinstance(out, np.ndarray) and isinstance(a, np.ndarray):
+            if out.shape != a.shape:
+                raise IRError(f"expression adds matrices of shapes {out.shape} and {a.shape}")
             out = out + a
-        elif _is_scalar(a) and isinstance(out, np.ndarray):
+        elif isinstance(out, np.ndarray):
             if a != 0:
                 raise IRError("expression adds a non-zero scalar to a matrix")
-        elif _is_scalar(out) and isinstance(a, np.ndarray):
+        elif isinstance(a, np.ndarray):
             if out != 0:
                 raise IRError("expression adds a non-zero scalar to a matrix")
             out = a
         else:
-            if out.shape != a.shape:
-                raise IRError(f"expression adds matrices of shapes {out.shape} and {a.shape}")
             out = out + a
     return out
 
@@ -81,12 +81,12 @@ def _add(*args: Value) -> Value:
 def _mul(*args: Value) -> Value:
     out: Value = 1.0
     for a in args:
-        if _is_scalar(out) or _is_scalar(a):
-            out = out * a
-        else:
+        if isinstance(out, np.ndarray) and isinstance(a, np.ndarray):
             if out.shape[1] != a.shape[0]:
                 raise IRError(f"expression multiplies shapes {out.shape} and {a.shape}")
             out = out @ a
+        else:
+            out = out * a
     return out
 
 

@@ -139,6 +139,4 @@ def tril_to_triu_colmajor_perm(d: int) -> np.ndarray:
         for r in range(c + 1):
             rows.append(r)
             cols.append(c)
-    r = np.array(rows)
-    c = np.array(cols)
-    return tril_index(c, r, d)
+    return tril_index(np.array(cols), np.array(rows), d)

@@ -478,7 +478,7 @@ def build_report(
     theorem: str,
     system: Any,
     params: dict[str, Any] | None = None,
-    backend: str = "clarabel",
+    backend: str | None = None,
     crosscheck_backends: list[str] | None = None,
     run_crosscheck: bool = True,
     run_simulation: bool = True,

@@ -1,5 +1,9 @@
 """Block matrices written like the paper: ``block([[a, b], [STAR, c]]) < 0``.
 
+A single matrix needs no ``block``: importing :mod:`lmic.template` lets any sympy matrix
+expression be compared with 0 (``A.T * P + P * A < 0``, ``P > 0``), which sympy itself refuses;
+the result is the same :class:`LmiSpec` as ``block(M) < 0``.
+
 Entries are sympy matrix expressions, ``0`` (a zero block sized by position), a scalar
 expression on a diagonal block (meaning ``scalar * I`` sized by position, as papers write
 ``-alpha I``), or :data:`STAR` (the transpose of the mirror entry, filled by the compiler).
@@ -12,6 +16,8 @@ Examples
 >>> spec = block([[-P, 0], [STAR, -P]]) < 0
 >>> spec.relation, spec.strict, spec.block.shape
 ('<', True, (2, 2))
+>>> (P > 0).block.shape
+(1, 1)
 """
 
 from __future__ import annotations
@@ -58,6 +64,9 @@ class LmiSpec:
 
     block: Block
     relation: str
+
+    def __bool__(self) -> bool:
+        raise TypeError("an LMI (matrix compared with 0) has no truth value; pass it to t.lmi(name, ...)")
 
     @property
     def strict(self) -> bool:
@@ -135,3 +144,18 @@ def block(rows: Any) -> Block:
     '>'
     """
     return Block(rows)
+
+
+def _matrix_compare(rel: str) -> Any:
+    def compare(self: sympy.MatrixExpr, other: Any) -> LmiSpec:
+        _check_zero(other, rel)
+        return LmiSpec(Block([[self]]), rel)
+
+    compare.__name__ = {"<": "__lt__", "<=": "__le__", ">": "__gt__", ">=": "__ge__"}[rel]
+    return compare
+
+
+# sympy raises "Invalid comparison of non-real" for a matrix compared with 0; make it an LMI
+for _rel in ("<", "<=", ">", ">="):
+    _f = _matrix_compare(_rel)
+    setattr(sympy.MatrixExpr, _f.__name__, _f)

@@ -1,4 +1,4 @@
-"""Render a theorem's template as the paper prints it: LaTeX and plain text.
+r"""Render a theorem's template as the paper prints it: LaTeX and plain text.
 
 Examples
 --------
@@ -11,6 +11,7 @@ True
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import sympy
@@ -19,9 +20,83 @@ from lmic.template.blocks import STAR
 from lmic.template.builder import LmiDecl, Template
 from lmic.template.theorem import Theorem
 
-__all__ = ["lmi_latex", "lmi_text", "theorem_latex", "describe", "entry_latex", "entry_text"]
+__all__ = [
+    "lmi_latex",
+    "lmi_text",
+    "theorem_latex",
+    "describe",
+    "entry_latex",
+    "entry_text",
+    "latex",
+    "text",
+    "domain_text",
+]
 
 _LATEX_REL = {"<": r"\prec", "<=": r"\preceq", ">": r"\succ", ">=": r"\succeq"}
+
+
+#: abbreviations authors use for Greek letters (``eps1`` is printed epsilon_1, not eps_1)
+_GREEK = {"eps": r"\varepsilon", "lam": r"\lambda", "gam": r"\gamma", "om": r"\omega"}
+_NAME = re.compile(r"^([A-Za-z]+?)_?(\d+)$")
+
+
+def _symbol_names(e: Any) -> dict[Any, str]:
+    r"""LaTeX names: ``eps1`` -> ``\varepsilon_{1}``; other names with digits keep them as a subscript.
+
+    >>> import sympy
+    >>> eps1 = sympy.Symbol("eps1")
+    >>> sympy.latex(2 * eps1, symbol_names=_symbol_names(2 * eps1))
+    '2 \\varepsilon_{1}'
+    """
+    out = {}
+    for s in getattr(e, "free_symbols", set()):
+        name = getattr(s, "name", "")
+        if name in _GREEK:
+            out[s] = _GREEK[name]
+            continue
+        m = _NAME.match(name)
+        if m and m.group(1) in _GREEK:
+            out[s] = f"{_GREEK[m.group(1)]}_{{{m.group(2)}}}"
+    return out
+
+
+def latex(e: Any) -> str:
+    r"""LaTeX of an expression in the author's term order where sympy keeps it.
+
+    >>> import sympy
+    >>> P = sympy.MatrixSymbol("P", 2, 2); w = sympy.Symbol("omega")
+    >>> latex(-P + 2 * w * sympy.Identity(2))
+    '- P + 2 \\omega \\mathbb{I}'
+    """
+    return sympy.latex(e, order="none", symbol_names=_symbol_names(e))
+
+
+def text(e: Any) -> str:
+    """Plain text of an expression in the author's term order where sympy keeps it."""
+    return sympy.sstr(e, order="none")
+
+
+def domain_text(domain: Any) -> str:
+    """A parameter domain as a reader writes it.
+
+    >>> import sympy
+    >>> domain_text(sympy.Interval(-sympy.oo, sympy.oo)), domain_text(sympy.Interval.Lopen(0, sympy.oo))
+    ('all reals', '(0, inf)')
+    >>> domain_text(sympy.Interval(0, 1)), domain_text(sympy.S.Naturals0)
+    ('[0, 1]', '0, 1, 2, ...')
+    """
+    if domain == sympy.Interval(-sympy.oo, sympy.oo) or domain == sympy.S.Reals:
+        return "all reals"
+    if isinstance(domain, sympy.Interval):
+
+        def num(x: Any) -> str:
+            return "inf" if x == sympy.oo else "-inf" if x == -sympy.oo else sympy.sstr(x)
+
+        left = "(" if domain.left_open else "["
+        right = ")" if domain.right_open else "]"
+        return f"{left}{num(domain.start)}, {num(domain.end)}{right}"
+    named = {sympy.S.Integers: "integers", sympy.S.Naturals: "1, 2, 3, ...", sympy.S.Naturals0: "0, 1, 2, ..."}
+    return named.get(domain, str(domain))
 
 
 def entry_latex(e: Any) -> str:
@@ -30,7 +105,7 @@ def entry_latex(e: Any) -> str:
         return r"\star"
     if isinstance(e, int | float) and e == 0:
         return "0"
-    return sympy.latex(e)
+    return latex(e)
 
 
 def entry_text(e: Any) -> str:
@@ -39,7 +114,7 @@ def entry_text(e: Any) -> str:
         return "*"
     if isinstance(e, int | float) and e == 0:
         return "0"
-    return sympy.sstr(e)
+    return text(e)
 
 
 def lmi_latex(decl: LmiDecl) -> str:
@@ -80,12 +155,12 @@ def _text(name: str) -> str:
 def theorem_latex(thm: Theorem, t: Template) -> str:
     """Every LMI and scalar constraint of a theorem as a LaTeX ``align*`` body."""
     lines = [rf"\text{{{_text(d.name)}}}:\quad & {lmi_latex(d)}" for d in t.lmis]
-    lines += [rf"\text{{{_text(c.name)}}}:\quad & {sympy.latex(c.relation)}" for c in t.constraints]
+    lines += [rf"\text{{{_text(c.name)}}}:\quad & {latex(c.relation)}" for c in t.constraints]
     sense, expr = t.objective
     if sense != "feasibility":
-        lines.append(rf"\text{{{'minimise' if sense == 'min' else 'maximise'}}}:\quad & {sympy.latex(expr)}")
+        lines.append(rf"\text{{{'minimise' if sense == 'min' else 'maximise'}}}:\quad & {latex(expr)}")
     for d in t.derived:
-        lines.append(rf"{sympy.latex(d.symbol)} &= {sympy.latex(d.expr)}")
+        lines.append(rf"{latex(d.symbol)} &= {latex(d.expr)}")
     return "\\begin{align*}\n" + " \\\\\n".join(lines) + "\n\\end{align*}"
 
 
@@ -117,21 +192,18 @@ def describe(thm: Theorem, t: Template) -> dict[str, Any]:
             for d in t.data_decls
         ],
         "params": [
-            {"name": p.name, "default": p.default, "domain": str(p.domain), "doc": p.doc} for p in t.params
+            {"name": p.name, "default": p.default, "domain": domain_text(p.domain), "doc": p.doc} for p in t.params
         ],
         "options": [
             {"name": o.name, "choices": list(o.choices), "default": o.default, "doc": o.doc} for o in t.options
         ],
         "constants": [{"name": c.name, "doc": c.doc} for c in t.consts],
-        "variables": [
-            {"name": v.name, "kind": v.kind, "shape": _shape(v.shape), "sign": v.sign} for v in t.variables
-        ],
+        "variables": [{"name": v.name, "kind": v.kind, "shape": _shape(v.shape), "sign": v.sign} for v in t.variables],
         "lmis": [
-            {"name": d.name, "relation": d.spec.relation, "text": lmi_text(d), "latex": lmi_latex(d)}
-            for d in t.lmis
+            {"name": d.name, "relation": d.spec.relation, "text": lmi_text(d), "latex": lmi_latex(d)} for d in t.lmis
         ],
-        "constraints": [{"name": c.name, "text": sympy.sstr(c.relation)} for c in t.constraints],
-        "objective_expr": {"sense": t.objective[0], "expr": sympy.sstr(t.objective[1])},
-        "derived": [{"name": d.name, "expr": sympy.sstr(d.expr), "doc": d.doc} for d in t.derived],
+        "constraints": [{"name": c.name, "text": text(c.relation)} for c in t.constraints],
+        "objective_expr": {"sense": t.objective[0], "expr": text(t.objective[1])},
+        "derived": [{"name": d.name, "expr": text(d.expr), "doc": d.doc} for d in t.derived],
         "checks": [{"name": c.name, "kind": c.spec.kind} for c in t.checks],
     }

@@ -1,19 +1,19 @@
 """The delay H-infinity observer template shared by Papers A and B of the Delshad thesis.
 
 Paper A (``delay_a``) and Paper B (``delay_b``) print the same LMIs except two entries that
-carry the delayed-output matrices ``Cd`` and ``M4`` of Paper B (catalogue section 3.1):
+carry the delayed-output matrices ``Cd`` and ``M4`` of Paper B:
 ``Omega(2,6) = Ad^T P1 - Cd^T Upsilon^T`` and ``Psi2(6,8) = P1 M2 - Upsilon M4``. With
 ``Cd = 0`` and ``M4 = 0`` the two papers coincide. This module builds both from one function,
 so a typo resolution made here applies to both.
 
-Setting (catalogue section 2): DT plant
+Setting: DT plant
 ``x+ = (A + dA) x + (Ad + dAd) x(k - tau(k)) + f(x) + B w``,
 ``y = (C + dC) x [+ (Cd + dCd) x(k - tau(k))] + D w``, ``tau1 <= tau(k) <= tau2``,
 ``tau0 = tau2 - tau1 + 1``; uncertainty ``[dA; dAd; dC; dCd] = [M1; M2; M3; M4] F N``,
 ``F^T F <= I``; performance output ``z = H e``; observer ``x^+ = A x^ + f(x^) + L (y - C x^)``,
 ``L = P1^-1 Upsilon``; ``gamma* = 1 / sqrt(alpha (1 + eps1))``.
 
-Typo resolutions (catalogue 2.1, 3.1):
+Typo resolutions:
 
 * ``Psi2(5,5)`` printed ``-eps I`` in Paper A is ``-eps2 I`` (Paper B prints ``-eps2 I``).
 * ``Omega(2,1)`` printed ``*`` is ``0``; the ``< 0`` printed after ``Omega`` and ``Psi1`` are

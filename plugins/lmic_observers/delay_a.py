@@ -1,8 +1,7 @@
 """Paper A of the Delshad thesis: H-infinity observers for uncertain nonlinear DT delay systems.
 
 Source: S. S. Delshad & T. Gustafsson, *H-infinity observer design for uncertain nonlinear
-discrete-time systems with time-delay: LMI optimization approach*, MED 2012 (thesis Paper A,
-source file 002 lines 2445-3620). Catalogue: ``thesis_catalogue.md`` section 2.
+discrete-time systems with time-delay: LMI optimization approach*, MED 2012 (thesis Paper A).
 
 The LMIs, their typo resolutions and the ``psi1 = printed | corrected`` option are shared with
 Paper B and documented in :mod:`lmic_observers._delay_hinf`.
@@ -32,7 +31,7 @@ _NOTES = (
     notes=_NOTES + " eta is listed among the scalars but the objective is min alpha + eps1: eta is given.",
 )
 def delay_a_thm3_1(t):
-    """Paper A, Theorem 3.1 (source line 2722), LMIs (15)-(16).
+    """Paper A, Theorem 3.1 (Section 3), LMIs (15)-(16).
 
     ``[Psi1, Omega; *, Psi2] < 0`` and ``Psi3 < 0`` (``-eta^2 I`` in its (1,1) block), with
     ``P1 > 0``, ``P2 > 0``, ``eps1, eps2, eps3, alpha > 0``; ``min alpha + eps1``.
@@ -51,10 +50,10 @@ def delay_a_thm3_1(t):
     objective="min lambda (alpha + eps1) + (1 - lambda) rho; L, gamma* = 1/sqrt(alpha (1+eps1)), eta* = sqrt(rho)",
     system_class="discrete time, Lipschitz f, time-varying state delay, norm-bounded uncertainty",
     notes=_NOTES + " lambda in [0, 1] is user-chosen. The published gamma* = 0.335 is not reproducible "
-    "(catalogue 2.2); eta* = 2.3787 at the published P1, P2, Upsilon is.",
+    "eta* = 2.3787 at the published P1, P2, Upsilon is.",
 )
 def delay_a_thm3_2(t):
-    """Paper A, Theorem 3.2 (source line 3395), LMIs (15) and (43).
+    """Paper A, Theorem 3.2 (Section 3), LMIs (15) and (43).
 
     ``[Psi1, Omega; *, Psi2] < 0`` and (43) (``Psi3`` with ``-rho I``, ``rho = eta^2``);
     ``min lambda (alpha + eps1) + (1 - lambda) rho`` for a given ``lambda`` in ``[0, 1]``.

@@ -1,8 +1,7 @@
 """Paper B of the Delshad thesis: H-infinity observers with state and output delays.
 
 Source: S. S. Delshad & T. Gustafsson, *Robust H-infinity observer design for uncertain
-nonlinear discrete-time systems with state and output delays*, IJRNC 2015 (thesis Paper B,
-source file 002 lines 3639-5000). Catalogue: ``thesis_catalogue.md`` section 3.
+nonlinear discrete-time systems with state and output delays*, IJRNC 2015 (thesis Paper B).
 
 Identical to Paper A except ``Omega(2,6) = Ad^T P1 - Cd^T Upsilon^T`` and
 ``Psi2(6,8) = P1 M2 - Upsilon M4`` (delayed output ``Cd x(k - tau)``, uncertainty
@@ -36,7 +35,7 @@ _NOTES = (
     notes=_NOTES + " The statement omits eta and eps3 from its scalars: eta is given.",
 )
 def delay_b_thm3_1(t):
-    """Paper B, Theorem 3.1 (source line 3932), LMIs (16)-(17).
+    """Paper B, Theorem 3.1 (Section 3), LMIs (16)-(17).
 
     As Paper A Theorem 3.1 with ``Omega(2,6) = Ad^T P1 - Cd^T Upsilon^T`` and
     ``Psi2(6,8) = P1 M2 - Upsilon M4``; ``min alpha + eps1`` for a given ``eta``. Outputs (18)
@@ -53,11 +52,11 @@ def delay_b_thm3_1(t):
     kind="S",
     objective="min lambda (alpha + eps1) + (1 - lambda) rho; L, gamma* = 1/sqrt(alpha (1+eps1)), eta* = sqrt(rho)",
     system_class="discrete time, Lipschitz f, state and output delays, norm-bounded uncertainty",
-    notes=_NOTES + " Tables 1-4 reproduce only approximately (about 10-20 %, catalogue 3.2); the "
+    notes=_NOTES + " Tables 1-4 reproduce only approximately (about 10-20 %); the "
     "claims 'tau0 >= 6 (Ex 1) / >= 5 (Ex 2) infeasible' do not hold for the printed LMIs.",
 )
 def delay_b_thm4_1(t):
-    """Paper B, Theorem 4.1 (source line 4631), LMIs (16) and (48).
+    """Paper B, Theorem 4.1 (Section 4), LMIs (16) and (48).
 
     ``[Psi1, Omega; *, Psi2] < 0`` (Theorem 3.1 blocks) and (48) (``Psi3`` with ``-rho I``);
     ``min lambda (alpha + eps1) + (1 - lambda) rho``, ``lambda`` in ``[0, 1]`` given. Outputs

@@ -2,7 +2,7 @@
 
 Source: S. S. Delshad, A. Johansson, M. Darouach and T. Gustafsson, *H-inf filter design for
 state estimation and unknown inputs reconstruction of a class of nonlinear systems*, IFAC 2014
-(thesis Paper D, source 002 lines 5646-6580).
+(thesis Paper D).
 
 System (1): ``x' = A x + B u + D f(x) + D1 w + sum F_i nu_i``, ``y = C x + D2 w + sum G_i nu_i``
 (``f: R^n -> R^q`` Lipschitz ``gamma``, ``h`` unknown inputs ``nu``, ``w`` in L2). Augmented
@@ -17,13 +17,13 @@ from a full-row-rank design matrix ``R`` (q1 x (n+h)); ``T = [M eta; Cbar]``;
 ``alpha1 = T^+ [I; 0]``, ``alpha2 = T^+ [0; I]``, ``beta1 = (I - T T^+)[I; 0]``,
 ``beta2 = (I - T T^+)[0; I]`` (38) with ``I - T T^+`` an exact orthogonal projector from an SVD
 basis (the naive ``I - T pinv(T)`` leaves ~1e-16 entries that a solver exploits by driving
-``Ybar1``, ``Y2`` to ~1e10: catalogue 11.1). Gains (39): ``N = M Abar alpha1 + Y1 beta1``,
+``Ybar1``, ``Y2`` to ~1e10). Gains (39): ``N = M Abar alpha1 + Y1 beta1``,
 ``L = M Abar alpha2 + Y1 beta2``, ``G = M B``, ``J = alpha1 + Y2 beta1``, ``E = alpha2 + Y2 beta2``.
 
 The filter's input gain ``G = M B`` is the derived quantity ``Gf`` here, because the data key
 ``G`` is already the unknown-input output matrix ``[G1 ... Gh]``.
 
-Reference values (thesis catalogue 5.3, 10, 11.1, 11.5, 11.8): on the example M from R is exact
+Reference values (checked by ``lmic reproduce``): on the example M from R is exact
 (``[1 4 2; -2 4 0; -3 -2 3]``), ``T`` is invertible so ``beta = 0`` and Y1, Y2 have no effect;
 N, L, G, J, E reproduce the print (to print precision); (40) is feasible at
 (gamma, mu) = (0.45, 2.5); min mu at gamma = 0.45 is ``sqrt(2 (1 + gamma^2)) = 1.5508``; sup
@@ -206,7 +206,7 @@ def hinf_block(P, Gamma, N, L, J, E, nonlinear_gain, MD1, D2, c, mu_sq):
     notes="Bilinear in (P, N); an LMI in (P, Gamma) for given gains.",
 )
 def descriptor_thm3_1(t):
-    """Theorem 3.1 (source 002 line 5851), inequalities (14).
+    """Theorem 3.1 (Section 3), inequalities (14).
 
     ``Gamma - I < 0``, ``[N^T P + P N + gamma^2 J^T J, P M D; *, -Gamma] < 0``, ``P > 0``: the
     error ``eps' = N eps + M D df`` (w = 0) is asymptotically stable and ``e = J eps -> 0``.
@@ -217,9 +217,8 @@ def descriptor_thm3_1(t):
     M = t.data("M", q1, n, doc="M (given; from R by (36))")
     D = t.data("D", n, q, doc="nonlinearity input matrix")
     gamma = t.param("gamma", domain="nonnegative", doc="Lipschitz constant of f")
-    P = t.symmetric("P", q1)
+    P = t.symmetric("P", q1, pd=True)
     Gamma = t.symmetric("Gamma", q)
-    t.lmi("P > 0", block(P) > 0)
     t.lmi("Gamma - I < 0", block(Gamma - I(q)) < 0)
     t.lmi("(14)", block([[N.T * P + P * N + gamma**2 * J.T * J, P * M * D], [STAR, -Gamma]]) < 0)
     t.check("N Hurwitz (error dynamics (13))", hurwitz(N))
@@ -236,7 +235,7 @@ def descriptor_thm3_1(t):
     "(25) prints the cross term as a product; it is a sum (no effect on (20)).",
 )
 def descriptor_thm3_2(t):
-    """Theorem 3.2 (source 002 line 5911), inequalities (20)-(21).
+    """Theorem 3.2 (Section 3), inequalities (20)-(21).
 
     ``Gamma - I < 0``, ``P > 0``, ``Phi = [a11, a12, a13; *, -Gamma, 0; *, 0, a33] < 0`` with
     ``a11 = N^T P + P N + (1+gamma^2) J^T J``, ``a12 = P M D``,
@@ -256,9 +255,8 @@ def descriptor_thm3_2(t):
     D2 = t.data("D2", p, nw, doc="disturbance matrix of the output")
     gamma = t.param("gamma", domain="nonnegative", doc="Lipschitz constant of f")
     mu = t.param("mu", domain="positive", doc="disturbance attenuation level")
-    P = t.symmetric("P", q1)
+    P = t.symmetric("P", q1, pd=True)
     Gamma = t.symmetric("Gamma", q)
-    t.lmi("P > 0", block(P) > 0)
     t.lmi("Gamma - I < 0", block(Gamma - I(q)) < 0)
     t.lmi("(20)", hinf_block(P, Gamma, N, L, J, E, M * D, M * D1, D2, 1 + gamma**2, mu**2) < 0)
     t.check("N Hurwitz (error dynamics (13))", hurwitz(N))
@@ -277,7 +275,7 @@ def descriptor_thm3_2(t):
     "conditions (31)-(32) read n + h (printed n). The filter gain G = M B is the derived 'Gf'.",
 )
 def descriptor_thm3_3(t):
-    """Theorem 3.3 (source 002 line 6226), LMI (40)-(41), gains (39).
+    """Theorem 3.3 (Section 3), LMI (40)-(41), gains (39).
 
     ``Gamma - I < 0``, ``P > 0`` and (block sizes q1, q, nw, n + h)
     ``[a11, a12, a13, a14; *, -Gamma, 0, 0; *, *, a33, a34; *, *, *, a44] < 0`` with
@@ -297,12 +295,11 @@ def descriptor_thm3_3(t):
     nw = s["D1"].shape[1]
     gamma = t.param("gamma", domain="nonnegative", doc="Lipschitz constant gamma0 of f")
     mu = t.param("mu", domain="positive", doc="disturbance attenuation level")
-    P = t.symmetric("P", q1)
+    P = t.symmetric("P", q1, pd=True)
     Gamma = t.symmetric("Gamma", q)
     Ybar1 = t.full("Ybar1", q1, q1 + p)
     Y2 = t.full("Y2", n + h, q1 + p)
     a11, a12, a13, a14, a34 = reduced_order_blocks(s, P, Ybar1, Y2, s["M"] * s["D"])
-    t.lmi("P > 0", block(P) > 0)
     t.lmi("Gamma - I < 0", block(Gamma - I(q)) < 0)
     t.lmi(
         "(40)",

@@ -2,7 +2,7 @@
 
 Source: S. S. Delshad, T. Gustafsson, H. R. Karimi and A. Zemouche, *Observer-based control
 design for a class of nonlinear systems subject to unknown inputs: LMI approach*, ICCAS 2015
-(thesis Paper F, source 002 lines 7642-8327).
+(thesis Paper F).
 
 System (1): ``x' = A x + B u + D f(x) + E mu``, ``y = C x``, ``||mu|| <= beta``, ``f``
 Lipschitz ``gamma``. Observer-based controller (6): ``x^' = A x^ + B u + D f(x^) + L (y - C x^)``,
@@ -20,7 +20,7 @@ Typo resolved: Theorem 3.1 prints ``(epso2 + epsc1) beta^2/alpha^2`` in Omega11;
 ((16) + (18)) and Theorem 3.2's delta33 give ``epso2 + epsc2``. Option
 ``c_variant = corrected | printed`` of ``obs_control.thm3_1`` selects it (default corrected).
 
-Reference values (thesis catalogue 7.2, 10, 11.7, 11.9), Rossler example with alpha = 0.05,
+Reference values (checked by ``lmic reproduce``), Rossler example with alpha = 0.05,
 eps = 0.8, epsc1 = epsc2 = epso1 = epso2 = 0.5, gamma = 0.259, beta = 1: in the original
 coordinates Theorem 3.2 is provably infeasible (delta11(3,3) needs
 ``400 G33^2 - 11.4 G33 + 2 < 0``); in the z-coordinates reconstruction (``Bz = B/100``,
@@ -104,7 +104,7 @@ def _nine(P, Q, K, L, mats, scalars, c):
     "(Omega11 < 0, Omega22 < 0) are implied by (9).",
 )
 def obs_control_thm3_1(t):
-    """Theorem 3.1 (source 002 line 7819), inequalities (9)-(11), in Schur form.
+    """Theorem 3.1 (Section 3), inequalities (9)-(11), in Schur form.
 
     ``[He(P(A - B K)) + c I, P B K, P D, P E, 0, 0; *, He(Q(A - L C)) + epso1 gamma^2 I, 0, 0,
     Q D, Q E; *, *, -epsc1 I, 0, 0, 0; *, *, *, -epsc2 I, 0, 0; *, *, *, *, -epso1 I, 0;
@@ -112,7 +112,7 @@ def obs_control_thm3_1(t):
     ``c = epsc1 gamma^2 + (epso2 + epsc2) beta^2/alpha^2`` (corrected; printed: epso2 + epsc1).
     The certificate also evaluates (9) in its Omega11, Omega22 form at the solution.
 
-    Example: the published K, L in the catalogue's z-coordinates: feasible (max eig -0.151).
+    Example: the published K, L in the z-coordinates of the paper's example: feasible (max eig -0.151).
     """
     (n, m, p, q, qE), mats = _plant(t)
     A, B, C, D, E = mats
@@ -128,11 +128,10 @@ def obs_control_thm3_1(t):
     )
     second = epsc2 if variant == "corrected" else epsc1
     c = epsc1 * gamma**2 + (epso2 + second) * beta**2 / alpha**2
-    P = t.symmetric("P", n)
+    P = t.symmetric("P", n, pd=True)
     Q = t.symmetric("Q", n)
     Acl = A - B * K
     Aob = A - L * C
-    t.lmi("P > 0", block(P) > 0)
     t.lmi("Q > 0", block(Q) > 0)
     t.lmi(
         "(9) (Schur form)",
@@ -166,7 +165,7 @@ def obs_control_thm3_1(t):
     "recovered K, L.",
 )
 def obs_control_thm3_2(t):
-    """Theorem 3.2 (source 002 line 7992), LMI (21)-(22).
+    """Theorem 3.2 (Section 3), LMI (21)-(22).
 
     Block sizes n, n, n, q, qE, n, n:
     ``[d11, 0, Gamma, 0, 0, B Kt, 0; *, d22, 0, Q D, Q E, 0, I; *, *, -d33, 0, 0, 0, 0;

@@ -28,54 +28,40 @@ CITATION = "Wang, Song & Zhang (2015), Adv. Difference Equ. 2015:307"
 
 
 def _full_order(t):
-    """Data, ``P``, ``R`` (or ``L^T P`` for a fixed L), ``omega`` and ``X = A^T P - C^T R``."""
+    """Data, ``P > 0``, ``R``, ``omega`` and ``X = A^T P - C^T R`` of LMIs (7) and (13)."""
     n, p = t.dims("n p")
     A = t.data("A", n, n, doc="state matrix")
     C = t.data("C", p, n, doc="output matrix")
-    fixed = t.flag("fixed_L", doc="1: L is given as data (audit), R = L^T P")
-    P = t.symmetric("P", n)
-    if fixed:
-        L = t.data("L", n, p, doc="the observer gain to audit (fixed_L = 1)")
-        R = L.T * P
-    else:
-        L = None
-        R = t.full("R", p, n, doc="R = L^T P")
+    P = t.symmetric("P", n, pd=True)
+    R = t.full("R", p, n, doc="R = L^T P")
     w = t.scalar("omega", sign="positive")
-    return n, A, C, P, R, L, w, A.T * P - C.T * R
-
-
-def _full_order_gain(t, A, C, P, R, L):
-    if L is None:
-        L = t.derive("L", P.inv() * R.T, doc="observer gain L = P^-1 R^T")
-    t.check("A - L C Schur stable", schur_stable(A - L * C))
-    t.observer("luenberger", "discrete", A=A, C=C, L=L)
+    return n, A, C, P, R, w, A.T * P - C.T * R
 
 
 @theorem(
     id="qib.thm1",
     title="Full-order observer for QIB nonlinear DT systems, LMI (7)",
     citation=CITATION + ", Theorem 1",
-    kind="S",
+    kind="synthesis",
     objective="feasibility; L = P^-1 R^T",
     system_class="discrete time, QIB (beta, gamma) nonlinearity",
-    notes="Checked against the proof (lines 102-132 of the source); L = P^-1 R^T (R = L^T P). "
+    notes="Checked against the proof of Theorem 1 (Section 3); L = P^-1 R^T (R = L^T P). "
     "The LMI is homogeneous in (P, R, omega). fixed_L: 1 audits a given gain.",
 )
 def qib_thm1(t):
-    """Theorem 1 (source 003, line 95), LMI (7).
+    """Theorem 1 (Section 3, Full-order observer design), LMI (7).
 
     ``[-P + 2 w beta I, A^T P - C^T R + w gamma I, A^T P - C^T R; *, P - 2 w I, 0; *, *, -P] < 0``
     with ``P > 0``, ``w > 0``; the observer gain is ``L = P^-1 R^T``.
 
-    Reference (seeds catalogue 3.1, 6; flexible joint, Euler Te = 0.1, beta = 0.00110889,
-    gamma = 0): the published (P, R, omega) is a certificate (lambda_max of (7) = -0.05581);
+    Reference (Section 5, the flexible-joint example, Euler step Te = 0.1, beta = 0.00110889,
+    gamma = 0): the printed (P, R, omega) is a certificate (lambda_max of (7) = -0.05581);
     a fresh solve gives L = [1 0.1; -4.86 2.5134; 0 0.4295; 0.195 0.0264] (rho = 0.3525),
-    essentially the published L; the published L is certified with ``fixed_L: 1``.
+    essentially the printed L; the printed L is certified with ``fixed_L: 1``.
     """
-    n, A, C, P, R, L, w, X = _full_order(t)
+    n, A, C, P, R, w, X = _full_order(t)
     beta = t.param("beta", domain="real", doc="QIB constant beta")
     gamma = t.param("gamma", default=0.0, domain="real", doc="QIB constant gamma")
-    t.lmi("P > 0", block(P) > 0)
     t.lmi(
         "(7)",
         block(
@@ -87,37 +73,33 @@ def qib_thm1(t):
         )
         < 0,
     )
-    _full_order_gain(t, A, C, P, R, L)
+    t.luenberger(A, C, L=P.inv() * R.T, fixes=R, doc="observer gain L = P^-1 R^T")
 
 
 @theorem(
     id="qib.cor1",
     title="Full-order observer for Lipschitz DT systems, LMI (13)",
     citation=CITATION + ", Corollary 1",
-    kind="S",
+    kind="synthesis",
     objective="feasibility; L = P^-1 R^T",
     system_class="discrete time, Lipschitz (constant lambda)",
     notes="Theorem 1 with beta = lambda^2, gamma = 0 and omega renamed (2 omega -> omega). "
     "Homogeneous. fixed_L: 1 audits a given gain.",
 )
 def qib_cor1(t):
-    """Corollary 1 (source 003, line 136), LMI (13).
+    """Corollary 1 (Section 3), LMI (13).
 
     ``[-P + w lambda^2 I, A^T P - C^T R, A^T P - C^T R; *, P - w I, 0; *, *, -P] < 0``,
     ``P > 0``, ``w > 0``; ``L = P^-1 R^T``. This is Theorem 1 with ``beta = lambda^2``,
     ``gamma = 0`` and ``2 w`` renamed ``w``.
 
-    Reference (seeds catalogue 3.2; flexible joint, lambda = 0.0333): feasible,
+    Reference (Section 5, flexible joint, lambda = 0.0333): feasible,
     L = [1 0.1; -4.86 2.5104; 0 0.428; 0.195 0.0255].
     """
-    n, A, C, P, R, L, w, X = _full_order(t)
+    n, A, C, P, R, w, X = _full_order(t)
     lam = t.param("lambda", domain="positive", doc="Lipschitz constant lambda of f")
-    t.lmi("P > 0", block(P) > 0)
-    t.lmi(
-        "(13)",
-        block([[-P + w * lam**2 * I(n), X, X], [STAR, P - w * I(n), 0], [STAR, STAR, -P]]) < 0,
-    )
-    _full_order_gain(t, A, C, P, R, L)
+    t.lmi("(13)", block([[-P + w * lam**2 * I(n), X, X], [STAR, P - w * I(n), 0], [STAR, STAR, -P]]) < 0)
+    t.luenberger(A, C, L=P.inv() * R.T, fixes=R, doc="observer gain L = P^-1 R^T")
 
 
 def reduced_coordinates(H: np.ndarray, C: np.ndarray, where: str = "") -> tuple[np.ndarray, np.ndarray]:
@@ -179,8 +161,7 @@ def _reduced_order(t, beta, gamma):
     w = t.scalar("omega", sign="positive")
     if fixed:
         K = t.data("K", n - p, p, doc="the reduced-order gain to audit (fixed_K = 1)")
-        P = t.symmetric("P", n)
-        t.lmi("P > 0", block(P) > 0)
+        P = t.symmetric("P", n, pd=True)
         a11 = -N.T * P * N + 2 * w * beta * N.T * N
         a13 = (AZ - K * CZ).T * N.T * P
         a23 = (H - K * C).T * N.T * P
@@ -202,14 +183,14 @@ def _reduced_order(t, beta, gamma):
     id="qib.thm2",
     title="Reduced-order observer for QIB nonlinear DT systems, LMI (26) (Remark 2, P = alpha I)",
     citation=CITATION + ", Theorem 2 and Remark 2",
-    kind="S",
+    kind="synthesis",
     objective="feasibility; gain K",
     system_class="discrete time, QIB (beta, gamma) nonlinearity, reduced-order observer",
     notes="(21) is bilinear (P K); Remark 2's P = alpha I gives the LMI (26) in (K, omega). "
     "fixed_K: 1 gives (21) in (P, omega) for a given K. The published K is infeasible.",
 )
 def qib_thm2(t):
-    """Theorem 2 (source 003, line 191), LMI (21), and Remark 2 (line 231), LMI (26).
+    """Theorem 2 (Section 4, Reduced-order observer design), LMI (21), and Remark 2, LMI (26).
 
     Reduced coordinates (14)-(15): ``z = H x``, ``[H; C]^-1 = [N M]``, ``A_Z = H A N``,
     ``C_Z = C A N``; error ``eps(k+1) = (A_Z - K C_Z) eps + (H - K C) dg`` (20).
@@ -225,7 +206,7 @@ def qib_thm2(t):
     The text says "by solving the LMI (21)" with alpha given: it must mean (26). N and M may be
     given (the example prints them; they must equal [H; C]^-1) or are computed.
 
-    Result (seeds catalogue 3.3, 6): on the flexible-joint example (26) is infeasible for every
+    Result (Section 5): on the flexible-joint example (26) is infeasible for every
     alpha and K (C_Z's second column is 0, so ||A_Z - K C_Z|| >= sqrt(2)); the published
     K = [0 0.2057; 0 -0.0401] is the least-infeasible point of (26). With K_pub fixed, (21) is
     marginally infeasible (phase-1 t* = 5.9e-11): solvers may return an 'inaccurate' point with
@@ -241,22 +222,22 @@ def qib_thm2(t):
     id="qib.cor2",
     title="Reduced-order observer for Lipschitz DT systems, LMI (27) with P = alpha I",
     citation=CITATION + ", Corollary 2",
-    kind="S",
+    kind="synthesis",
     objective="feasibility; gain K",
     system_class="discrete time, Lipschitz (constant lambda), reduced-order observer",
     notes="Theorem 2 with beta = lambda^2, gamma = 0 (the factor 2 of 2 omega stays). "
     "P = alpha I as in Remark 2; fixed_K: 1 gives (27) in (P, omega).",
 )
 def qib_cor2(t):
-    """Corollary 2 (source 003, line 238), LMI (27):
+    """Corollary 2 (Section 4), LMI (27):
 
     ``[-N^T P N + 2 w lambda^2 N^T N, 0, (A_Z - K C_Z)^T N^T P; *, -2 w I, (H - K C)^T N^T P;
     *, *, -P] < 0``: Theorem 2 with ``beta = lambda^2``, ``gamma = 0`` (unlike Corollary 1,
     omega is not rescaled). As for Theorem 2 the default form sets ``P = alpha I`` (Remark 2),
     an LMI in (K, w); ``fixed_K: 1`` gives (27) in (P, w) for a given K.
 
-    Reference (seeds catalogue 3.4; flexible joint, lambda = 0.0333): infeasible (same proof
-    as Theorem 2).
+    Reference (Section 5, flexible joint, lambda = 0.0333): infeasible (same proof as
+    Theorem 2).
     """
     lam = t.param("lambda", domain="positive", doc="Lipschitz constant lambda of f")
     _reduced_order(t, lam**2, None)

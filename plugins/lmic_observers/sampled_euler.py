@@ -2,7 +2,7 @@
 
 Source: M. Abbaszadeh, H. J. Marquez, *Robust H-infinity observer design for sampled-data
 Lipschitz nonlinear systems with exact and Euler approximate models*, Automatica 44 (2008)
-799-806 (text: the later arXiv version, source file 000).
+799-806 (the text followed is the later arXiv version).
 
 Discrete-time plant ``x(k+1) = Ad x + F(x, u)``, ``y = Cd x`` with ``F`` Lipschitz (constant
 ``gamma_d``), observer ``x^(k+1) = Ad x^ + F(x^, u) + L (y - Cd x^)``, gain ``L = P^-1 G``.
@@ -88,7 +88,7 @@ def _finish_gain(t, P, G, L_data, Ad, Cd):
     "Q is a fixed design matrix; fixed_L: 1 audits a given gain (G = P L).",
 )
 def sampled_euler_thm1(t):
-    """Theorem 1 (source 000, line 143): LMIs (6) line 153, (7) line 159, Psi1 (8) line 176.
+    """Theorem 1 (Section 3, discrete-time systems): LMIs (6), (7), Psi1 (8).
 
     ``(6) [P - Q - eps I, Ad^T P - Cd^T G^T; *, P] > 0``, ``(7) [Psi1 I, P; *, Psi1 I] > 0``
     (i.e. ``lambda_max(P) < Psi1``), with the constant
@@ -100,7 +100,7 @@ def sampled_euler_thm1(t):
     (checked algebraically). The (2,1) block of (6), printed ``P Ad - G Cd``, is the transpose
     of (1,2): consistent.
 
-    Reference (seeds catalogue 1.1): example data, Q = 0.1 I, gamma_d = 0.06109 is feasible;
+    Reference (``lmic reproduce``): example data, Q = 0.1 I, gamma_d = 0.06109 is feasible;
     sup gamma_d = 0.0935 by bisection. The published Theorem-4 gain L = [1.0497; 0.3588] is a
     valid Theorem-1 certificate (``fixed_L: 1``).
     """
@@ -109,10 +109,9 @@ def sampled_euler_thm1(t):
     t.param("gamma_d", domain="positive", doc="Lipschitz constant gamma_d of F")
     fixed = t.flag("fixed_L", doc="1: L is given as data (audit), G = P L")
     psi1 = t.const("Psi1", lambda v: psi1_value(v["Q"], v["gamma_d"]), doc="Psi1 of (8)")
-    P = t.symmetric("P", n)
+    P = t.symmetric("P", n, pd=True)
     G, L_data = _gain(t, n, p, P, fixed)
     eps = t.scalar("epsilon", sign="positive")
-    t.lmi("P > 0", block(P) > 0)
     _lmi6(t, n, P, Q, Ad, Cd, G, eps, "(6)")
     t.lmi("(7)", block([[psi1, P], [STAR, psi1]]) > 0)
     _finish_gain(t, P, G, L_data, Ad, Cd)
@@ -145,15 +144,15 @@ def _thm2_body(t, n, Ad, Cd, Q, P, G, L_data):
     "gamma_d (optional) is the actual Lipschitz constant, for Remark 2's margin.",
 )
 def sampled_euler_thm2(t):
-    """Theorem 2 (source 000, line 389): ``min xi`` subject to (32) = (6) and
+    """Theorem 2 (Section 3): ``min xi`` subject to (32) = (6) and
     ``(33) [Psi2 I, P; *, Psi2 I] > 0`` with ``Psi2 = (lmin(Q) xi - lmax(Q)) / 3`` (34),
     ``xi > 1``, ``P > 0``, ``eps > 0``; ``gamma_d* = 1/xi*`` (36), ``L = P^-1 G`` (35).
 
-    Remark 2 (line 478): the observer tolerates any additive Lipschitz uncertainty up to
+    Remark 2: the observer tolerates any additive Lipschitz uncertainty up to
     ``gamma_d* - gamma_d`` (derived ``delta_gamma_d``; the check ``gamma_d < gamma_d*``
     states that the design covers the actual constant).
 
-    Reference (seeds catalogue 1.2, 1.5, 6): example (Ad = I + 0.1 A, Q = q I, any q):
+    Reference (``lmic reproduce``): example (Ad = I + 0.1 A, Q = q I, any q):
     xi* = 14.95596, gamma_d* = 0.066863 (paper: 0.067), L = [1.0384; 0.2454].
     """
     n, p, Ad, Cd = _observer(t)
@@ -170,7 +169,7 @@ def sampled_euler_thm2(t):
 
 
 def _theorem3_q_rule(v):
-    """``lambda_min(Q) = T`` is part of Theorem 3's statement (line 584)."""
+    """``lambda_min(Q) = T`` is part of Theorem 3's statement."""
     lmin_q, T = lambda_min(v["Q"]), v["T"]
     if abs(lmin_q - T) > 1e-9 * max(1.0, T):
         raise DataError(
@@ -191,16 +190,16 @@ def _theorem3_q_rule(v):
     notes="Q defaults to T I (Remark 3, the best choice); lambda_min(Q) = T is enforced.",
 )
 def sampled_euler_thm3(t):
-    """Theorem 3 (source 000, line 580): Theorem 2 applied to the Euler model (47)-(49),
+    """Theorem 3 (Section 4, sampled-data systems): Theorem 2 applied to the Euler model (47)-(49),
     ``Ad = I + T A`` (48), ``Cd = C``, ``F_T = T f`` so ``gamma_d = T gamma_c``, with the
-    extra requirement ``lambda_min(Q) = T`` (line 584). Derived ``gamma_c* = gamma_d*/T``;
+    extra requirement ``lambda_min(Q) = T``. Derived ``gamma_c* = gamma_d*/T``;
     Remark 4 margin ``gamma_c* - gamma_c``.
 
     The system file gives the continuous-time ``A``, ``C`` and the sampling time ``T``; ``Q``
     is optional (default ``T I``, Remark 3 (66)); a ``Q`` with ``lambda_min(Q) != T`` is
     rejected (the statement requires it).
 
-    Reference (seeds catalogue 1.3, 6): example T = 0.1, Q = 0.1 I: gamma_c* = 0.66863
+    Reference (``lmic reproduce``): example T = 0.1, Q = 0.1 I: gamma_c* = 0.66863
     (paper: 0.67), L = [1.0384; 0.2454].
     """
     n, p = t.dims("n p")
@@ -232,10 +231,10 @@ def sampled_euler_thm3(t):
     objective="min zeta; mu* = sqrt(zeta), L = P^-1 G",
     system_class="discrete time, Lipschitz (gamma_d given), disturbance Bd w, z = H e",
     notes="(73) as printed is infeasible for every instance: its constant (1,1) block Lambda2 "
-    "always has a positive eigenvalue (seeds catalogue 1.4). coupling: Bd (default) | I.",
+    "always has a positive eigenvalue. coupling: Bd (default) | I.",
 )
 def sampled_euler_thm4(t):
-    """Theorem 4 (source 000, line 741): ``min zeta`` subject to (71) = (6), (72) = (7) with
+    """Theorem 4 (Section 5, H-infinity synthesis): ``min zeta`` subject to (71) = (6), (72) = (7) with
     Psi1 from (8), and
 
     ``(73) [Lambda2, c/2 Bd; *, Bd^T P Bd - zeta I] < 0``,
@@ -249,8 +248,10 @@ def sampled_euler_thm4(t):
     keeps the printed identity, possible only when nw = n (Bd must then be n x n).
 
     Result: only ``zeta`` and ``P`` enter (73) and its (1,1) block is the constant Lambda2,
-    which has a positive eigenvalue for every Q > 0, gamma_d > 0, H (proof in the seeds
-    catalogue 1.4). The theorem as printed is infeasible on every instance; the published
+    which has a positive eigenvalue for every Q > 0, gamma_d > 0, H (with v the unit
+    eigenvector of Q for s = lambda_min(Q), r = lambda_max(Q), u = s / (gamma_d r):
+    ``v^T Lambda2 v / (gamma_d r) >= 1 - u + 3 (sqrt(1 + u^2) - 1) / (gamma_d + 2) > 0``).
+    The theorem as printed is infeasible on every instance; the published
     mu* = 0.1308 cannot be reproduced (example: lambda_max(Lambda2) = +0.1049).
     """
     n, p, Ad, Cd = _observer(t)
@@ -274,12 +275,11 @@ def sampled_euler_thm4(t):
         doc="Lambda2 = H^T H - Q + gamma_d (3 Psi1 + lmax(Q)) I",
     )
     half_c = (2 * (gamma_d + 1) * psi1 + lmax_q) / 2
-    P = t.symmetric("P", n)
+    P = t.symmetric("P", n, pd=True)
     G, L_data = _gain(t, n, p, P, fixed)
     eps = t.scalar("epsilon", sign="positive")
     zeta = t.scalar("zeta", sign="positive", doc="zeta = mu^2")
     coupling_block = half_c * (I(n) if coupling == "I" else Bd)
-    t.lmi("P > 0", block(P) > 0)
     _lmi6(t, n, P, Q, Ad, Cd, G, eps, "(71)")
     t.lmi("(72)", block([[psi1, P], [STAR, psi1]]) > 0)
     t.lmi("(73)", block([[Lambda2, coupling_block], [STAR, Bd.T * P * Bd - zeta * I(Bd.shape[1])]]) < 0)

@@ -1,7 +1,7 @@
 """Delshad & Gustafsson (ECC 2014), thesis Paper C: unknown-input observers for DT Lipschitz systems.
 
 Source: S. S. Delshad and T. Gustafsson, *Observer design for a class of nonlinear systems
-subject to unknown inputs*, ECC 2014 (thesis Paper C, source 002 lines 5003-5640).
+subject to unknown inputs*, ECC 2014 (thesis Paper C).
 
 System (1): ``x(k+1) = A x + B u + D f(x) + D1 mu``, ``y = C x``, ``f`` Lipschitz with constant
 ``gamma`` (``f: R^n -> R^q``, ``mu`` the unknown input, ``h`` columns of ``D1``). Observer (3):
@@ -16,7 +16,7 @@ This requires ``rank(C D1) = rank(D1)`` (checked when the constants are computed
 Gains (22)/(27): ``Y = P^-1 Ybar``, ``K = P^-1 Kbar``, ``E = U + Y V``, ``M = I + E C``,
 ``N = M A - K C``, ``L = K (I + C E) - M A E``, ``G = M B``.
 
-Reference values (thesis catalogue 4.1-4.3, 10, 11): Thm 3.2 on the flexible-joint robot with
+Reference values (checked by ``lmic reproduce``): Thm 3.2 on the flexible-joint robot with
 gamma = 1 is feasible; the published (P, Y, K) certify (9)/(20) with max eig -0.2445; the
 spectral radius of the recovered N is 0.954; Thm 4.1 gamma_max = 51.5 is a supremum that is not
 attained (P unbounded): it is found by bisection on Thm 3.2 feasibility (or on the ``gamma``
@@ -97,8 +97,9 @@ def _gains(t, n, p, mats, consts, P, Ybar, Kbar):
     """Back-substitution (22)/(27); returns the symbols of N and M."""
     A, B, C, D, D1 = mats
     U, V = consts
-    Y = t.derive("Y", P.inv() * Ybar, doc="Y = P^-1 Ybar")
-    K = t.derive("K", P.inv() * Kbar, doc="K = P^-1 Kbar")
+    # fixes=: the audit variants fixed_Y / fixed_K take printed Y, K as data (Ybar = P Y, Kbar = P K)
+    Y = t.derive("Y", P.inv() * Ybar, doc="Y = P^-1 Ybar", fixes=Ybar)
+    K = t.derive("K", P.inv() * Kbar, doc="K = P^-1 Kbar", fixes=Kbar)
     E = t.derive("E", U + Y * V, doc="E = U + Y V (18)")
     M = t.derive("M", I(n) + E * C, doc="M = I + E C")
     N = t.derive("N", M * A - K * C, doc="N = M A - K C")
@@ -133,7 +134,7 @@ def _nine(n, q, P, N, M, D, gamma_sq):
     "sign typo (-P^-1) that does not affect (9).",
 )
 def uio_dt_thm3_1(t):
-    """Theorem 3.1 (source 002 line 5122), inequality (9).
+    """Theorem 3.1 (Section 3), inequality (9).
 
     ``[-P + gamma^2 I, 0, N^T P; *, -I_q, D^T M^T P; *, *, -P] < 0`` with ``P > 0`` (the
     ``-P`` diagonal blocks already imply it). It is ``N^T P N - P + gamma^2 I + ... < 0`` of
@@ -143,15 +144,14 @@ def uio_dt_thm3_1(t):
 
     Example: the flexible-joint robot of Paper C with N, M recomputed by (22) from the printed
     Y, K, gamma = 1: feasible (the published P certifies it, max eig -0.2445); largest gamma
-    with P free 3.72 (catalogue 11.8).
+    with P free 3.72.
     """
     n, q = t.dims("n q")
     N = t.data("N", n, n, doc="observer matrix N (given)")
     M = t.data("M", n, n, doc="M = I + E C (given)")
     D = t.data("D", n, q, doc="nonlinearity input matrix")
     gamma = t.param("gamma", domain="nonnegative", doc="Lipschitz constant of f")
-    P = t.symmetric("P", n)
-    t.lmi("P > 0", block(P) > 0)
+    P = t.symmetric("P", n, pd=True)
     t.lmi("(9)", _nine(n, q, P, N, M, D, gamma**2) < 0)
     t.check("N Schur stable (error dynamics (7))", schur_stable(N))
 
@@ -168,7 +168,7 @@ def uio_dt_thm3_1(t):
     "Thesis Thm 4.1.3 is the same LMI.",
 )
 def uio_dt_thm3_2(t):
-    """Theorem 3.2 (source 002 line 5230), LMI (20)-(21), gains (22).
+    """Theorem 3.2 (Section 3), LMI (20)-(21), gains (22).
 
     ``[-P + gamma^2 I, 0, d13; *, -I_q, d23; *, *, -P] < 0`` with
     ``d13 = A^T P + (U C A)^T P + (V C A)^T Ybar^T - C^T Kbar^T`` (``= N^T P``) and
@@ -209,7 +209,7 @@ def uio_dt_thm3_2(t):
     "at gamma; gamma = 0 (default) leaves rho free.",
 )
 def uio_dt_thm4_1(t):
-    """Theorem 4.1 (source 002 line 5301), LMI (25)-(26), gamma_max (28), gains (27).
+    """Theorem 4.1 (Section 4), LMI (25)-(26), gamma_max (28), gains (27).
 
     ``min rho`` subject to ``[-P, 0, d13, I; *, -I_q, d23, 0; *, *, -P, 0; *, *, *, -rho I] < 0``
     (block sizes n, q, n, n) with ``d13``, ``d23`` as in Theorem 3.2. The Schur complement of

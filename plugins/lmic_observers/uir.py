@@ -2,7 +2,7 @@
 
 Source: S. S. Delshad, A. Johansson, M. Darouach and T. Gustafsson, *Robust state estimation
 and unknown inputs reconstruction for a class of nonlinear systems: multiobjective approach*,
-Automatica 2015 (thesis Paper E, source 002 lines 6582-7640).
+Automatica 2015 (thesis Paper E).
 
 System (1): ``x' = A x + B u + f(x) + F nu + D1 w``, ``y = C x + G nu + D2 w`` with
 ``f: R^n -> R^n`` Lipschitz ``gamma`` (no ``D`` matrix: Paper D with ``D = I``). Augmented
@@ -21,7 +21,7 @@ Lipschitz constant ``gamma0 + dgamma + ||dA||``. Theorem 4.1 maximises ``gamma``
 ``rho = 1/(1 + gamma^2)`` with the side condition (40) ``0 < rho < 1/(1 + gamma0^2)``
 (``gamma > gamma0``); ``(dgamma + ||dA||)_max = sqrt(1/rho - 1) - gamma0``.
 
-Reference values (thesis catalogue 6.3, 10, 11.6, 11.9): on the Rossler example (kappa
+Reference values (checked by ``lmic reproduce``): on the Rossler example (kappa
 coordinates) M from R is exact, ``T`` is invertible (``beta = 0``), J and E reproduce exactly;
 with the printed F the structural N is unstable, with ``F(1,:) = [1 0]`` N and L match the
 print. Theorem 5.1 is **infeasible** for both F (``||J (sI - N)^-1 M||_inf ~ 30.2`` forces
@@ -63,22 +63,20 @@ SYSTEM_CLASS = (
     notes="Bilinear in (P, N); an LMI in (P, Gamma) for given gains. Paper D Thm 3.1 with D = I.",
 )
 def uir_thm3_1(t):
-    """Theorem 3.1 (source 002 line 6772), inequalities (11).
+    """Theorem 3.1 (Section 3), inequalities (11).
 
     ``Gamma - I < 0``, ``[N^T P + P N + gamma^2 J^T J, P M; *, -Gamma] < 0``, ``P > 0``.
 
     Example: the printed observer (51) at gamma0 = 0.259 (the paper claims feasibility):
-    infeasible; by the bounded-real lemma (11) holds at these gains only for gamma < 0.0401
-    (catalogue 11.6).
+    infeasible; by the bounded-real lemma (11) holds at these gains only for gamma < 0.0401.
     """
     q1, nh, n = t.dims("q1 nh n")
     N = t.data("N", q1, q1, doc="observer matrix N (given)")
     J = t.data("J", nh, q1, doc="observer output matrix J (given)")
     M = t.data("M", q1, n, doc="M (given; from R by (34))")
     gamma = t.param("gamma", domain="nonnegative", doc="Lipschitz constant of f")
-    P = t.symmetric("P", q1)
+    P = t.symmetric("P", q1, pd=True)
     Gamma = t.symmetric("Gamma", n)
-    t.lmi("P > 0", block(P) > 0)
     t.lmi("Gamma - I < 0", block(Gamma - I(n)) < 0)
     t.lmi("(11)", block([[N.T * P + P * N + gamma**2 * J.T * J, P * M], [STAR, -Gamma]]) < 0)
     t.check("N Hurwitz (error dynamics (10))", hurwitz(N))
@@ -94,7 +92,7 @@ def uir_thm3_1(t):
     notes="Paper D Thm 3.2 with D = I (a12 = P M).",
 )
 def uir_thm3_2(t):
-    """Theorem 3.2 (source 002 line 6829), inequalities (16)-(17).
+    """Theorem 3.2 (Section 3), inequalities (16)-(17).
 
     ``Gamma - I < 0``, ``P > 0``, ``[a11, P M, a13; *, -Gamma, 0; *, 0, a33] < 0`` with
     ``a11 = N^T P + P N + (1+gamma^2) J^T J``, ``a13 = P (L D2 - M D1) + (1+gamma^2) J^T E D2``,
@@ -110,9 +108,8 @@ def uir_thm3_2(t):
     D2 = t.data("D2", p, nw, doc="disturbance matrix of the output")
     gamma = t.param("gamma", domain="nonnegative", doc="Lipschitz constant of f")
     mu = t.param("mu", domain="positive", doc="disturbance attenuation level")
-    P = t.symmetric("P", q1)
+    P = t.symmetric("P", q1, pd=True)
     Gamma = t.symmetric("Gamma", n)
-    t.lmi("P > 0", block(P) > 0)
     t.lmi("Gamma - I < 0", block(Gamma - I(n)) < 0)
     t.lmi("(16)", hinf_block(P, Gamma, N, L, J, E, M, M * D1, D2, 1 + gamma**2, mu**2) < 0)
     t.check("N Hurwitz (error dynamics (10))", hurwitz(N))
@@ -133,7 +130,7 @@ def _robust(t, multiobjective: bool):
         default=True,
         doc="impose the side condition (40) rho < 1/(1 + gamma0^2) (1, default) or not (0)",
     )
-    P = t.symmetric("P", q1)
+    P = t.symmetric("P", q1, pd=True)
     Gamma = t.symmetric("Gamma", n)
     Ybar1 = t.full("Ybar1", q1, q1 + p)
     Y2 = t.full("Y2", n + h, q1 + p)
@@ -144,7 +141,6 @@ def _robust(t, multiobjective: bool):
     else:
         mu_sq = mu**2
     a11, a12, a13, a14, a34 = reduced_order_blocks(s, P, Ybar1, Y2, s["M"])
-    t.lmi("P > 0", block(P) > 0)
     t.lmi("Gamma - I < 0", block(Gamma - I(n)) < 0)
     name = "(41)" if multiobjective else "(38)"
     t.lmi(
@@ -195,7 +191,7 @@ def _robust(t, multiobjective: bool):
     "rho_bound = 0 it is only checked on the result.",
 )
 def uir_thm4_1(t):
-    """Theorem 4.1 (source 002 line 7148), LMI (38)-(39), side condition (40).
+    """Theorem 4.1 (Section 4), LMI (38)-(39), side condition (40).
 
     ``min rho`` subject to ``Gamma - I < 0``, ``P > 0``, ``(1 + gamma0^2) rho < 1`` (40) and
     ``[a11, P M, a13, a14; *, -Gamma, 0, 0; *, *, -mu^2 I, a34; *, *, *, -rho I] < 0`` (block
@@ -214,12 +210,12 @@ def uir_thm4_1(t):
     system_class=SYSTEM_CLASS,
     notes="The statement calls rho a given scalar; it is a decision variable (it is minimised). "
     "mubar = mu^2 is a variable. Side condition (40) imposed by default (rho_bound = 1). The "
-    "published example is infeasible (catalogue 6.3): with the printed F(1,:) = [0 1] the "
+    "published example is infeasible: with the printed F(1,:) = [0 1] the "
     "structural N is unstable; F(1,:) = [1 0] reproduces the printed N, L but (41) still needs "
     "rho >~ 913.",
 )
 def uir_thm5_1(t):
-    """Theorem 5.1 (source 002 line 7248), LMI (41)-(42).
+    """Theorem 5.1 (Section 5), LMI (41)-(42).
 
     As Theorem 4.1 with ``a33 = -mubar I`` (``mubar = mu^2`` a decision variable) and objective
     ``min lambda rho + (1 - lambda) mubar``, ``lambda`` in [0, 1];

@@ -1,7 +1,7 @@
 """Abbaszadeh & Marquez (2008): robust H-infinity filtering for DT nonlinear uncertain systems.
 
 Source: M. Abbaszadeh, H. J. Marquez, *LMI optimization approach to robust H-infinity filtering
-for discrete-time nonlinear uncertain systems*, ACC 2008 (version of IJRNC 2009; source 001).
+for discrete-time nonlinear uncertain systems*, ACC 2008 (version of IJRNC 2009).
 
 System ``x(k+1) = (A + dA) x + Phi(x, u) + B w``, ``y = (C + dC) x + D w``, ``Phi`` Lipschitz
 (constant gamma), ``[dA; dC] = [M1; M2] F N`` with ``F^T F <= I``; observer
@@ -39,7 +39,7 @@ CITATION = (
     notes="Block sizes (15): n, n, n, n, r; (16): nw, n, n. Checked against the proof.",
 )
 def uncertain_dt_lemma3(t):
-    """Lemma 3 (source 001, line 108): for ``x(k+1) = (A + M1 F N) x + Phi + B w``, ``z = H x``,
+    """Lemma 3 (Section III, H-infinity synthesis): for ``x(k+1) = (A + M1 F N) x + Phi + B w``, ``z = H x``,
 
     ``(15) [Lambda1, I, A^T P, 0, 0; *, -alpha I, 0, 0, 0; *, *, -P/2, P, P M1;
     *, *, *, P - 2 eps1 I, 0; *, *, *, *, -eps2 I] < 0``, ``Lambda1 = H^T H - P + eps2 N^T N``,
@@ -47,8 +47,8 @@ def uncertain_dt_lemma3(t):
     ``(16) [-mu^2 I, B^T P, B^T P; *, -P/2, 0; *, *, -I] < 0``, ``P > 0``, scalars > 0;
     ``min alpha + eps1``, ``gamma* = 1/sqrt(alpha* (1 + eps1*))`` (22).
 
-    Checked (seeds catalogue 2.1): the Schur complement of rows 3-5 of (15) is the last
-    inequality of the proof (lines 121-179); (16) gives ``-mu^2 + 2 B^T P B + B^T P P B < 0``.
+    Checked against the proof: the Schur complement of rows 3-5 of (15) is the last
+    inequality of the proof; (16) gives ``-mu^2 + 2 B^T P B + B^T P P B < 0``.
     Reference (Sec. V plant, mu = 1.25, Clarabel): alpha = 65.57, eps1 = 12.68, gamma* = 0.0334.
     """
     n, nw, nz, r, s = t.dims("n nw nz r s")
@@ -58,12 +58,11 @@ def uncertain_dt_lemma3(t):
     M1 = t.data("M1", n, r, doc="uncertainty dA = M1 F N")
     N = t.data("N", s, n, doc="uncertainty dA = M1 F N")
     mu = t.param("mu", domain="positive", doc="L2 gain bound mu")
-    P = t.symmetric("P", n)
+    P = t.symmetric("P", n, pd=True)
     alpha = t.scalar("alpha", sign="positive")
     eps1 = t.scalar("eps1", sign="positive")
     eps2 = t.scalar("eps2", sign="positive")
     Lambda1 = H.T * H - P + eps2 * N.T * N
-    t.lmi("P > 0", block(P) > 0)
     t.lmi(
         "(15)",
         block(
@@ -167,7 +166,7 @@ def _gain_and_check(t, d):
     "The published (eps1, alpha) = (0.7715, 2.9982) is infeasible; the optimum is gamma* = 0.3405.",
 )
 def uncertain_dt_thm1(t):
-    """Theorem 1 (source 001, line 187): ``min alpha + eps1`` subject to
+    """Theorem 1 (Section III): ``min alpha + eps1`` subject to
     ``[Psi1, Omega; *, Psi2] < 0`` and ``Xi1 < 0`` (24), ``P1, P2 > 0``, scalars > 0:
 
     ``Psi1 = [H^T H - e^{-2 beta} P1, 0, I; *, eps2 N^T N - P2, 0; *, *, -alpha I]``,
@@ -180,7 +179,7 @@ def uncertain_dt_thm1(t):
 
     Typo resolutions: the second rows of Psi1, Psi2 and Omega carry a leading alignment ``&``
     in the extraction; the star pattern fixes the positions. Every block was re-derived from
-    Lemma 3 with the augmented matrices (lines 223-240).
+    Lemma 3 with the augmented matrices.
 
     ``psi1: corrected``: on the augmented state the bound ``||Phi~|| <= gamma ||xi||`` needs
     ``alpha^-1 I_2n`` (both the e and the x blocks); the printed Psi1 applies it to e only.
@@ -188,7 +187,7 @@ def uncertain_dt_thm1(t):
     *, *, -alpha I, 0; *, *, *, -alpha I]`` and Omega gets a fourth zero row. The default is
     ``printed`` (the published gain supports that reading).
 
-    Reference (seeds catalogue 2.2, 6; Sec. V example, Clarabel): printed: alpha = 4.0625,
+    Reference (``lmic reproduce``; Sec. V example, Clarabel): printed: alpha = 4.0625,
     eps1 = 1.1226, eps2 = 0.1620, gamma* = 0.3405 (published 0.4339, whose (eps1, alpha) is
     infeasible), L = [0.3522 1.0213; 0.3051 1.1676; -0.1104 1.5616]; corrected: alpha = 19.635,
     eps1 = 2.835, gamma* = 0.1152. Published L (``fixed_L: 1``): alpha = 4.150, eps1 = 1.051,
@@ -262,16 +261,16 @@ def _positive_weights(v):
     "As printed, the certified matrix is Gamma*^T (Gamma_star_T).",
 )
 def uncertain_dt_cor1(t):
-    """Corollary 1 (source 001, line 283): Theorem 1 with
+    """Corollary 1 (Section IV.B, element-wise robustness): Theorem 1 with
     ``Psi1 = [H^T H - e^{-2 beta} P1, 0, Acal; *, eps2 N^T N - P2, 0; *, *, -I]`` (Xi1, Psi2,
     Omega unchanged), ``Acal = [alpha_ij] > 0``, objective ``min eps1 - sum_ij c_ij alpha_ij``
-    with fixed weights ``c_ij > 0`` (data ``Cw``); ``L = P1^-1 G``,
+    with fixed weights ``c_ij > 0`` (data ``Cw``, all ones when omitted); ``L = P1^-1 G``,
     ``Gamma* = Acal* / sqrt(1 + eps1*)``.
 
-    Readings: ``Acal > 0`` is element-wise (the paper defines its order element-wise, II-A,
-    line 80); ``positivity: none`` drops it. Transposition: ``[X, Acal; Acal^T, -I] < 0``
+    Readings: ``Acal > 0`` is element-wise (the paper defines its order element-wise,
+    Section II-A); ``positivity: none`` drops it. Transposition: ``[X, Acal; Acal^T, -I] < 0``
     yields ``X + Acal Acal^T`` while the proof's change of variables is
-    ``(1 + eps1) Gamma^T Gamma = Acal^T Acal`` (line 301): as printed the certified
+    ``(1 + eps1) Gamma^T Gamma = Acal^T Acal``: as printed the certified
     matrix-type constant is ``Gamma*^T`` (derived ``Gamma_star_T``); identical when Acal* is
     symmetric.
 
@@ -279,12 +278,13 @@ def uncertain_dt_cor1(t):
     ``n^2 x n^2`` variable ``W = diag(c_ij alpha_ij)`` (row-major), with ``Acal = E W F`` for the
     constant factors of :func:`vec_embedding`; the objective is ``eps1 - trace(W)``.
 
-    Reference (seeds catalogue 2.3, 6; Sec. V data, c_ij = 1, Clarabel = SCS): objective
+    Reference (``lmic reproduce``; Sec. V data, c_ij = 1, Clarabel = SCS): objective
     -0.77198, eps1 = 0.5731.
     """
     d = _filter_data(t)
     n = d["n"]
-    t.data("Cw", n, n, doc="weights c_ij > 0 of the objective")
+    t.data("Cw", n, n, default=lambda v, r, c: np.ones((r, c)),
+           doc="weights c_ij > 0 of the objective (default: all ones, as in the shipped example)")
     positivity = t.option("positivity", ("elementwise", "none"), "elementwise",
                           doc="Acal > 0 element-wise, or no sign constraint")
     E = t.const("E", lambda v: _positive_weights(v)[0], shape=(n, n**2), doc="Acal = E W F")

@@ -172,3 +172,60 @@ def test_fixed_margin_point_that_misses_the_strict_constraints_is_not_feasible()
     assert sol.status == "inaccurate" and sol.margin < 0 and "misses" in sol.message
     sol = strict.invert(Solution("optimal", x=np.array([0.5])), inv, SolveOptions(), prob)
     assert sol.status == "feasible" and sol.margin == pytest.approx(1.0)
+
+
+# ---- an optimisation solve without a decision: the constraints alone decide ----------------
+
+
+def _infeasible_optimisation():
+    import scipy.sparse as sp
+
+    from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+
+    # p > 1 and p < -1 (strict): no p at all, whatever the objective min p
+    return Problem(
+        [Variable("p", "scalar", (1, 1))],
+        [LMI("p - 1 > 0", 1, sp.csc_matrix([[-1.0, 1.0]])), LMI("-1 - p > 0", 1, sp.csc_matrix([[-1.0, -1.0]]))],
+        LinearConstraints.empty(1),
+        Objective("min", np.array([0.0, 1.0])),
+    )
+
+
+def _failing_on(senses, calls, native="NumericalError", message="Clarabel stopped with status NumericalError"):
+    real = get_backend("clarabel")._run
+
+    def run(problem, options):
+        calls.append(problem.objective.sense)
+        if problem.objective.sense in senses:
+            return Solution("error", backend="clarabel", native_status=native, message=message, solve_s=0.5)
+        return real(problem, options)
+
+    return run
+
+
+@pytest.mark.skipif("clarabel" not in available_backend_names(), reason="needs Clarabel")
+def test_optimisation_error_is_decided_by_the_constraints_alone():
+    from lmic.certify import certify
+
+    prob, calls = _infeasible_optimisation(), []
+    sol = strict.solve(prob, SolveOptions(), _failing_on({"min"}, calls))
+    assert calls[0] == "min" and "min" not in calls[1:] and len(calls) >= 2
+    assert sol.status == "infeasible" and "the constraints alone are infeasible" in sol.message
+    assert sol.info["optimisation_attempt"]["status"] == "error"
+    assert sol.solve_s >= 0.5  # the failed attempt's time is counted
+    # the certifier, not the route, decides: the ray proves the original problem infeasible
+    cert = certify(prob, sol, exact=True)
+    assert cert.verdict == "infeasible-certified" and cert.exact["proven"]
+
+
+@pytest.mark.skipif("clarabel" not in available_backend_names(), reason="needs Clarabel")
+def test_constraints_route_that_decides_nothing_keeps_the_failure():
+    prob, calls = _infeasible_optimisation(), []
+    sol = strict.solve(prob, SolveOptions(), _failing_on({"min", "max", "feasibility"}, calls))
+    assert sol.status == "error" and sol.native_status == "NumericalError"
+    assert sol.info["constraints_attempt"]["status"] == "error"
+    # a time limit is not followed by another solve
+    calls.clear()
+    timed = _failing_on({"min"}, calls, native="MaxTime", message="time limit of 1 s exceeded")
+    sol = strict.solve(prob, SolveOptions(), timed)
+    assert sol.status == "error" and calls == ["min"]

@@ -200,7 +200,7 @@ def test_theorem_certificate_recompiles(theorem_cert):
     assert doc["ir"]["embedded"] is None
     r = audit_certificate(path)
     assert r.ok, r.message
-    assert r.checked[:4] == ["schema", "tolerances", "system.sha256", "ir.sha256"]
+    assert r.checked[:5] == ["schema", "tolerances", "system.sha256", "theorem.template_hash", "ir.sha256"]
     assert "theorem thesis.lyapunov on lyap.yaml" in r.message
 
 
@@ -217,8 +217,59 @@ def test_changed_compilation_is_caught_by_the_ir_hash(theorem_cert):
     doc["params"] = {"nonstrict": "1"}
     _rewrite(path, doc)
     r = audit_certificate(path)
+    assert not r.ok and r.field == "theorem.template_hash"
+    assert "option nonstrict differs; LMI (2.9) removed; LMI (2.14) added" in r.message
+    # a certificate predating template hashes still meets the IR hash
+    for key in ("template_hash", "template_parts"):
+        doc["theorem"].pop(key)
+    _rewrite(path, doc)
+    r = audit_certificate(path)
     assert not r.ok and r.field == "ir.sha256"
     assert "recompiling gives a different IR" in r.message
+
+
+def test_certificate_records_provider_and_template_hash(theorem_cert):
+    _, doc, _ = theorem_cert
+    thm = doc["theorem"]
+    assert thm["provider"]["distribution"] == "lmic" and thm["provider"]["version"]
+    assert thm["provider"]["entry_point"] == "thesis = lmic_observers.thesis"
+    assert len(thm["template_hash"]) == 64 and "LMI (2.9)" in thm["template_parts"]
+
+
+def test_audit_rejects_a_certificate_whose_theorem_changed(tmp_path):
+    """The same id, now with a different LMI (e.g. a plugin upgrade): the audit names the change."""
+    from lmic.compile import compile_theorem
+    from lmic.registry import REGISTRY, register
+    from lmic.system import load_system
+    from lmic.template import theorem
+
+    def make(scale):
+        @theorem(id="tst.changed", title="t", citation="c", kind="analysis")
+        def build(t):
+            (n,) = t.dims("n")
+            A = t.data("A", n, n)
+            P = t.symmetric("P", n, pd=True)
+            t.lmi("(1)", A.T * P + P * A + scale * P < 0)
+
+        return build
+
+    sysfile = tmp_path / "s.yaml"
+    sysfile.write_text("lmic: 1\ndata:\n  A: " + json.dumps(A3) + "\n")
+    system = load_system(sysfile)
+    try:
+        register(make(0))
+        prob = compile_theorem("tst.changed", system)
+        P = solve_continuous_lyapunov(np.array(A3).T, -np.eye(3))
+        sol = Solution("feasible", x=prob.pack({"P": P}), backend="scs")
+        path = tmp_path / "c.json"
+        write_certificate(path, prob, sol, certify(prob, sol), system=system)
+        assert audit_certificate(path).ok
+        register(make(1))  # the theorem changes under the same id
+        r = audit_certificate(path)
+        assert not r.ok and r.field == "theorem.template_hash"
+        assert "LMI (1) differs" in r.message and "P > 0" not in r.message
+    finally:
+        REGISTRY._theorems.pop("tst.changed", None)
 
 
 def test_theorem_not_installed_and_missing_system(theorem_cert):
@@ -261,10 +312,11 @@ def test_repaired_farkas_certificate_is_recorded_and_audited(tmp_path):
     path = tmp_path / "uir.json"
     doc = write_certificate(path, prob, sol, certify(prob, sol))
     rec = doc["certificate"]["farkas"]
-    assert doc["certificate"]["verdict"] == "infeasible-certified" and rec["repaired"]
+    # a float ray of an inhomogeneous problem: bounded (no solution with ||x||_inf <= R), not global
+    assert doc["certificate"]["verdict"] == "infeasible-bounded" and rec["repaired"]
     assert rec["original"]["rel_residual"] > 1e-5 and len(rec["certificate"]["lmis"]) == 3
     r = audit_certificate(path)
-    assert r.ok and r.verdict == "infeasible-certified", r.message
+    assert r.ok and r.verdict == "infeasible-bounded", r.message
     doc["certificate"]["farkas"]["certificate"]["linear"][0] *= 1.01
     _rewrite(path, doc)
     bad = audit_certificate(path)
@@ -279,7 +331,10 @@ def test_exact_infeasibility_certificate_is_audited(tmp_path):
     plain = tmp_path / "plain.json"
     write_certificate(plain, prob, sol, certify(prob, sol))
     asked = audit_certificate(plain, exact=True)  # not recorded: run, reported, not compared
-    assert asked.ok and asked.label == "infeasible-certified (exact)"
+    # the file claims only the bounded verdict of its float ray; the proof run on request is
+    # reported (it would make the verdict global), the file's claim is what is audited
+    assert asked.ok and asked.verdict == "infeasible-bounded", asked.message
+    assert "with it the verdict would be infeasible-certified (exact)" in asked.message
     path = tmp_path / "exact.json"
     doc = write_certificate(path, prob, sol, certify(prob, sol, exact=True))
     assert doc["certificate"]["label"] == "infeasible-certified (exact)"

@@ -157,8 +157,14 @@ def test_tiny_margin_falls_back_to_the_float_point_itself():
     )
     x = np.array([1.0 + 2.0**-40, 1.0])
     r = prove(prob, x)
-    assert r["proven"]
-    assert r["bits"] >= 40
+    assert r["proven"] and r["at_x"] and r["bits"] >= 40
+    # the recorded rational point is the float point itself, entry by entry
+    den = Fraction(r["point"]["den"])
+    assert [Fraction(int(v)) / den for v in r["point"]["num"]] == [Fraction(v) for v in x]
+    p, q = (Fraction(v) for v in x)
+    assert p * q - 1 == Fraction(1, 2**40)  # the margin the proof had to keep, exactly
+    # a coarse grid rounds p to 1 and loses it: falling back to a rounding would not prove it
+    assert not prove(prob, x, bits=20)["proven"]
 
 
 def test_exact_disproof_of_a_tolerated_non_strict_violation():

@@ -162,7 +162,10 @@ def test_sdpa_certificate_with_residual_3e_5_is_verified_after_repair():
     again = verify_farkas(prob, r["certificate"], repair=False)
     assert again["verified"] and again["rel_residual"] == pytest.approx(r["rel_residual"], abs=1e-15)
     cert = certify(prob, Solution("infeasible", farkas=farkas, backend="sdpa"))
-    assert cert.verdict == "infeasible-certified" and "after repair" in cert.reason
+    # the ray is a float certificate of an inhomogeneous problem: it proves "no solution with
+    # ||x||_inf <= R" (R > 1e10), not infeasibility (lmic.certify.farkas.scope)
+    assert cert.verdict == "infeasible-bounded" and cert.farkas["scope"]["radius"] > 1e10
+    assert "after repair" in cert.farkas["reason"]
 
 
 def test_perturbed_certificate_of_a_feasible_problem_stays_unverified():
@@ -288,3 +291,53 @@ def test_exact_farkas_never_proves_a_feasible_problem_infeasible():
     # closed Lyapunov LMIs are feasible at P = 0: the strict certificate proves nothing there
     closed = lyapunov(UNSTABLE, strict=False)
     assert not prove_farkas(closed, _lyapunov_certificate(UNSTABLE))["proven"]
+
+
+def test_round_off_on_a_zero_row_of_the_multiplier_does_not_block_the_exact_proof():
+    # Block (41) of the repaired SDPA certificate has an exactly zero row: the face lies in a
+    # coordinate subspace. LAPACK leaves ~1e-14 there in the eigenvectors (how much depends on
+    # the build); rounded to 2^-50 that tilts the face out of the subspace and an equation that
+    # vanishes identically on the true face binds. Inject such noise deterministically.
+    from lmic.certify.farkas import prove_farkas
+
+    prob, farkas = _uir_sdpa()
+    rep = verify_farkas(prob, farkas)["certificate"]
+    lmis = [np.array(Z) for Z in rep["lmis"]]
+    i = next(k for k, Z in enumerate(lmis) if Z.shape[0] > 1 and np.min(np.diag(Z)) < 1e-20)
+    j = int(np.argmin(np.diag(lmis[i])))
+    e, v = np.eye(len(lmis[i]))[j], np.linalg.eigh(lmis[i])[1][:, -1]
+    lmis[i] = lmis[i] + 5e-15 * (np.outer(e, v) + np.outer(v, e))
+    assert np.max(np.abs(np.linalg.eigh(lmis[i])[1][j, -1])) > 2.0**-50  # survives the rounding
+    r = prove_farkas(prob, {"lmis": lmis, "linear": rep["linear"]}, keep_certificate=True)
+    assert r["proven"] and r["kind"] == "closed", r["reason"]
+    ex = r["exact_certificate"]
+    g = _exact_g(prob, ex["lmis"], ex["linear"])
+    assert all(val == 0 for val in g[1:]) and g[0] < 0
+    assert all(ex["lmis"][i][j][c] == 0 for c in range(len(lmis[i])))  # the zero row stays exactly zero
+
+
+def test_exact_proof_moves_towards_the_centre_when_the_projection_leaves_the_cone():
+    # p >= 1, p <= -1 twice: certificates are a = b + c (multipliers of the three LMIs), g0 < 0.
+    # The rough (a, b, c) = (0.4, 0.5, 0.001) has residual -0.101; its least-norm projection
+    # makes c = 0.001 - 0.101/3 < 0, and c is above every face threshold, so no face drops it.
+    from fractions import Fraction
+
+    from lmic.certify.farkas import prove_farkas
+
+    prob = Problem(
+        [Variable("p", "scalar", (1, 1))],
+        [
+            lmi_from("p - 1 >= 0", [-np.ones((1, 1)), np.ones((1, 1))], strict=False),
+            lmi_from("-1 - p >= 0 (b)", [-np.ones((1, 1)), -np.ones((1, 1))], strict=False),
+            lmi_from("-1 - p >= 0 (c)", [-np.ones((1, 1)), -np.ones((1, 1))], strict=False),
+        ],
+        LinearConstraints.empty(1),
+        Objective("feasibility", np.zeros(2)),
+    )
+    rough = {"lmis": [0.4 * np.eye(1), 0.5 * np.eye(1), 0.001 * np.eye(1)], "linear": []}
+    r = prove_farkas(prob, rough, keep_certificate=True)
+    assert r["proven"] and r["kind"] == "closed" and r["face"]["centered"], r["reason"]
+    ex = r["exact_certificate"]
+    a, b, c = (Fraction(Z[0][0]) for Z in ex["lmis"])
+    assert min(a, b, c) >= 0 and a - b - c == 0 and -(a + b + c) < 0  # g1 = a - b - c, g0 = -(a + b + c)
+    assert all(v == 0 for v in _exact_g(prob, ex["lmis"], [])[1:])

@@ -136,5 +136,6 @@ def test_a_buggy_build_function_is_reported_with_the_theorem_id():
     def build(t):
         raise KeyError("oops")
 
-    with pytest.raises(TemplateError, match="theorem test.bad: template failed to build: KeyError"):
+    where = r"at test_template_errors.py:\d+"  # the file and line of the bug in the plugin
+    with pytest.raises(TemplateError, match=rf"theorem test.bad: template failed to build {where}: KeyError"):
         analyse(_thm(build))

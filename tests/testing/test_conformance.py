@@ -22,8 +22,32 @@ def test_conformance(label, case):
     assert result.passed, f"{label} / {case}: {result.message}"
 
 
-def test_every_exclusion_has_a_reason():
-    assert all(isinstance(r, str) and len(r) > 10 for r in EXCLUSIONS.values())
+def test_every_exclusion_names_a_known_backend_and_case_with_a_reason():
+    from lmic.backends.registry import backend_classes
+
+    known = set(backend_classes()) | set(LABELS)
+    for (label, case), reason in EXCLUSIONS.items():
+        assert label in known or label.split(":")[0] in known, f"exclusion of unknown backend {label!r}"
+        assert case in CASES, f"exclusion of unknown case {case!r}"
+        assert isinstance(reason, str) and len(reason) > 10, f"({label}, {case}): write the reason"
+
+
+def test_an_exclusion_excuses_the_case_without_running_it(monkeypatch):
+    class NeverRuns:
+        name = label = "neverruns"
+
+        def supports(self, *args, **kwargs):
+            raise AssertionError("an excluded case must not be looked at")
+
+        def solve(self, *args, **kwargs):
+            raise AssertionError("an excluded case must not be solved")
+
+    reason = "the solver cannot take this case (written reason)"
+    monkeypatch.setitem(EXCLUSIONS, ("neverruns", "max_sense"), reason)
+    result = run_case(NeverRuns(), CASES["max_sense"])  # type: ignore[arg-type]
+    assert (result.excluded, result.passed, result.case, result.backend) == (reason, True, "max_sense", "neverruns")
+    with pytest.raises(AssertionError, match="must not be looked at"):
+        run_case(NeverRuns(), CASES["lyapunov_stable"])  # type: ignore[arg-type]
 
 
 def test_hinf_norm_matches_frequency_sweep():

@@ -22,7 +22,7 @@ from lmic.template import STAR, I, block, hurwitz, theorem
     id="tutorial.bounded_real",
     title="Bounded-real lemma: minimal H-infinity norm bound",
     citation="Boyd, El Ghaoui, Feron & Balakrishnan (1994), LMIs in System and Control Theory, sec. 6.3.2",
-    kind="A",
+    kind="analysis",
     objective="minimise gamma (the H-infinity norm of (A, B, C, D))",
     system_class="continuous time, linear, stable",
 )
@@ -33,9 +33,8 @@ def bounded_real(t):
     B = t.data("B", n, m, doc="disturbance input matrix")
     C = t.data("C", q, n, doc="performance output matrix")
     D = t.data("D", q, m, default=0.0, doc="feed-through (optional, zero by default)")
-    P = t.symmetric("P", n)
+    P = t.symmetric("P", n, pd=True)
     gamma = t.scalar("gamma", sign="positive")
-    t.lmi("P > 0", block(P) > 0)
     t.lmi(
         "bounded real",
         block(

@@ -1,0 +1,251 @@
+"""Resolve the numbers of one bind: parameters, data, dimensions and data-derived constants.
+
+Everything a system file or a call supplies is validated here against the theorem's template
+(names, shapes, symmetry, domains, requirements), before :mod:`lmic.compile.bind` turns the
+numbers into an IR. Errors are :class:`~lmic.errors.DataError` naming the theorem, the source
+and the key at fault.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import sympy
+
+from lmic.compile.plan import Plan
+from lmic.errors import DataError, LmicError, TemplateError
+from lmic.system import System, UnusedDataNote, near_miss
+from lmic.template.builder import normalise_option
+from lmic.template.convert import as_expr
+
+__all__ = ["Inputs", "dim_value", "resolve_inputs"]
+
+
+class Inputs:
+    """Numbers resolved for one bind: dimensions, data, parameters and constants."""
+
+    def __init__(self) -> None:
+        self.dims: dict[sympy.Symbol, int] = {}
+        self.values: dict[str, Any] = {}  # data, params, consts (numbers / arrays)
+        self.params: dict[str, Any] = {}  # every parameter and option value used
+
+
+def dim_value(expr: Any, dims: Mapping[sympy.Symbol, int]) -> int | None:
+    """The integer value of a dimension expression under ``dims``, or None when it is not fixed.
+
+    Examples
+    --------
+    >>> n, p = sympy.symbols("n p")
+    >>> dim_value(n + 1, {n: 3}), dim_value(2, {}), dim_value(n * p, {n: 3})
+    (4, 2, None)
+    """
+    if isinstance(expr, int):
+        return expr
+    v = as_expr(as_expr(expr).xreplace(dict(dims)))
+    return int(v) if v.is_Integer else None
+
+
+def _in_domain(value: float, domain: sympy.Set) -> bool:
+    """Whether ``value`` lies in ``domain`` (integer sets are decided on integral values)."""
+    verdict = domain.contains(sympy.Float(value))
+    if verdict not in (sympy.true, sympy.false) and float(value).is_integer():
+        verdict = domain.contains(sympy.Integer(int(value)))
+    return verdict == sympy.true
+
+
+def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | None = None) -> Inputs:
+    """Validate data and parameters against the template and compute the constants.
+
+    Parameters
+    ----------
+    plan : Plan
+        The analysed theorem (:func:`lmic.compile.plan.analyse`).
+    system : System
+        The numbers (:func:`lmic.system.load_system`).
+    overrides : mapping, optional
+        Parameter values that replace the system's.
+
+    Returns
+    -------
+    Inputs
+        Dimensions, data, parameters and data-derived constants, checked.
+
+    Raises
+    ------
+    DataError
+        Naming the theorem, the key and the rule broken (unknown or missing key, wrong shape,
+        parameter outside its domain, failed requirement).
+
+    Examples
+    --------
+    >>> from lmic.template import theorem, block
+    >>> from lmic.compile.plan import analyse
+    >>> from lmic.system import load_system
+    >>> @theorem(id="demo.inputs", title="t", citation="c")
+    ... def demo(t):
+    ...     n, = t.dims("n")
+    ...     A = t.data("A", n, n)
+    ...     P = t.symmetric("P", n)
+    ...     t.lmi("stability", block(A.T * P + P * A) < 0)
+    >>> inputs = resolve_inputs(analyse(demo), load_system({"data": {"A": [[-1.0, 0.0], [0.0, -2.0]]}}))
+    >>> {str(k): v for k, v in inputs.dims.items()}
+    {'n': 2}
+    """
+    t = plan.template
+    tid = t.theorem_id
+    where = f"theorem {tid}, {system.label}"
+    out = Inputs()
+    params = dict(system.params)
+    params.update(overrides or {})
+
+    # parameters and options
+    known = {p.name for p in t.params} | {o.name for o in t.options}
+    for key in params:
+        if key not in known:
+            accepted = ", ".join(sorted(known)) or "none"
+            raise DataError(f"{where}: unknown parameter '{key}' (the theorem takes: {accepted})")
+    for o in t.options:
+        option = normalise_option(params.get(o.name, o.default))
+        if option != o.value:
+            raise DataError(f"{where}: option {o.name} = {option!r} does not match the analysed plan")
+        out.params[o.name] = o.value
+    for p in t.params:
+        raw: Any
+        if p.name in params:
+            raw = params[p.name]
+            if isinstance(raw, str):
+                try:
+                    raw = float(raw)
+                except ValueError:
+                    raise DataError(f"{where}: parameter '{p.name}' = {raw!r} is not a number") from None
+        elif p.default is not None:
+            raw = p.default
+        else:
+            raise DataError(f"{where}: missing parameter '{p.name}'" + (f" ({p.doc})" if p.doc else ""))
+        number = float(raw)
+        if not np.isfinite(number):
+            raise DataError(f"{where}: parameter '{p.name}' is {number}")
+        if not _in_domain(number, p.domain):
+            raise DataError(f"{where}: parameter {p.name} = {number:g} is outside its domain {p.domain}")
+        out.params[p.name] = number
+        out.values[p.name] = number
+
+    # data and dimensions
+    declared = {d.name for d in t.data_decls}
+    unused = [key for key in system.data if key not in declared]
+    absent = [d.name for d in t.data_decls if d.name not in system.data]  # missing or optional
+    for key in unused:  # extra keys are fine (one plant file, several theorems); typos are not
+        close = near_miss(key, absent)
+        if close is not None:
+            raise DataError(
+                f"{where}: unknown data key '{key}' (did you mean '{close}'? the theorem takes: "
+                f"{', '.join(sorted(declared))})"
+            )
+    if unused:
+        warnings.warn(
+            f"{where}: data {', '.join(repr(k) for k in unused)} not used by the theorem "
+            f"(it takes: {', '.join(sorted(declared))})",
+            UnusedDataNote,
+            stacklevel=2,
+        )
+    origin: dict[sympy.Symbol, str] = {}
+    arrays: dict[str, np.ndarray] = {}
+    for d in t.data_decls:
+        if d.name in system.data:
+            arrays[d.name] = system.data[d.name]
+    # first pass: bind plain dimension symbols from the data present
+    for d in t.data_decls:
+        if d.name not in arrays:
+            continue
+        for axis, size in enumerate(d.shape):
+            dim = as_expr(size)
+            if isinstance(dim, sympy.Symbol) and dim not in out.dims:
+                out.dims[dim] = int(arrays[d.name].shape[axis])
+                origin[dim] = f"{'rows' if axis == 0 else 'columns'} of {d.name}"
+    # defaults for missing data
+    for d in t.data_decls:
+        if d.name in arrays:
+            continue
+        if d.default is None:
+            shape = " x ".join(str(s) for s in d.shape)
+            raise DataError(f"{where}: missing data '{d.name}' ({shape})" + (f": {d.doc}" if d.doc else ""))
+        for size in d.shape:  # a dimension only absent optional data would fix is 0
+            dim = as_expr(size)
+            if isinstance(dim, sympy.Symbol) and dim not in out.dims:
+                out.dims[dim] = 0
+                origin[dim] = f"absent optional data {d.name}"
+        n_rows, n_cols = (dim_value(size, out.dims) for size in d.shape)
+        if n_rows is None or n_cols is None:
+            raise DataError(f"{where}: cannot size the default of data '{d.name}' (dimensions unknown)")
+        if callable(d.default):
+            arr = np.atleast_2d(np.asarray(d.default({**out.values, **arrays}, n_rows, n_cols), dtype=float))
+        else:
+            arr = float(d.default) * np.eye(n_rows, n_cols)
+        arrays[d.name] = arr
+    for d in t.data_decls:
+        arr = arrays[d.name]
+        expected: list[int] = []
+        for size in d.shape:
+            val = dim_value(size, out.dims)
+            if val is None:
+                raise DataError(f"{where}: dimension {size} of data '{d.name}' cannot be determined")
+            expected.append(val)
+        if tuple(expected) != arr.shape:
+            shape_sym = " x ".join(str(s) for s in d.shape)
+            bound = ", ".join(
+                f"{s} = {out.dims[s]} from {origin.get(s, 'defaults')}"
+                for s in sorted((s for s in sympy.Matrix(list(d.shape)).free_symbols if s in out.dims), key=str)
+            )
+            raise DataError(
+                f"{where}: data '{d.name}' has shape {arr.shape[0]}x{arr.shape[1]}, expected "
+                f"{shape_sym} = {expected[0]}x{expected[1]}" + (f" ({bound})" if bound else "")
+            )
+        if d.symmetric:
+            scale = max(1.0, float(np.max(np.abs(arr))))
+            if arr.shape[0] != arr.shape[1] or np.max(np.abs(arr - arr.T)) > 1e-9 * scale:
+                raise DataError(f"{where}: data '{d.name}' must be symmetric")
+        if d.positive_definite and np.linalg.eigvalsh(0.5 * (arr + arr.T))[0] <= 0:
+            raise DataError(f"{where}: data '{d.name}' must be positive definite")
+        out.values[d.name] = arr
+
+    # data-derived constants, in order
+    for c in t.consts:
+        try:
+            computed = c.fn(dict(out.values))
+        except DataError as err:
+            msg = str(err)
+            raise DataError(msg if msg.startswith(f"theorem {tid}") else f"{where}: {msg}") from None
+        except LmicError:
+            raise
+        except Exception as err:
+            raise DataError(f"{where}: constant '{c.name}' cannot be computed: {type(err).__name__}: {err}") from None
+        if c.shape is None:
+            arr = np.asarray(computed, dtype=float)
+            if arr.size != 1:
+                raise TemplateError(f"{tid}: constant '{c.name}' is declared scalar but has shape {arr.shape}")
+            scalar = float(arr.reshape(-1)[0])
+            if not np.isfinite(scalar):
+                raise DataError(f"{where}: constant '{c.name}' is {scalar} for this data")
+            out.values[c.name] = scalar
+        else:
+            matrix = np.atleast_2d(np.asarray(computed, dtype=float))
+            exp = tuple(dim_value(size, out.dims) for size in c.shape)
+            if matrix.shape != exp:
+                raise TemplateError(f"{tid}: constant '{c.name}' has shape {matrix.shape}, declared {exp}")
+            if not np.all(np.isfinite(matrix)):
+                raise DataError(f"{where}: constant '{c.name}' is not finite for this data")
+            out.values[c.name] = matrix
+    for req in t.requirements:
+        try:
+            ok = bool(req.predicate(dict(out.values)))
+        except LmicError:
+            raise
+        except Exception as err:
+            why = f"{type(err).__name__}: {err}"
+            raise DataError(f"{where}: requirement '{req.name}' cannot be checked: {why}") from None
+        if not ok:
+            raise DataError(f"{where}: requirement '{req.name}' fails" + (f" ({req.doc})" if req.doc else ""))
+    return out

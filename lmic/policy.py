@@ -1,0 +1,422 @@
+"""The one solve policy: reductions x backends until the certifier decides.
+
+Every entry point uses :func:`decide`: ``lmic solve`` and :func:`lmic.api.solve`, each
+``lmic crosscheck`` column (with one backend), ``--maximize`` / ``--sweep``
+(:func:`lmic.sweep.decide`), ``audit-published``, ``reproduce`` and ``report``.
+
+What it does
+------------
+For each backend of the route (:func:`route`), it tries strategies until one *decides* (a
+certified point, or a GLOBAL infeasibility proof, :mod:`lmic.outcome`):
+
+1. ``scaled``: the problem preconditioned at a reference point (when the caller has one, e.g.
+   the last certified point of a bisection; :mod:`lmic.reductions.precondition`);
+2. ``default``: the backend's own strict reduction plan (:mod:`lmic.reductions.strict`);
+3. on ``error``, ``inaccurate``, a rejected point or a bounded ray: the other strict reduction
+   (``max-margin`` <-> ``fixed-margin``) when the problem is a feasibility problem with strict
+   constraints (unless ``SolveOptions.strict`` names one: that choice is honoured), and the
+   problem preconditioned at the point the solver returned (``rescaled``); for an optimisation
+   problem whose solve failed, its feasibility problem (``feasibility``: only an infeasibility
+   proof counts from it, a point is no optimum);
+4. the first ``infeasible-bounded`` answer ("no solution with ``||x||_inf <= R``") is
+   immediately tried for an exact rational proof (:func:`lmic.certify.farkas.prove_infeasible`),
+   which makes it global when it holds (one ray per decision: a proof attempt costs seconds).
+
+Then the next backend of the route. After the route: the exact rescue of the best rejected
+point whose float eigenvalues are all positive (margins below the float error bound, e.g. near a
+supremum that is not attained). The best outcome found is returned (certified or
+infeasible-certified > infeasible-bounded > rejected > undecided), with every attempt.
+
+Escalation order: the size-based first choice of :func:`lmic.backends.auto.route` (small
+problems: Clarabel; large strict feasibility problems: SCS then CVXOPT; large optimisation
+problems: SDPA, CVXOPT, Clarabel), then the rest of :data:`ORDER` (Clarabel -> CVXOPT -> SDPA ->
+SCS), skipping backends that are not installed or cannot take the problem (Clarabel's memory
+guard on large PSD blocks). SCS, a first-order method, runs at tolerance
+:data:`FIRST_ORDER_TOL` in the route (its answers are certified, not trusted; alone it runs at
+its own floor). ``backend="X"`` means X alone (strategies and exact rescue still apply, no other
+backend); no backend (or ``"auto"``) means the escalating route. Once :data:`MAX_BOUNDED`
+backends have given bounded rays that no exact proof upgrades, the route stops there.
+
+Examples
+--------
+>>> import scipy.sparse as sp
+>>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+>>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+>>> out = decide(p)
+>>> out.verdict, out.exit_code(), out.attempts[0].backend
+('certified', 0, 'clarabel')
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from lmic.errors import BackendError, LmicError
+from lmic.ir.problem import Problem
+from lmic.outcome import Attempt, Evidence, Outcome, evidence_of, rank, verdict_of
+from lmic.solution import Solution
+
+__all__ = [
+    "ORDER",
+    "FIRST_ORDER_TOL",
+    "MAX_BOUNDED",
+    "route",
+    "decide",
+    "step_options",
+    "is_auto",
+    "exact_rescue_point",
+]
+
+#: default escalation order of backends
+ORDER = ("clarabel", "cvxopt", "sdpa", "scs")
+#: tolerance of a first-order backend's solve (certified, not trusted)
+FIRST_ORDER_TOL = 1e-3
+#: stop escalating once this many backends gave bounded rays that no exact proof upgraded
+MAX_BOUNDED = 2
+
+
+def is_auto(backend: Any) -> bool:
+    """``None`` or ``"auto"``: the escalating route.
+
+    >>> is_auto(None), is_auto("auto"), is_auto("cvxopt")
+    (True, True, False)
+    """
+    return backend is None or (isinstance(backend, str) and backend.split(":")[0].lower() == "auto")
+
+
+def _label(backend: Any) -> str:
+    return str(getattr(backend, "label", backend))
+
+
+def _instance(backend: Any) -> Any:
+    from lmic.backends.base import Backend
+
+    if isinstance(backend, Backend):
+        return backend
+    from lmic.backends.registry import get_backend
+
+    return get_backend(str(backend))
+
+
+def _usable(name: str, problem: Problem) -> bool:
+    try:
+        be = _instance(name)
+    except LmicError:
+        return False
+    if not be.is_available():
+        return False
+    ok = be.supports(problem, explain=True)
+    return bool(ok[0] if isinstance(ok, tuple) else ok)
+
+
+def route(problem: Problem, backend: Any = None) -> list[Any]:
+    """The backends :func:`decide` tries, in order.
+
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> route(lyapunov_problem(-np.eye(2)))[:2], route(lyapunov_problem(-np.eye(2)), "scs")
+    (['clarabel', 'cvxopt'], ['scs'])
+    """
+    if not is_auto(backend):
+        return [backend]
+    from lmic.backends import auto
+
+    first = [name for name in auto.route(problem) if _usable(name, problem)]
+    usable = first + [name for name in ORDER if name not in first and _usable(name, problem)]
+    if not usable:
+        raise BackendError("no installed backend can take this problem (tried " + ", ".join(ORDER) + ")")
+    return usable
+
+
+def step_options(backend: Any, options: Any) -> Any:
+    """Options for one backend: a first-order backend runs at :data:`FIRST_ORDER_TOL` or looser.
+
+    >>> from lmic.backends.base import SolveOptions
+    >>> step_options("scs", SolveOptions(tol=1e-8)).tol, step_options("cvxopt", SolveOptions(tol=1e-8)).tol
+    (0.001, 1e-08)
+    """
+    from lmic.backends.base import SolveOptions
+
+    options = options or SolveOptions()
+    be = _instance(backend)
+    if not be.interior_point:
+        return replace(options, tol=max(options.tol, FIRST_ORDER_TOL))
+    return options
+
+
+def _solve_one(be: Any, target: Problem, options: Any, scales: list[np.ndarray] | None, judge: Problem) -> Solution:
+    from lmic.reductions.precondition import unscale_duals
+
+    sol = be.solve(target, options)
+    if scales is not None:
+        unscale_duals(sol, scales)
+    if sol.x is not None and judge.objective.sense != "feasibility" and len(sol.x) == judge.n:
+        sol.objective = judge.objective.value(sol.x)
+    elif judge.objective.sense == "feasibility":
+        sol.objective = None
+    return sol
+
+
+def _certify(problem: Problem, sol: Solution, exact: bool) -> Any:
+    from lmic.certify import certify
+
+    return certify(problem, sol, exact=exact)
+
+
+def exact_rescue_point(problem: Problem, sol: Solution, cert: Any) -> Any | None:
+    """An exact proof at a point the float certificate rejected only for its tiny margins.
+
+    Returns the exact certificate when every LMI and row is proven exactly and every derived
+    quantity and check holds; ``None`` otherwise.
+
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> p = lyapunov_problem(-np.eye(1))
+    >>> exact_rescue_point(p, Solution("optimal", x=np.array([1.0])), None) is None
+    True
+    """
+    if sol.x is None or getattr(cert, "verdict", None) != "rejected":
+        return None
+    if any(r.get("min_eig") is None or r["min_eig"] <= 0 for r in cert.lmis):
+        return None  # a negative eigenvalue in float: an exact proof will not help
+    if not all(c.get("ok") for c in cert.checks) or not all(d.get("ok") for d in cert.derived):
+        return None
+    if cert.objective is not None and not cert.objective.get("ok", True):
+        return None
+    try:
+        exact = _certify(problem, sol, True)
+    except LmicError:
+        return None
+    return exact if exact.exact and exact.exact.get("proven") and exact.verdict == "certified" else None
+
+
+def _prove_ray(problem: Problem, sol: Solution, cert: Any) -> bool:
+    """Try an exact proof of a bounded ray (one face threshold); upgrade ``cert`` in place if it holds."""
+    from lmic.certify.farkas import prove_infeasible, scope
+
+    try:
+        ex = prove_infeasible(problem, sol.farkas or {}, cert.farkas or {}, rel_face=(1e-9,))
+    except (LmicError, ValueError, ArithmeticError):
+        return False
+    if not ex.get("proven"):
+        return False
+    cert.exact = ex
+    cert.farkas["scope"] = scope(problem, cert.farkas, ex)
+    cert.verdict = "infeasible-certified"
+    cert.reason = cert.farkas["scope"]["statement"] + "; " + str(ex.get("reason", ""))
+    return True
+
+
+class _Run:
+    """The state of one :func:`decide` call: attempts so far and the best outcome."""
+
+    def __init__(self, problem: Problem, exact: bool, rescue: bool) -> None:
+        self.problem, self.exact, self.rescue = problem, exact, rescue
+        self.attempts: list[Attempt] = []
+        self.best: Outcome | None = None
+        self.rejected: list[tuple[Solution, Any, str]] = []
+        self.ray_tried = False
+
+    def record(self, backend: str, label: str, sol: Solution, t0: float, infeasibility_only: bool = False) -> Outcome:
+        t1 = time.perf_counter()
+        cert = _certify(self.problem, sol, self.exact)
+        verdict = verdict_of(self.problem, sol, cert)
+        note = ""
+        if infeasibility_only and verdict in ("certified", "rejected"):
+            # a point of the feasibility problem is no optimum: it decides nothing here
+            verdict, note = "undecided", "the feasibility problem has a point; the optimum was not reached"
+        if verdict == "infeasible-bounded" and self.rescue and not self.exact and not self.ray_tried:
+            self.ray_tried = True  # an exact proof costs seconds: one ray per decision, one face
+            if _prove_ray(self.problem, sol, cert):
+                verdict, note = "infeasible-certified", "exact proof of the ray"
+            else:
+                note = "exact proof of the ray failed"
+        if verdict == "rejected":
+            self.rejected.append((sol, cert, backend))
+        reduction = f"{label}/{sol.strategy}" if sol.strategy not in (None, "", "none") else label
+        if not note and verdict in ("undecided", "rejected"):
+            note = " ".join(str(getattr(cert, "reason", "") or sol.message or "").split())[:160]
+        now = time.perf_counter()
+        self.attempts.append(
+            Attempt(
+                backend,
+                reduction,
+                sol.status,
+                str(sol.native_status or ""),
+                verdict,
+                now - t0,
+                note,
+                solve_s=float(sol.solve_s or 0.0),
+                certify_s=now - t1,
+            )
+        )
+        out = Outcome(
+            verdict,
+            evidence_of(verdict, cert),
+            str(getattr(cert, "reason", "") or sol.message or sol.status),
+            solution=sol,
+            certificate=cert,
+            backend=backend,
+        )
+        if self.best is None or rank(out.verdict) > rank(self.best.verdict):
+            self.best = out
+        return out
+
+
+def decide(
+    problem: Problem,
+    backend: Any = None,
+    options: Any = None,
+    *,
+    exact: bool = False,
+    solve_as: Problem | None = None,
+    reference: np.ndarray | None = None,
+    rescue: bool = True,
+) -> Outcome:
+    """Decide ``problem`` by the policy of the module docstring.
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem whose answer is certified (the judge).
+    backend : str, Backend or None
+        ``None``/``"auto"``: the escalating route; anything else: that backend alone.
+    options : SolveOptions, optional
+    exact : bool
+        Ask the certifier for exact proofs of every answer (``--exact``).
+    solve_as : Problem, optional
+        What the solvers are given (same variables as ``problem``, e.g. the objective dropped
+        for a bisection); default ``problem``.
+    reference : numpy.ndarray, optional
+        A point to precondition at first (``scaled``).
+    rescue : bool
+        Exact rescue of bounded rays and of points rejected only for tiny margins.
+
+    Returns
+    -------
+    Outcome
+        With ``solution``/``certificate`` of the chosen attempt and every attempt.
+
+    Raises
+    ------
+    BackendError
+        A single backend that cannot take the problem (bad input), or no usable backend.
+    """
+    from lmic.backends.base import SolveOptions
+    from lmic.reductions.precondition import precondition
+    from lmic.reductions.strict import has_strict
+
+    options = options or SolveOptions()
+    solve_as = solve_as if solve_as is not None else problem
+    names = route(solve_as, backend)
+    single = len(names) == 1 and not is_auto(backend)
+    if single:
+        be = _instance(names[0])
+        ok, why = be.supports(solve_as, explain=True)  # type: ignore[misc]
+        if not ok:
+            raise BackendError(f"backend '{be.label}' cannot take this problem: {why}")
+    run = _Run(problem, exact, rescue)
+    bounded = 0
+    feasibility_strict = problem.objective.sense == "feasibility" and has_strict(problem)
+    for name in names:
+        be = _instance(name)
+        label = be.label
+        opts = step_options(be, options) if not single else options
+        last_x: np.ndarray | None = None
+        tried_strict: set[str] = set()
+        plan: list[tuple[str, Problem, Any]] = []
+        if reference is not None and solve_as.lmis:
+            plan.append(("scaled", solve_as, reference))
+        plan.append(("default", solve_as, None))
+        decided = False
+        k = 0
+        while k < len(plan):
+            tag, target, at = plan[k]
+            k += 1
+            t0 = time.perf_counter()
+            scales = None
+            step_opts = opts
+            if tag in ("scaled", "rescaled"):
+                target, scales = precondition(target, at)
+            if tag.startswith("strict="):
+                step_opts = replace(opts, strict=tag.split("=", 1)[1])
+            sol = _solve_one(be, target, step_opts, scales, problem)
+            for a in sol.info.get("strict_attempts", []) or []:
+                tried_strict.add(str(a.get("strategy")))
+            out = run.record(label, tag, sol, t0, infeasibility_only=tag == "feasibility")
+            if sol.x is not None and len(sol.x) == problem.n:
+                last_x = sol.x
+            if out.decided:
+                decided = True
+                break
+            if tag in ("default", "scaled"):  # escalate within this backend
+                if feasibility_strict and options.strict == "auto":  # an explicit --strict is honoured
+                    for s in ("max-margin", "fixed-margin"):
+                        if s not in tried_strict and s != sol.strategy:
+                            plan.append((f"strict={s}", problem, None))
+                if last_x is not None and solve_as.lmis and np.all(np.isfinite(last_x)) and np.any(last_x):
+                    plan.append(("rescaled", solve_as, last_x))
+                if problem.objective.sense != "feasibility" and sol.status in ("error", "inaccurate", "infeasible"):
+                    # an optimisation solve that failed: the feasibility problem can still prove
+                    # infeasibility (a Farkas ray does not depend on the objective)
+                    plan.append(("feasibility", _feasibility(solve_as), None))
+        if decided:
+            break
+        if run.best is not None and run.best.verdict == "infeasible-bounded":
+            bounded += 1
+            if bounded >= MAX_BOUNDED:
+                break
+    assert run.best is not None
+    best = run.best
+    if not best.decided and rescue and not exact:
+        for sol, cert, label in sorted(run.rejected, key=lambda r: -_rel_margin(r[1])):
+            t0 = time.perf_counter()
+            rescued = exact_rescue_point(problem, sol, cert)
+            if rescued is None:
+                continue
+            run.attempts.append(
+                Attempt(
+                    label,
+                    "exact rescue",
+                    sol.status,
+                    str(sol.native_status or ""),
+                    "certified",
+                    time.perf_counter() - t0,
+                )
+            )
+            best = Outcome(
+                "certified",
+                evidence_of("certified", rescued),
+                rescued.reason,
+                solution=sol,
+                certificate=rescued,
+                backend=label,
+            )
+            break
+    best.attempts = run.attempts
+    if best.solution is not None:
+        best.solution.info["attempts"] = [a.to_dict() for a in run.attempts]
+    if best.verdict == "infeasible-bounded":
+        best.reason += (
+            "; to go further: a larger bound (a more accurate ray), another backend (--backend), "
+            "or an exact proof (--exact)"
+        )
+    if best.evidence is None:
+        best.evidence = Evidence()
+    return best
+
+
+def _feasibility(problem: Problem) -> Problem:
+    """The same constraints without the objective."""
+    from lmic.ir.problem import Objective
+
+    return replace(problem, objective=Objective("feasibility", np.zeros(problem.n + 1)))
+
+
+def _rel_margin(cert: Any) -> float:
+    vals = [r.get("rel_margin") for r in getattr(cert, "lmis", None) or []]
+    vals = [float(v) for v in vals if isinstance(v, int | float) and np.isfinite(float(v))]
+    return min(vals) if vals else -np.inf

@@ -1,0 +1,206 @@
+"""The decision engine (issue 9): no false certificates, one outcome, one exit-code rule.
+
+Instances are built here with their truth in closed form:
+
+* ``big(eps)``: ``[[x, 1], [1, eps]] > 0``, feasible exactly for ``x > 1/eps`` (Schur
+  complement): its only solutions are large. SDPA and SCS return Farkas rays that verify in
+  float with radius ~4e4 < 1/eps: before the engine they were printed ``infeasible-certified``.
+* ``thesis.thm3_2_2`` with ``C = I``: ``P = I``, ``Lbar = A + k I`` with ``k = gamma^2 + 1`` is
+  feasible for every ``gamma`` (``(A - L C) = -k I`` gives ``-2k + gamma^2 + 1 < 0``): the
+  supremum of ``gamma`` is infinite.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import yaml
+
+from lmic.api import solve
+from lmic.certify import certify
+from lmic.crosscheck import conflicts, crosscheck
+from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+from lmic.outcome import EXIT_CODES, exit_code, verdict_of
+from lmic.solution import Solution
+
+ROOT = Path(__file__).resolve().parents[1]
+EPS = 1e-5
+
+
+def big(eps: float = EPS) -> Problem:
+    """``[[x, 1], [1, eps]] > 0``: feasible exactly for ``x > 1/eps``."""
+    coeffs = sp.csc_matrix(np.array([[0.0, 1.0], [1.0, 0.0], [eps, 0.0]]))  # tril (0,0), (1,0), (1,1)
+    return Problem(
+        [Variable("x", "scalar", (1, 1))],
+        [LMI("big", 2, coeffs, strict=True)],
+        LinearConstraints.empty(1),
+        Objective("feasibility", [0, 0]),
+    )
+
+
+def _truly_feasible(x: float, eps: float = EPS) -> bool:
+    # closed form, no solver: x > 0 and eps - 1/x > 0
+    return x > 1.0 / eps
+
+
+@pytest.mark.parametrize("backend", ["clarabel", "cvxopt", "sdpa", "scs", None])
+def test_feasible_problem_with_only_large_solutions_is_never_called_infeasible(backend):
+    r = solve(big(), backend=backend)
+    assert r.verdict != "infeasible-certified" and r.exit_code() != 3
+    if r.verdict == "certified":
+        x = float(r.solution.x[0])
+        assert _truly_feasible(x)
+        exact = bool(r.certificate.exact and r.certificate.exact.get("proven"))  # exact rescue
+        assert certify(big(), Solution("feasible", x=np.array([x])), exact=exact).verdict == "certified"
+    if r.verdict == "infeasible-bounded":
+        # what is claimed must be true: no solution with |x| <= R, and every solution is > 1/eps
+        assert r.exit_code() == 4
+        assert r.outcome.evidence.radius <= 1.0 / EPS
+        assert "no solution with ||x||_inf <=" in r.outcome.reason
+
+
+def test_default_policy_certifies_the_large_solution():
+    r = solve(big())
+    assert r.verdict == "certified" and _truly_feasible(float(r.solution.x[0]))
+
+
+def test_a_float_ray_of_an_inhomogeneous_problem_is_bounded_and_its_radius_is_true():
+    # a Farkas ray that passes the float tests for [[x,1],[1,eps]] > 0 (which is feasible):
+    # Z = [[d, -s], [-s, 1]], s = sqrt(d): <F_x, Z> = d ~ 0, <F_0, Z> = eps - 2 s < 0
+    d = 1e-8
+    s = np.sqrt(d) * (1 - 1e-9)
+    Z = np.array([[d, -s], [-s, 1.0]])
+    cert = certify(big(), Solution("infeasible", farkas={"lmis": [Z], "linear": []}))
+    assert cert.farkas["verified"]  # the float verification alone would have said "infeasible"
+    assert cert.verdict == "infeasible-bounded"
+    radius = cert.farkas["scope"]["radius"]
+    # independent check of the claim: every solution has x > 1/eps, so none has |x| <= radius
+    assert radius < 1.0 / EPS
+    assert exit_code(verdict_of(big(), Solution("infeasible"), cert)) == 4
+
+
+def test_homogeneous_ray_is_global():
+    # -p > 0 and p > 0 (homogeneous): Z = 1, 1 proves infeasibility at every scale
+    p = Problem(
+        [Variable("p", "scalar", (1, 1))],
+        [LMI("p > 0", 1, sp.csc_matrix([[0.0, 1.0]])), LMI("-p > 0", 1, sp.csc_matrix([[0.0, -1.0]]))],
+        LinearConstraints.empty(1),
+        Objective("feasibility", [0, 0]),
+    )
+    r = solve(p)
+    assert r.verdict == "infeasible-certified" and r.exit_code() == 3
+    assert r.outcome.evidence.kind in ("global-ray", "exact-proof")
+
+
+def test_unverified_infeasible_status_does_not_exit_3():
+    p = big()
+    bad = Solution("infeasible", farkas={"lmis": [np.eye(2)], "linear": []})  # not a Farkas ray
+    cert = certify(p, bad)
+    assert cert.verdict == "unverified"
+    v = verdict_of(p, bad, cert)
+    assert v == "undecided" and exit_code(v) == 1
+
+
+def test_exit_code_table_is_the_documented_one():
+    # the table in README.md and docs/backends.md is the one lmic uses
+    for doc in (ROOT / "README.md", ROOT / "docs" / "backends.md"):
+        text = doc.read_text()
+        found = dict(re.findall(r"^\|\s*`([a-z -]+)`\s*\|[^|\n]*\|\s*(\d+)\s*\|", text, flags=re.M))
+        assert found, f"{doc.name}: no verdict table"
+        assert {k: int(v) for k, v in found.items()} == EXIT_CODES, doc.name
+    assert [exit_code(v) for v in ("certified", "rejected", "undecided")] == [0, 1, 1]
+
+
+def test_crosscheck_semantics_failures_are_not_conflicts():
+    rows = [
+        {"backend": "a", "decision": "certified", "objective": 1.0, "x_norm": 2.0},
+        {"backend": "b", "decision": "certified", "objective": 1.0 + 1e-6, "x_norm": 2.0},
+        {"backend": "c", "decision": "rejected", "objective": None},
+        {"backend": "d", "decision": "undecided", "objective": None},
+    ]
+    found, gap = conflicts(rows, "min", 1e-3)
+    assert found == [] and gap is not None and gap < 1e-3
+    rows.append({"backend": "e", "decision": "certified", "objective": 1.5, "x_norm": 2.0})
+    assert any("optima differ" in c for c in conflicts(rows, "min", 1e-3)[0])
+    rows = [
+        {"backend": "a", "decision": "certified", "objective": None, "x_norm": 2.0},
+        {"backend": "b", "decision": "infeasible-certified", "objective": None},
+    ]
+    assert conflicts(rows, "feasibility", 1e-3)[0]
+    # a bounded ray conflicts with a certified point only inside its radius
+    rows[1] = {"backend": "b", "decision": "infeasible-bounded", "radius": 1.0, "objective": None}
+    assert conflicts(rows, "feasibility", 1e-3)[0] == []
+    rows[1]["radius"] = 3.0
+    assert conflicts(rows, "feasibility", 1e-3)[0]
+
+
+def test_crosscheck_control1_agrees_with_failures_listed():
+    from lmic.backends.base import SolveOptions
+
+    path = ROOT.parent / "shared" / "sdplib" / "control1.dat-s"
+    if not path.is_file():
+        pytest.skip("SDPLIB not available")
+    # SCS capped at 50 iterations cannot reach a certified optimum: a failure, not a disagreement
+    rep = crosscheck(str(path), backends=["clarabel", "cvxopt", "scs"], options=SolveOptions(max_iter=50))
+    decisions = {r["backend"]: r["decision"] for r in rep.results}
+    assert decisions["clarabel"] == decisions["cvxopt"] == "certified"
+    assert decisions["scs"] != "certified"
+    assert rep.agree and rep.exit_code() == 0 and rep.failures == 1 and rep.conflicts == []
+
+
+def _lmic(*args: str) -> subprocess.CompletedProcess:
+    import os
+
+    env = dict(os.environ)
+    env["PYTHONPATH"] = f"{ROOT}{os.pathsep}{ROOT / 'plugins'}"
+    return subprocess.run(
+        [sys.executable, "-m", "lmic.cli", *args], capture_output=True, text=True, env=env, cwd=ROOT, timeout=600
+    )
+
+
+def test_same_verdict_from_solve_api_and_audit_published(tmp_path):
+    from lmic.published import audit_published
+
+    example = ROOT / "examples" / "thesis.thm3_2_2.ex3_2_2.yaml"
+    api = solve("thesis.thm3_2_2", str(example))
+    cli = _lmic("solve", "thesis.thm3_2_2", str(example), "--json")
+    assert cli.returncode == api.exit_code(), cli.stderr
+    assert json.loads(cli.stdout)["verdict"] == api.verdict
+    audit = audit_published("thesis.thm3_2_2", str(example))
+    status = next(c for c in audit.claims if c.kind == "status")
+    assert status.verdict == api.verdict
+    # the verdict itself is checked by the certifier: a certified point, or a Farkas proof
+    if api.verdict == "certified":
+        assert certify(api.problem, Solution("feasible", x=api.solution.x)).verdict == "certified"
+    else:
+        assert api.verdict in ("infeasible-certified", "infeasible-bounded")
+        assert api.certificate.farkas["verified"] or api.certificate.exact["proven"]
+
+
+def test_infinite_supremum_has_no_proven_upper_end(tmp_path):
+    from lmic.compile import compile_theorem
+    from lmic.sweep import maximize
+
+    rng = np.random.default_rng(3)
+    A = rng.standard_normal((2, 2))
+    system = {"lmic": 1, "data": {"A": A.tolist(), "B": [[1.0], [0.0]], "C": np.eye(2).tolist()}, "params": {}}
+    path = tmp_path / "sys.yaml"
+    path.write_text(yaml.safe_dump(system))
+    r = maximize("thesis.thm3_2_2", str(path), "gamma", max_evals=10)
+    assert r.lower is not None
+    assert r.upper_proven is None and r.upper_kind != "infeasible-certified"
+    assert not r.to_dict()["bracket_proven"]
+    for pt in r.points:
+        # closed form: P = I, Lbar = A + k I (k = gamma^2 + 1) is feasible at every gamma
+        g = pt.value
+        prob = compile_theorem("thesis.thm3_2_2", str(path), {"gamma": g})
+        x = prob.pack({"P": np.eye(2), "Lbar": A + (g * g + 1.0) * np.eye(2)})
+        assert certify(prob, Solution("feasible", x=x)).verdict == "certified"
+        assert pt.outcome != "infeasible"
