@@ -67,6 +67,11 @@ class Result:
         mapping), ``solve_s`` (inside the solver), ``certify_s``.
     attempts : list of dict
         For ``auto``: every backend tried, its status and verdict.
+    enclosure : dict or None
+        Optimisation problems: the certified enclosure of the optimal value
+        (:func:`lmic.certify.enclosure.enclosure`).
+    backoff : dict or None
+        The backed-off, well-scaled point near the optimum (:func:`lmic.backoff.backoff`).
     """
 
     target: str
@@ -83,6 +88,8 @@ class Result:
     params: dict[str, Any] = field(default_factory=dict)
     attempts: list[dict[str, Any]] = field(default_factory=list)
     outcome: Any = None
+    enclosure: dict[str, Any] | None = None
+    backoff: dict[str, Any] | None = None
 
     @property
     def verdict(self) -> str:
@@ -168,6 +175,9 @@ class Result:
             "verdict": self.verdict,
             "evidence": self.outcome.evidence.to_dict() if self.outcome is not None else None,
             "attempts": self.attempts,
+            # -- optimal-value enclosure (lmic.certify.enclosure) --
+            "enclosure": _enclosure_summary(self.enclosure),
+            "backoff": _jsonable(self.backoff),
             "exit_code": self.exit_code(),
         }
 
@@ -298,6 +308,7 @@ def solve(
     backend: str | Backend | None = None,
     options: SolveOptions | None = None,
     exact: bool = False,
+    backoff: float | None = None,
 ) -> Result:
     """Compile (or load), solve, certify.
 
@@ -317,6 +328,10 @@ def solve(
     options : SolveOptions, optional
     exact : bool
         Ask the certifier for an exact rational proof too.
+    backoff : float or None
+        Optimisation problems: relative backoff of the objective for a second, well-scaled
+        solve (:mod:`lmic.backoff`); ``None`` is :data:`lmic.backoff.DEFAULT_BACKOFF` when the
+        problem derives quantities (gains) and off otherwise, ``0`` is off.
 
     Returns
     -------
@@ -347,12 +362,40 @@ def solve(
     certify_s = sum(a.certify_s for a in outcome.attempts)
     solve_s = sum(a.solve_s for a in outcome.attempts)
     variables, derived = _values(problem, sol.x, cert)
+    # -- optimal-value enclosure (lmic.certify.enclosure) --
+    enc, enclosure_s = _enclosure(problem, sol, cert, exact, used, options)
+    back = _backoff(problem, enc, backoff, used, options, sol.objective)
+    if enc is not None and (enc["upper"] if problem.objective.sense == "min" else enc["lower"]) is None:
+        # no rigorous primal end at the solver's point (a non-strict constraint met only to
+        # the certifier's tolerance, or a rejected point): the backed-off point, else a point
+        # strictly inside from a solve with every constraint tightened (lmic.backoff.restore)
+        t_rest = time.perf_counter()
+        from lmic.certify.enclosure import primal_end, with_primal
+
+        if back is not None and back.get("x") is not None:
+            pe = primal_end(problem, np.asarray(back["x"], dtype=float))
+            if pe["proven"]:
+                enc = with_primal(enc, pe["value"], "certified backed-off point")
+        if (enc["upper"] if problem.objective.sense == "min" else enc["lower"]) is None and sol.x is not None:
+            from lmic.backoff import restore
+
+            for rel in (1e-10, 1e-9, 1e-8):  # the smallest tightening that gives a provable point
+                rest = restore(problem, sol.x, used, options, rel=rel)
+                pe = primal_end(problem, np.asarray(rest["x"], dtype=float)) if rest["x"] is not None else {}
+                if pe.get("proven"):
+                    enc = with_primal(enc, pe["value"], "restored point")
+                    enc["restored_x"] = rest["x"]
+                    break
+        enclosure_s += time.perf_counter() - t_rest
     timings = {
         "compile_s": compile_s,
         "lower_s": max(0.0, total - solve_s - certify_s),
         "solve_s": solve_s,
         "certify_s": certify_s,
+        "enclosure_s": enclosure_s,
     }
+    if back is not None:
+        timings["backoff_s"] = back["time_s"]
     return Result(
         target=str(name),
         theorem=theorem,
@@ -368,4 +411,67 @@ def solve(
         params=dict(params or {}),
         attempts=attempts,
         outcome=outcome,
+        enclosure=enc,
+        backoff=back,
     )
+
+
+# -- optimal-value enclosure (lmic.certify.enclosure) -----------------------------------------
+
+
+def _enclosure(
+    problem: Problem, sol: Solution, cert: Any, exact: bool, backend: str, options: SolveOptions | None
+) -> tuple[dict[str, Any] | None, float]:
+    """The enclosure of an optimisation problem's optimal value (``None`` for feasibility).
+
+    A degenerate dual is retried on a perturbed problem, solved on the backend that answered.
+    """
+    if problem.objective.sense == "feasibility" or cert is None or sol.status in ("infeasible", "unbounded"):
+        return None, 0.0
+    from lmic.certify.enclosure import enclosure
+
+    t0 = time.perf_counter()
+    x = sol.x if getattr(cert, "verdict", None) == "certified" else None
+
+    def resolve(perturbed: Problem) -> dict[str, Any] | None:
+        try:
+            other = solve_problem(perturbed, backend, options)
+        except LmicError:
+            return None
+        return other.duals if other.status in ("optimal", "inaccurate") else None
+
+    enc = enclosure(problem, sol.duals, x, exact=exact, resolve=resolve)
+    return enc, time.perf_counter() - t0
+
+
+def _backoff(
+    problem: Problem,
+    enc: dict[str, Any] | None,
+    rel: float | None,
+    backend: str,
+    options: SolveOptions | None,
+    claimed: float | None = None,
+) -> dict[str, Any] | None:
+    """The backed-off point (``None`` when off or without a reference objective).
+
+    The reference is the certified primal end, else the solver's claimed objective (the
+    backed-off point is certified on its own either way).
+    """
+    from lmic.backoff import DEFAULT_BACKOFF, backoff
+
+    if rel is None:
+        rel = DEFAULT_BACKOFF if problem.derived else 0.0
+    if not rel or enc is None:
+        return None
+    value = enc["upper"] if problem.objective.sense == "min" else enc["lower"]
+    if value is None:
+        value = claimed
+    if value is None or not np.isfinite(value):
+        return None
+    return backoff(problem, float(value), backend, options, rel=float(rel))
+
+
+def _enclosure_summary(enc: dict[str, Any] | None) -> dict[str, Any] | None:
+    from lmic.certify.enclosure import summary
+
+    return _jsonable(summary(enc))

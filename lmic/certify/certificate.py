@@ -156,6 +156,8 @@ def certificate_document(
     system: Any = None,
     path: str | os.PathLike[str] | None = None,
     embed_ir: bool | None = None,
+    enclosure: dict[str, Any] | None = None,
+    backoff: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The certificate file's content as a dict (see the module docstring).
 
@@ -170,6 +172,11 @@ def certificate_document(
     embed_ir : bool, optional
         Embed the IR (default: unless ``system`` is given, has a path, and the problem records
         its theorem; then the audit recompiles it).
+    enclosure : dict, optional
+        The optimal-value enclosure (:func:`lmic.certify.enclosure.enclosure`), recorded as
+        the ``enclosure`` section with its dual point; the audit re-verifies both ends.
+    backoff : dict, optional
+        The backed-off point (:func:`lmic.backoff.backoff`); the audit re-certifies it.
 
     Examples
     --------
@@ -245,6 +252,10 @@ def certificate_document(
         "tolerances": dict(certificate.tolerances),
         "certificate": cert,
     }
+    if enclosure is not None:  # -- optimal-value enclosure (lmic.certify.enclosure) --
+        doc["enclosure"] = enclosure
+    if backoff is not None:  # -- backed-off point (lmic.backoff) --
+        doc["backoff"] = backoff
     doc = _jsonable(doc)
     doc["integrity"] = integrity_of(doc)
     return doc
@@ -311,6 +322,8 @@ def write_certificate(
     *,
     system: Any = None,
     embed_ir: bool | None = None,
+    enclosure: dict[str, Any] | None = None,
+    backoff: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Write a certificate file atomically (temporary file + rename); return its content.
 
@@ -326,9 +339,18 @@ def write_certificate(
     >>> json.load(open(f))["certificate"]["verdict"]
     'certified'
     """
-    doc = certificate_document(problem, solution, certificate, system=system, path=path, embed_ir=embed_ir)
     from lmic.output import write_output
 
+    doc = certificate_document(
+        problem,
+        solution,
+        certificate,
+        system=system,
+        path=path,
+        embed_ir=embed_ir,
+        enclosure=enclosure,
+        backoff=backoff,
+    )
     text = json.dumps(doc, indent=1, allow_nan=False) + "\n"
     write_output(path, text)  # atomic; the output-path rules of lmic.output
     return doc
@@ -923,6 +945,26 @@ def audit_certificate(
             msg = f"{fld} differs: recorded {_short(a)}, recomputed {_short(b)}"
         return _fail(doc, fld, msg, cert, **kw)
     checked.append("recomputed fields")
+    # the sections that other modules re-verify (before the hashes: they name what is wrong)
+    # -- optimal-value enclosure (lmic.certify.enclosure): both ends re-verified --
+    if doc.get("enclosure") is not None:
+        from lmic.certify.enclosure import audit_enclosure
+
+        enc = audit_enclosure(problem, doc["enclosure"], cert, doc.get("backoff"))
+        if not enc["ok"]:
+            return _fail(doc, enc["field"], enc["message"], cert, **kw)
+        checked.append("enclosure")
+    if doc.get("backoff") is not None and doc["backoff"].get("x") is not None:  # -- lmic.backoff --
+        rec_b = doc["backoff"]
+        xb = np.asarray(rec_b["x"], dtype=float)
+        if xb.shape != (problem.n,):
+            return _fail(doc, "backoff.x", "backoff.x has the wrong length", cert, **kw)
+        cb = certify(problem, Solution(status=rec_b.get("status") or "optimal", x=xb), tol=file_tol)
+        if cb.verdict != rec_b.get("verdict") or problem.objective.value(xb) != rec_b.get("objective"):
+            return _fail(
+                doc, "backoff", f"backoff differs: recorded {rec_b.get('verdict')}, recomputed {cb.verdict}", cert, **kw
+            )
+        checked.append("backoff")
     if hashed is not None:
         return _fail(doc, hashed[0], hashed[1], cert, **kw)
     checked.append("integrity")

@@ -416,7 +416,7 @@ def _decided_by_float(entry: dict[str, Any]) -> dict[str, Any]:
     return entry
 
 
-def _lmi_reason(r: dict) -> str:
+def _lmi_reason(r: dict, optimisation: bool = False) -> str:
     if r["note"].startswith("the point is ~0"):
         return (
             f"LMI '{r['name']}' is not certified: the point is ~0 for it "
@@ -431,8 +431,29 @@ def _lmi_reason(r: dict) -> str:
         )
     need = "> 0 (strict)" if r["strict"] else f">= {_g(r['threshold'])}"
     if r["strict"] and r["min_eig"] > 0:
-        need = f"> {_g(r['threshold'])} (strict, relative {_g(r['threshold'] / r['scale'])})"
+        # a positive margin the float evaluation cannot vouch for: not a violation
+        return (
+            f"LMI '{r['name']}' holds with margin {r['min_eig']:.1e} (relative {_g(r['rel_margin'])}), below the "
+            f"certification threshold {_g(r['threshold'])} (relative {_g(r['threshold'] / r['scale'])}): "
+            + _margin_hint(r, optimisation)
+        )
     return f"LMI '{r['name']}' violated: lambda_min = {_g(r['min_eig'])} (relative {_g(r['rel_margin'])}), needs {need}"
+
+
+def _margin_hint(r: dict, optimisation: bool) -> str:
+    """The likely cause of a positive margin below the threshold, and the option that helps."""
+    if optimisation:
+        return (
+            "the optimum of a strict problem is an infimum on the boundary (unattained infimum or "
+            "degenerate optimum); --backoff gives a certified point inside, within a relative "
+            "objective tolerance; --exact may prove the margin exactly"
+        )
+    if r["rel_margin"] < 1e-9:
+        return (
+            f"scaling: the margin is {_g(r['rel_margin'])} of the matrix scale {_g(r['scale'])}; "
+            "impose a larger one with --margin, prove it with --exact, or try another backend"
+        )
+    return "impose a larger margin with --margin, prove it with --exact, or try another backend"
 
 
 def _linear_reports(problem: Problem, x: np.ndarray, tol: Tolerances, inaccurate: bool) -> list:
@@ -633,7 +654,7 @@ def _reasons(cert: Certificate) -> list[str]:
         if worst["decided_by"] == "exact":
             reasons.append(f"exact: LMI '{worst['name']}' {worst['note']}")
         else:
-            reasons.append(_lmi_reason(worst))
+            reasons.append(_lmi_reason(worst, cert.objective is not None))
         if len(failing) > 1:
             reasons[-1] += f" (and {len(failing) - 1} more LMI(s))"
     reasons += [_linear_reason(r) for r in cert.linear if not r["ok"]]

@@ -205,27 +205,27 @@ def _failing_on(senses, calls, native="NumericalError", message="Clarabel stoppe
 
 @pytest.mark.skipif("clarabel" not in available_backend_names(), reason="needs Clarabel")
 def test_optimisation_error_is_decided_by_the_constraints_alone():
-    from lmic.certify import certify
+    """The policy's ``feasibility`` step: a failed optimisation solve, then the constraints alone."""
+    from lmic.policy import decide
 
     prob, calls = _infeasible_optimisation(), []
-    sol = strict.solve(prob, SolveOptions(), _failing_on({"min"}, calls))
-    assert calls[0] == "min" and "min" not in calls[1:] and len(calls) >= 2
-    assert sol.status == "infeasible" and "the constraints alone are infeasible" in sol.message
-    assert sol.info["optimisation_attempt"]["status"] == "error"
-    assert sol.solve_s >= 0.5  # the failed attempt's time is counted
-    # the certifier, not the route, decides: the ray proves the original problem infeasible
-    cert = certify(prob, sol, exact=True)
-    assert cert.verdict == "infeasible-certified" and cert.exact["proven"]
+    be = get_backend("clarabel")
+    be._run = _failing_on({"min"}, calls)
+    out = decide(prob, be, SolveOptions(), exact=False)
+    assert calls[0] == "min" and len(calls) >= 2 and "min" not in calls[1:]  # then the constraints alone
+    # the certifier decides: the ray is proven exactly, so the proof is global (p > 1 and p < -1)
+    assert out.verdict == "infeasible-certified", out.reason
+    assert out.certificate.verdict == "infeasible-certified"
+    assert [a.native_status for a in out.attempts][0] == "NumericalError"
 
 
 @pytest.mark.skipif("clarabel" not in available_backend_names(), reason="needs Clarabel")
 def test_constraints_route_that_decides_nothing_keeps_the_failure():
+    from lmic.policy import decide
+
     prob, calls = _infeasible_optimisation(), []
-    sol = strict.solve(prob, SolveOptions(), _failing_on({"min", "max", "feasibility"}, calls))
-    assert sol.status == "error" and sol.native_status == "NumericalError"
-    assert sol.info["constraints_attempt"]["status"] == "error"
-    # a time limit is not followed by another solve
-    calls.clear()
-    timed = _failing_on({"min"}, calls, native="MaxTime", message="time limit of 1 s exceeded")
-    sol = strict.solve(prob, SolveOptions(), timed)
-    assert sol.status == "error" and calls == ["min"]
+    be = get_backend("clarabel")
+    be._run = _failing_on({"min", "max", "feasibility"}, calls)
+    out = decide(prob, be, SolveOptions(), exact=False)
+    assert out.verdict == "undecided" and out.exit_code() == 1
+    assert all(a.native_status == "NumericalError" for a in out.attempts)

@@ -1,0 +1,204 @@
+"""Cost of the certified lower bound: the extra time of the enclosure over today's solve.
+
+For every problem, two methods run interleaved (``--repeat`` rounds, the order rotated):
+
+* ``plain``: compile or load, solve, certify (:func:`lmic.api.solve_problem` and
+  :func:`lmic.certify.certify`): what ``lmic solve`` did before the enclosure;
+* ``enclosure``: the same followed by :func:`lmic.certify.enclosure.enclosure` (dual repair,
+  rigorous proof, the perturbed solve when the dual is degenerate) and, when the solver's point
+  has no rigorous primal end, the restoration solve (:mod:`lmic.backoff`); no backoff.
+
+The report gives medians, the extra time ``enclosure - plain`` and the ratio, the enclosure
+(lower, upper, relative gap) and, for SDPLIB, whether the published optimum (its rounding
+interval: the README prints few digits) meets the enclosure. Usage::
+
+    python benchmarks/enclosure.py                      # examples + SDPLIB, 3 rounds
+    python benchmarks/enclosure.py --repeat 5 --json out.json --backend cvxopt
+    python benchmarks/enclosure.py --only control1,truss1
+
+On a shared machine run it with ``OPENBLAS_NUM_THREADS=1``: the proof does many small dense
+solves (``n x n``), which multi-threaded BLAS slows down ten-fold when the cores are busy
+(control3: 0.6 s single-threaded, 6.8 s with contended threads).
+
+Examples
+--------
+>>> rounding_interval("-8.999996e+00")
+(-8.9999965, -8.9999955)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["rounding_interval", "problems", "run_once", "main"]
+
+ROOT = Path(__file__).resolve().parents[1]
+SDPLIB = ROOT.parent / "shared" / "sdplib"
+if not SDPLIB.is_dir():
+    SDPLIB = Path("/work/shared/sdplib")
+SDPLIB_NAMES = (
+    ["control1", "control2", "control3"] + [f"hinf{k}" for k in range(1, 7)] + [f"truss{k}" for k in range(1, 5)]
+)
+EXAMPLES = [
+    ("sampled_euler.thm2", "sampled_euler.thm2.example.yaml"),
+    ("sampled_euler.thm3", "sampled_euler.thm3.example.yaml"),
+    ("sampled_euler.thm4", "sampled_euler.thm4.example.yaml"),
+    ("delay_b.thm4_1", "delay_b.thm4_1.ex1_lambda0_5.yaml"),
+    ("uncertain_dt.thm1", "uncertain_dt.thm1.example.yaml"),
+    ("uncertain_dt.lemma3", "uncertain_dt.lemma3.example-plant.yaml"),
+    ("uncertain_dt.cor1", "uncertain_dt.cor1.example-plant.yaml"),
+    ("uio_dt.thm4_1", "uio_dt.thm4_1.flexible_joint.yaml"),
+    ("delay_a.thm3_2", "delay_a.thm3_2.example.yaml"),
+]
+
+
+def rounding_interval(text: str) -> tuple[float, float]:
+    """Values that print as ``text`` (half a unit of its last digit either side)."""
+    low = text.lower()
+    mant, _, e = low.partition("e")
+    exp = int(e) if e else 0
+    digits = len(mant.split(".")[1]) if "." in mant else 0
+    half = 0.5 * 10.0 ** (exp - digits)
+    v = float(text)
+    return round(v - half, 12), round(v + half, 12)
+
+
+def _published() -> dict[str, str]:
+    out = {}
+    readme = SDPLIB / "README.md"
+    if readme.is_file():
+        for line in readme.read_text().splitlines():
+            cells = [c.strip() for c in line.strip().strip("|").split("|")]
+            if len(cells) == 4 and cells[0] and cells[3][:1] in "-0123456789":
+                out[cells[0]] = cells[3]
+    return out
+
+
+def problems(only: set[str] | None = None) -> list[tuple[str, Any]]:
+    """``(label, Problem)`` for every benchmark problem (compiled once, outside the timing)."""
+    from lmic.api import load_target
+
+    out = []
+    for thm, system in EXAMPLES:
+        if only and thm not in only:
+            continue
+        path = ROOT / "examples" / system
+        if path.is_file():
+            out.append((thm, load_target(thm, str(path))[0]))
+    for name in SDPLIB_NAMES:
+        if only and name not in only:
+            continue
+        path = SDPLIB / f"{name}.dat-s"
+        if path.is_file():
+            out.append((name, load_target(str(path))[0]))
+    return out
+
+
+def run_once(problem: Any, backend: str, method: str) -> dict[str, Any]:
+    """One timed run of ``method`` (``plain`` or ``enclosure``)."""
+    from lmic.api import solve_problem
+    from lmic.certify import certify
+    from lmic.certify.enclosure import enclosure
+
+    t0 = time.perf_counter()
+    sol = solve_problem(problem, backend)
+    cert = certify(problem, sol)
+    out: dict[str, Any] = {"verdict": cert.verdict}
+    if method == "enclosure":
+        x = sol.x if cert.verdict == "certified" else None
+
+        def resolve(p: Any) -> Any:
+            other = solve_problem(p, backend)
+            return other.duals if other.status in ("optimal", "inaccurate") else None
+
+        enc = enclosure(problem, sol.duals, x, resolve=resolve)
+        key = "upper" if problem.objective.sense == "min" else "lower"
+        if enc[key] is None and sol.x is not None:
+            from lmic.backoff import restore
+            from lmic.certify.enclosure import primal_end, with_primal
+
+            for rel in (1e-10, 1e-9, 1e-8):
+                rest = restore(problem, sol.x, backend, rel=rel)
+                pe = primal_end(problem, np.asarray(rest["x"])) if rest["x"] is not None else {}
+                if pe.get("proven"):
+                    enc = with_primal(enc, pe["value"], "restored point")
+                    break
+        out.update(lower=enc["lower"], upper=enc["upper"], rel_gap=enc["rel_gap"], kind=enc["kind"])
+        out["dual"] = enc["dual"].get("reason", "")
+    out["time_s"] = time.perf_counter() - t0
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--backend", default="clarabel")
+    ap.add_argument("--only", default="", help="comma-separated problem labels")
+    ap.add_argument("--json", default=None)
+    args = ap.parse_args(argv)
+    only = {s for s in args.only.split(",") if s} or None
+    published = _published()
+    rows = []
+    for label, prob in problems(only):
+        times: dict[str, list[float]] = {"plain": [], "enclosure": []}
+        last: dict[str, Any] = {}
+        for r in range(args.repeat):
+            order = ["plain", "enclosure"] if r % 2 == 0 else ["enclosure", "plain"]
+            for m in order:
+                try:
+                    res = run_once(prob, args.backend, m)
+                except Exception as exc:  # a benchmark row, not a crash: report it
+                    res = {"time_s": float("nan"), "error": f"{type(exc).__name__}: {exc}"}
+                times[m].append(res["time_s"])
+                if m == "enclosure":
+                    last = res
+        plain, enc = statistics.median(times["plain"]), statistics.median(times["enclosure"])
+        row = {
+            "problem": label,
+            "backend": args.backend,
+            "plain_s": plain,
+            "enclosure_s": enc,
+            "extra_s": enc - plain,
+            "ratio": enc / plain if plain > 0 else float("nan"),
+            **{k: last.get(k) for k in ("verdict", "kind", "lower", "upper", "rel_gap", "dual", "error")},
+        }
+        if label in published:
+            a, b = rounding_interval(published[label])
+            lo, hi = row["lower"], row["upper"]
+            row["published"] = published[label]
+            row["inside"] = (
+                "-" if lo is None and hi is None else bool((lo is None or lo <= b) and (hi is None or a <= hi))
+            )
+        rows.append(row)
+        _print_row(row)
+        sys.stdout.flush()
+    if args.json:
+        Path(args.json).write_text(json.dumps(rows, indent=1, default=str))
+    return 0
+
+
+def _fmt(v: Any, spec: str = ".4g") -> str:
+    return "-" if v is None else (format(v, spec) if isinstance(v, float) else str(v))
+
+
+def _print_row(row: dict[str, Any]) -> None:
+    print(
+        f"| {row['problem']} | {_fmt(row['plain_s'], '.3f')} | {_fmt(row['enclosure_s'], '.3f')} | "
+        f"{_fmt(row['extra_s'], '.3f')} | {_fmt(row['ratio'], '.2f')} | {_fmt(row['lower'], '.10g')} | "
+        f"{_fmt(row['upper'], '.10g')} | {_fmt(row['rel_gap'], '.2g')} | {row.get('published', '-')} | "
+        f"{row.get('inside', '-')} |"
+    )
+
+
+if __name__ == "__main__":
+    print("| problem | plain s | with enclosure s | extra s | ratio | lower | upper | rel gap | published | inside |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+    sys.exit(main())
