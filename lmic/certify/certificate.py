@@ -950,13 +950,21 @@ def audit_certificate(
     if doc.get("enclosure") is not None:
         from lmic.certify.enclosure import audit_enclosure
 
-        enc = audit_enclosure(problem, doc["enclosure"], cert, doc.get("backoff"))
+        try:
+            enc = audit_enclosure(problem, doc["enclosure"], cert, doc.get("backoff"))
+        except (ValueError, TypeError, KeyError, IndexError, AttributeError) as err:
+            # a malformed section (the enclosure audit expects what lmic writes)
+            fld, why = hashed if hashed is not None else ("enclosure", f"enclosure is malformed: {err}")
+            return _fail(doc, fld, " ".join(why.split())[:200], cert, **kw)
         if not enc["ok"]:
             return _fail(doc, enc["field"], enc["message"], cert, **kw)
         checked.append("enclosure")
     if doc.get("backoff") is not None and doc["backoff"].get("x") is not None:  # -- lmic.backoff --
         rec_b = doc["backoff"]
-        xb = np.asarray(rec_b["x"], dtype=float)
+        try:
+            xb = np.asarray(rec_b["x"], dtype=float)
+        except (ValueError, TypeError):
+            xb = np.zeros(0)
         if xb.shape != (problem.n,):
             return _fail(doc, "backoff.x", "backoff.x has the wrong length", cert, **kw)
         cb = certify(problem, Solution(status=rec_b.get("status") or "optimal", x=xb), tol=file_tol)

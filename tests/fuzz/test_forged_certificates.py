@@ -224,12 +224,13 @@ def _is_informational(keys) -> bool:
     return _matches(".".join(str(k) for k in keys if not isinstance(k, int)), INFORMATIONAL)
 
 
-def _run_sweep(path: Path, doc: dict, sample_every: int = 1) -> tuple[int, list[str]]:
+def _run_sweep(path: Path, doc: dict, sample_every: int = 1, only: tuple = ()) -> tuple[int, list[str]]:
+    """Audit single-field mutants: every ``sample_every``-th one, and all under the ``only`` sections."""
     validator = jsonschema.Draft202012Validator(_schema())
     bad: list[str] = []
     n = 0
     for i, (keys, how, new) in enumerate(_mutants(doc)):
-        if i % sample_every:
+        if i % sample_every and keys[0] not in only:
             continue
         mpath = _dotted(keys)
         m = copy.deepcopy(doc)
@@ -299,4 +300,23 @@ def test_sampled_mutations_of_a_real_theorem_certificate_are_rejected(qib, tmp_p
     total = sum(1 for _ in _mutants(doc))
     n, bad = _run_sweep(path, doc, sample_every=max(1, total // 60))
     assert n >= 50
+    assert not bad, f"{len(bad)} of {n} mutants: " + "; ".join(bad[:8])
+
+
+def test_sampled_mutations_of_a_certificate_with_an_enclosure_are_rejected(tmp_path):
+    from lmic.api import solve
+
+    control1 = TRUSS1.parent / "control1.dat-s"
+    r = solve(str(control1), backend="clarabel")
+    assert r.enclosure is not None
+    path = tmp_path / "c.json"
+    write_certificate(path, r.problem, r.solution, r.certificate, enclosure=r.enclosure)
+    assert audit_certificate(path).ok
+    doc = json.loads(path.read_text())
+    assert doc["enclosure"]["lower"] is not None
+    # every mutant of the enclosure section, and a sample of the rest
+    mutants = list(_mutants(doc))
+    enclosure = sum(1 for keys, _, _ in mutants if keys[0] == "enclosure")
+    n, bad = _run_sweep(path, doc, sample_every=max(1, (len(mutants) - enclosure) // 30), only=("enclosure",))
+    assert n >= enclosure
     assert not bad, f"{len(bad)} of {n} mutants: " + "; ".join(bad[:8])
