@@ -76,7 +76,7 @@ def read(kind, path):
     elif kind == "ir":
         from lmic.ir.jsonio import load_problem_json
         load_problem_json(path)
-    elif kind == "certificate":
+    elif kind in ("certificate", "enclosure"):
         from lmic.certify.certificate import audit_certificate
         audit_certificate(path)
 
@@ -168,13 +168,20 @@ def seeds(folder: Path) -> dict[str, tuple[bytes, str]]:
     r = solve("qib.thm1", system=str(ROOT / "examples" / "qib.thm1.flexible-joint.yaml"))
     cert = folder / "seed-cert.json"
     write_certificate(cert, r.problem, r.solution, r.certificate, embed_ir=True)
-    return {
+    out = {
         "system": (SYSTEM, ".yaml"),
         "simulation": (SYSTEM, ".yaml"),
         "sdpa": (SDPA, ".dat-s"),
         "ir": (problem_to_json(prob).encode(), ".json"),
         "certificate": (cert.read_bytes(), ".json"),
     }
+    control1 = Path("/work/shared/sdplib/control1.dat-s")
+    if control1.exists():  # a certificate with an optimal-value enclosure (dual point) as well
+        e = solve(str(control1), backend="clarabel")
+        enc = folder / "seed-enclosure.json"
+        write_certificate(enc, e.problem, e.solution, e.certificate, enclosure=e.enclosure)
+        out["enclosure"] = (enc.read_bytes(), ".json")
+    return out
 
 
 def run_batch(kind: str, paths: list[str], timeout: int) -> dict[str, str]:
