@@ -148,7 +148,7 @@ def _atomic(target: Path, data: Any, binary: bool, given: str) -> None:
     try:
         tmp_name = str(folder / f".{target.name}.{secrets.token_hex(6)}.tmp")
         fd = os.open(tmp_name, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o600)
-        fh = os.fdopen(fd, "wb" if binary else "w", **({} if binary else {"encoding": "utf-8"}))
+        fh: IO[Any] = os.fdopen(fd, "wb") if binary else os.fdopen(fd, "w", encoding="utf-8")
         fd = -1  # owned by fh now
         with fh:
             _write_all(fh, data)
@@ -179,7 +179,8 @@ def _atomic(target: Path, data: Any, binary: bool, given: str) -> None:
 
 def _direct(target: Path, data: Any, binary: bool, given: str) -> None:
     try:
-        with open(target, "wb" if binary else "w", **({} if binary else {"encoding": "utf-8"})) as fh:
+        fh: IO[Any] = open(target, "wb") if binary else open(target, "w", encoding="utf-8")  # noqa: SIM115
+        with fh:
             _write_all(fh, data)
             fh.flush()
     except OSError as err:

@@ -431,9 +431,9 @@ def read_certificate(path: str | os.PathLike[str]) -> dict[str, Any]:
     validator = jsonschema.Draft202012Validator(_schema())
     errors = sorted(validator.iter_errors(doc), key=lambda e: list(e.absolute_path))
     if errors:
-        err = errors[0]
-        where = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in err.absolute_path).lstrip(".")
-        msg = " ".join(err.message.split())
+        first = errors[0]
+        where = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in first.absolute_path).lstrip(".")
+        msg = " ".join(first.message.split())
         if len(msg) > 160:
             msg = msg[:157] + "..."
         raise CertificateError(f"{name}: {where or 'top level'}: {msg}")
