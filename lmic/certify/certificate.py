@@ -398,6 +398,12 @@ def read_certificate(path: str | os.PathLike[str]) -> dict[str, Any]:
             raise ValueError(f"an integer of {len(t.lstrip('-'))} digits (at most {MAX_INT_DIGITS})")
         return int(t)
 
+    def parse_float(t: str) -> float:
+        value = float(t)
+        if not math.isfinite(value):
+            raise ValueError(f"the number {t[:24]} overflows float64")
+        return value
+
     try:
         if p.stat().st_size > MAX_INPUT_BYTES:
             raise CertificateError(f"{p}: larger than the input limit of {MAX_INPUT_BYTES} bytes")
@@ -409,7 +415,7 @@ def read_certificate(path: str | os.PathLike[str]) -> dict[str, Any]:
     if not text.strip():
         raise CertificateError(f"{name}: empty certificate file")
     try:
-        doc = json.loads(text, parse_constant=_reject_constant, parse_int=parse_int)
+        doc = json.loads(text, parse_constant=_reject_constant, parse_int=parse_int, parse_float=parse_float)
     except json.JSONDecodeError as err:
         raise CertificateError(
             f"{name}: not valid JSON (truncated or corrupted?) at line {err.lineno} column {err.colno}: {err.msg}"

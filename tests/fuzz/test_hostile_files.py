@@ -158,6 +158,7 @@ CERT_FILES = {
     "deep.json": '{"lmic_certificate": 1, "x": ' + "[" * 100000 + "]" * 100000 + "}",
     "huge-int.json": '{"lmic_certificate": ' + "1" * 5000 + "}",
     "nan.json": '{"lmic_certificate": 1, "created": NaN}',
+    "overflow.json": '{"lmic_certificate": 1, "created": 1e999}',  # found by benchmarks/fuzz.py
     "not-utf8.json": "\udcff",
 }
 
