@@ -43,6 +43,7 @@ COMMANDS = [
     "audit",
     "audit_published",
     "reproduce",
+    "batch",
     "simulate",
     "report",
 ]

@@ -6,8 +6,13 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
+
+import numpy as np
+
+from lmic.errors import LmicError
 
 __all__ = ["SolveOptions"]
 
@@ -22,8 +27,12 @@ class SolveOptions:
         Relative accuracy (gap and feasibility) asked of the solver.
     max_iter : int or None
     time_limit : float or None
-        Seconds. Solvers without a native time limit run in a child process that is stopped
-        when the limit is reached (status ``error``, message ``time limit ... exceeded``).
+        Seconds for the whole :meth:`Backend.solve` call (every strict-reduction attempt
+        included). Solvers with a native limit (Clarabel, SCS, CVXPY with either) are given the
+        time left; the others solve in a forked child process that is stopped at the limit.
+        A stopped solve is status ``error`` with ``info["time_limit"] = True`` and a message
+        ``time limit of ... s exceeded`` (:mod:`lmic.backends.outcomes`): report it as
+        ``undecided (time limit)``.
     verbose : bool
     margin : float
         Absolute margin imposed on strict inequalities (``F(x) >= margin I``) by the
@@ -41,12 +50,21 @@ class SolveOptions:
     extra : dict
         Solver-specific settings passed through unchanged.
 
+    Every field is checked when it is set (at construction and on assignment): a tolerance in
+    ``(0, 1)``, a positive finite time limit and margin, a positive integer ``max_iter``;
+    anything else (negative, zero, NaN, infinite, not a number) raises
+    :class:`lmic.errors.LmicError` (bad input: one line, exit code 2).
+
     Examples
     --------
     >>> SolveOptions(max_iter=50).max_iter
     50
     >>> SolveOptions(strict="fixed-margin").strict
     'fixed-margin'
+    >>> SolveOptions(time_limit=float("nan"))
+    Traceback (most recent call last):
+    ...
+    lmic.errors.LmicError: time_limit must be a finite number, got nan
     """
 
     tol: float = 1e-8
@@ -58,10 +76,73 @@ class SolveOptions:
     relative_margin: float = 1e-4
     extra: dict[str, Any] = field(default_factory=dict)
 
-    def __post_init__(self) -> None:
-        from lmic.errors import LmicError
+    def __setattr__(self, name: str, value: Any) -> None:
+        # every assignment is checked, at construction and later (the CLI sets fields one by one)
+        check = _OPTION_CHECKS.get(name)
+        if check is not None:
+            value = check(value)
+        object.__setattr__(self, name, value)
 
-        if self.strict not in ("auto", "max-margin", "fixed-margin"):
-            raise LmicError(f"strict strategy '{self.strict}' unknown; choose auto, max-margin or fixed-margin")
-        if not 0.0 < self.relative_margin < 1.0:
-            raise LmicError(f"relative_margin must be in (0, 1), got {self.relative_margin}")
+
+def _finite_number(name: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise LmicError(f"{name} must be a number, got {value!r}")
+    value = float(value)
+    if not np.isfinite(value):
+        raise LmicError(f"{name} must be a finite number, got {value}")
+    return value
+
+
+def _check_tol(value: Any) -> float:
+    value = _finite_number("tol", value)
+    if not 0.0 < value < 1.0:
+        raise LmicError(f"tol must be in (0, 1), got {value:g}")
+    return value
+
+
+def _check_time_limit(value: Any) -> float | None:
+    if value is None:
+        return None
+    value = _finite_number("time_limit", value)
+    if value <= 0.0:
+        raise LmicError(f"time_limit must be a positive number of seconds, got {value:g}")
+    return value
+
+
+def _check_max_iter(value: Any) -> int | None:
+    if value is None:
+        return None
+    number = _finite_number("max_iter", value)
+    if number != int(number) or number < 1:
+        raise LmicError(f"max_iter must be a positive integer, got {value!r}")
+    return int(number)
+
+
+def _check_margin(value: Any) -> float:
+    value = _finite_number("margin", value)
+    if value <= 0.0:
+        raise LmicError(f"margin must be positive, got {value:g}")
+    return value
+
+
+def _check_strict(value: Any) -> str:
+    if value not in ("auto", "max-margin", "fixed-margin"):
+        raise LmicError(f"strict strategy '{value}' unknown; choose auto, max-margin or fixed-margin")
+    return str(value)
+
+
+def _check_relative_margin(value: Any) -> float:
+    value = _finite_number("relative_margin", value)
+    if not 0.0 < value < 1.0:
+        raise LmicError(f"relative_margin must be in (0, 1), got {value:g}")
+    return value
+
+
+_OPTION_CHECKS: dict[str, Callable[[Any], Any]] = {
+    "tol": _check_tol,
+    "time_limit": _check_time_limit,
+    "max_iter": _check_max_iter,
+    "margin": _check_margin,
+    "strict": _check_strict,
+    "relative_margin": _check_relative_margin,
+}

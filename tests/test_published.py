@@ -188,8 +188,8 @@ def test_status_claims():
     assert (c.finding, c.agrees, c.verdict) == ("infeasible-bounded", None, "infeasible-bounded")
     assert rep.exit_code() == 4
     uir = audit_published("uir.thm3_1", EX / "uir.thm3_1.rossler_published_gains.yaml").claim("status")
-    # the claim "feasible" is not confirmed; what lmic proves is bounded infeasibility only
-    assert uir.finding == "infeasible-bounded" and uir.agrees is None
+    # the claim "feasible" is refuted: the Farkas ray is proven exactly (a global proof)
+    assert uir.finding == "infeasible" and uir.agrees is False
 
 
 def test_value_claims_and_skipped_keys():

@@ -206,7 +206,7 @@ def test_solve_maximize_text_and_sweep_table(capsys):
     out = capsys.readouterr().out
     assert "sup gamma >= " in out and "lower" in out and "upper" in out and "bisection steps" in out
     q = str(EX / "qib.thm2.flexible-joint.yaml")
-    assert main(["solve", "qib.thm2", q, "--sweep", "alpha=log:1e-3:1:3"]) == 4  # (26): bounded rays at every alpha
+    assert main(["solve", "qib.thm2", q, "--sweep", "alpha=log:1e-3:1:3"]) == 3  # (26): proven at every alpha
     out = capsys.readouterr().out
     assert "no certified point" in out and out.count("infeasible") >= 3
 

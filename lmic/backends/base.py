@@ -24,6 +24,7 @@ Examples
 from __future__ import annotations
 
 import contextlib
+import functools
 import importlib
 import importlib.util
 import multiprocessing
@@ -273,6 +274,47 @@ def _child(conn: Any, backend: Backend, problem: Problem, options: SolveOptions)
         conn.close()
 
 
+def _sandboxed(backend: Backend, problem: Problem, options: SolveOptions, seconds: float) -> Solution | None:
+    """Run ``backend._solve`` in a forked child for at most ``seconds``; ``None`` on time-out.
+
+    The child is stopped (SIGTERM, then SIGKILL after 1 s) when the time is up or when the
+    parent is interrupted. Where ``fork`` is unavailable the solve runs here, relying on the
+    solver's native limit.
+    """
+    try:
+        ctx = multiprocessing.get_context("fork")
+    except ValueError:  # no fork (Windows): native limits only
+        t0 = time.perf_counter()
+        try:
+            return backend._solve(problem, options)
+        except Exception as err:  # noqa: BLE001 - the solver's crash is a status
+            return Solution(
+                status="error", backend=backend.label, message=_describe(err), solve_s=time.perf_counter() - t0
+            )
+    recv, send = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_child, args=(send, backend, problem, options), daemon=True)
+    proc.start()
+    send.close()
+    try:
+        if recv.poll(seconds):
+            return recv.recv()
+        return None
+    except EOFError:
+        return Solution(
+            status="error",
+            backend=backend.label,
+            message=f"solver process died (exit code {proc.exitcode})",
+        )
+    finally:
+        if proc.is_alive():
+            proc.terminate()
+            proc.join(1.0)
+            if proc.is_alive():
+                proc.kill()
+        proc.join(1.0)
+        recv.close()
+
+
 def _describe(err: BaseException) -> str:
     msg = " ".join(str(err).split()) or "no message"
     return f"{type(err).__name__}: {msg}"
@@ -385,7 +427,10 @@ class Backend(ABC):
         t0 = time.perf_counter()
         try:
             kept, keep = eliminate_unused(problem, dependent=self.full_rank)
-            sol = strict.solve(kept, options, self._run, first_order=not self.interior_point)
+            # one deadline for every attempt of the strict reduction (SolveOptions.time_limit)
+            deadline = None if options.time_limit is None else time.monotonic() + options.time_limit
+            run = functools.partial(self._run, deadline=deadline)
+            sol = strict.solve(kept, options, run, first_order=not self.interior_point)
             if keep is not None:
                 restore_eliminated(sol, keep, problem)
         except Exception as err:  # noqa: BLE001 - a crash is a status, never a traceback
@@ -401,47 +446,60 @@ class Backend(ABC):
         sol.lower_s = max(0.0, time.perf_counter() - t0 - sol.solve_s)
         return sol
 
-    def _run(self, problem: Problem, options: SolveOptions) -> Solution:
-        """Call :meth:`_solve`, in a child process when a time limit must be enforced here."""
-        if options.time_limit is None or self.native_time_limit:
-            t0 = time.perf_counter()
-            try:
-                return self._solve(problem, options)
-            except Exception as err:  # noqa: BLE001 - the solver's crash, timed as solver time
-                return Solution(
-                    status="error",
-                    backend=self.label,
-                    message=_describe(err),
-                    solve_s=time.perf_counter() - t0,
-                )
-        ctx = multiprocessing.get_context("fork")
-        recv, send = ctx.Pipe(duplex=False)
-        proc = ctx.Process(target=_child, args=(send, self, problem, options), daemon=True)
+    def _run(self, problem: Problem, options: SolveOptions, deadline: float | None = None) -> Solution:
+        """Call :meth:`_solve`; with a time limit, in a forked child stopped at the limit.
+
+        ``deadline`` (``time.monotonic()`` seconds) is the end of the whole :meth:`solve` call;
+        each attempt gets the time left (at most ``options.time_limit``), and an attempt that
+        starts after the deadline returns the time-limit solution at once. A solver that stops
+        by itself at the limit (a native limit) is marked the same way
+        (:func:`lmic.backends.outcomes.mark_time_limit`).
+        """
+        from lmic.backends.progress import solve_progress
+
+        # a solve longer than 2 s shows "lmic: <label> | <step> | <seconds>" on a terminal
+        with solve_progress(self.label):
+            return self._run_limited(problem, options, deadline)
+
+    def _call(self, problem: Problem, options: SolveOptions) -> Solution:
+        """:meth:`_solve` here, a crash turned into an ``error`` solution."""
         t0 = time.perf_counter()
-        proc.start()
-        send.close()
         try:
-            if recv.poll(options.time_limit):
-                sol = recv.recv()
-            else:
-                sol = Solution(
-                    status="error",
-                    backend=self.label,
-                    native_status="time_limit",
-                    message=f"time limit of {options.time_limit:g} s exceeded",
-                    solve_s=time.perf_counter() - t0,
-                )
-        except EOFError:
-            sol = Solution(
+            return self._solve(problem, options)
+        except Exception as err:  # noqa: BLE001 - the solver's crash, timed as solver time
+            return Solution(
                 status="error",
                 backend=self.label,
-                message=f"solver process died (exit code {proc.exitcode})",
+                message=_describe(err),
+                solve_s=time.perf_counter() - t0,
             )
-        finally:
-            if proc.is_alive():
-                proc.terminate()
-            proc.join(1.0)
-            recv.close()
+
+    def _run_limited(self, problem: Problem, options: SolveOptions, deadline: float | None) -> Solution:
+        from lmic.backends.outcomes import mark_time_limit, time_limit_solution
+
+        limit = options.time_limit
+        if limit is None:
+            return self._call(problem, options)
+        left = limit if deadline is None else min(limit, deadline - time.monotonic())
+        if left <= 0.0:
+            return time_limit_solution(self.label, limit, 0.0)
+        from dataclasses import replace as _replace
+
+        child_options = _replace(options, time_limit=left)
+        t0 = time.perf_counter()
+        if self.native_time_limit:
+            # the solver stops itself, here: a forked child of a process that has already run
+            # Clarabel hangs in Clarabel's thread pool (SDPLIB infp1, measured), so no fork
+            sol: Solution | None = self._call(problem, child_options)
+        else:
+            sol = _sandboxed(self, problem, child_options, left)
+        elapsed = time.perf_counter() - t0
+        if sol is None:
+            return time_limit_solution(self.label, limit, elapsed)
+        stopped = sol.status in ("error", "inaccurate") and elapsed >= 0.95 * left
+        if sol.info.get("time_limit") or stopped:
+            sol.solve_s = sol.solve_s or elapsed
+            mark_time_limit(sol, limit, elapsed)
         return sol
 
     @abstractmethod

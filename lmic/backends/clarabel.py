@@ -24,33 +24,56 @@ import numpy as np
 import scipy.sparse as sp
 
 from lmic.backends.base import Backend, SolveOptions, conic_data
+from lmic.backends.outcomes import mark_time_limit, settle_inexact_infeasible
 from lmic.ir.problem import Problem
 from lmic.ir.svec import svec_scale, tril_to_triu_colmajor_perm, tril_unvec
 from lmic.solution import Solution
 
-__all__ = ["ClarabelBackend", "clarabel_vec", "clarabel_unvec", "kkt_bytes", "MEMORY_FRACTION"]
+__all__ = [
+    "ClarabelBackend",
+    "clarabel_vec",
+    "clarabel_unvec",
+    "kkt_bytes",
+    "MEMORY_FRACTION",
+    "BYTES_PER_KKT_ENTRY",
+    "BYTES_PER_FILL_ENTRY",
+    "KKT_CONSTANT_BYTES",
+]
 
-#: Clarabel is refused when its estimated KKT memory exceeds this share of the machine's memory
+#: Clarabel is refused when its estimated memory exceeds this share of the machine's memory
 MEMORY_FRACTION = 0.4
-#: measured bytes per entry of the dense ``t x t`` block a PSD cone of ``t = d(d+1)/2`` rows
-#: adds to Clarabel's KKT system (55 at d = 100, 24 at d = 250: use the larger-scale figure)
-_BYTES_PER_KKT_ENTRY = 24
+#: bytes per entry of the dense ``t x t`` block a PSD cone of ``t = d(d+1)/2`` rows adds to
+#: Clarabel's KKT system (matrix, LDL factor and workspace), calibrated against the peak
+#: resident memory of solves measured by ``benchmarks/clarabel_memory.py``: 52.2-54.7 bytes on
+#: max-cut SDPs (d = 40-130), 51.5 in the issue's d = 150 max-cut (6.6 GB); 56 covers them
+BYTES_PER_KKT_ENTRY = 56
+#: bytes per entry of the ``n x n`` block the factorisation fills in among the ``n`` decision
+#: variables once the dense PSD blocks are eliminated (``A' H^-1 A``): negligible on max-cut
+#: (``n = d``), but a Lyapunov LMI pair at d = 90 (n = 4095) peaked at 1849 MiB and at d = 130
+#: (n = 8515) passed 9.4 GiB, above the PSD term alone (1791 MiB and 7.6 GiB)
+BYTES_PER_FILL_ENTRY = 32
+#: fixed part of the estimate (solver workspace besides the KKT system)
+KKT_CONSTANT_BYTES = 64 << 20
 
 
 def kkt_bytes(problem: Problem) -> int:
-    """Estimated memory of Clarabel's dense PSD blocks for ``problem`` (bytes).
+    """Estimated peak memory of a Clarabel solve of ``problem`` (bytes).
 
     Clarabel factors a dense ``t x t`` scaling block per PSD cone with ``t = d (d + 1) / 2`` rows:
-    memory grows as ``d^4`` (a 250 x 250 LMI needs about 24 GB; SDPA solves it in 0.3 s).
+    memory grows as ``d^4`` (:data:`BYTES_PER_KKT_ENTRY` per entry), plus the fill among the
+    ``n`` decision variables (:data:`BYTES_PER_FILL_ENTRY` per ``n^2``) and
+    :data:`KKT_CONSTANT_BYTES`. Measured: a 130 x 130 max-cut LMI peaks at 3.5 GiB against an
+    estimate of 3.8 GiB; a 250 x 250 LMI would need about 55 GB (SDPA solves it in 0.3 s).
 
     >>> import scipy.sparse as sp
     >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
     >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t>0", 1, sp.csc_matrix([[0., 1.]]))],
     ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
-    >>> kkt_bytes(p)
-    24
+    >>> kkt_bytes(p) - KKT_CONSTANT_BYTES
+    88
     """
-    return sum(_BYTES_PER_KKT_ENTRY * (lmi.dim * (lmi.dim + 1) // 2) ** 2 for lmi in problem.lmis)
+    blocks = sum((lmi.dim * (lmi.dim + 1) // 2) ** 2 for lmi in problem.lmis)
+    return BYTES_PER_KKT_ENTRY * blocks + BYTES_PER_FILL_ENTRY * problem.n**2 + KKT_CONSTANT_BYTES
 
 
 def _size(n: float) -> str:
@@ -112,9 +135,10 @@ class ClarabelBackend(Backend):
         "Solved": "optimal",
         "AlmostSolved": "inaccurate",
         "PrimalInfeasible": "infeasible",
-        "AlmostPrimalInfeasible": "infeasible",
+        # an inexact infeasibility claim: kept only if its ray verifies (settle_inexact_infeasible)
+        "AlmostPrimalInfeasible": "inaccurate",
         "DualInfeasible": "unbounded",
-        "AlmostDualInfeasible": "unbounded",
+        "AlmostDualInfeasible": "inaccurate",
         "MaxIterations": "inaccurate",
         "MaxTime": "error",
         "NumericalError": "error",
@@ -176,20 +200,30 @@ class ClarabelBackend(Backend):
             info={"solver_time_s": float(result.solve_time)},
         )
         z = np.asarray(result.z, dtype=float)
-        if status in ("optimal", "inaccurate"):
+
+        def ray() -> dict:
+            farkas = self.split_duals(data, z, clarabel_unvec, len(problem.linear))
+            scale = -float(data.b @ z)
+            if scale > 0:
+                farkas["lmis"] = [Z / scale for Z in farkas["lmis"]]
+                farkas["linear"] = farkas["linear"] / scale
+            return farkas
+
+        if native == "AlmostPrimalInfeasible":
+            settle_inexact_infeasible(problem, sol, ray())
+        elif native == "AlmostDualInfeasible":
+            sol.info["inexact_ray"] = np.asarray(result.x, dtype=float)
+            sol.message = "Clarabel stopped with status AlmostDualInfeasible (inexact unboundedness claim)"
+        elif status in ("optimal", "inaccurate"):
             sol.x = np.asarray(result.x, dtype=float)
             sol.objective = data.sign * (float(data.c @ sol.x) + data.c0)
             sol.duals = self.split_duals(data, z, clarabel_unvec, len(problem.linear))
         elif status == "infeasible":
-            sol.farkas = self.split_duals(data, z, clarabel_unvec, len(problem.linear))
-            scale = -float(data.b @ z)
-            if scale > 0:
-                sol.farkas["lmis"] = [Z / scale for Z in sol.farkas["lmis"]]
-                sol.farkas["linear"] = sol.farkas["linear"] / scale
+            sol.farkas = ray()
         elif status == "unbounded":
             sol.info["ray"] = np.asarray(result.x, dtype=float)
         if native == "MaxTime":
-            sol.message = f"time limit of {options.time_limit:g} s exceeded"
-        elif status in ("error", "inaccurate"):
+            mark_time_limit(sol, options.time_limit, solve_s)
+        elif status in ("error", "inaccurate") and not sol.message:
             sol.message = f"Clarabel stopped with status {native}"
         return sol

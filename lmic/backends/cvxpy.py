@@ -22,6 +22,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from lmic.backends.base import Backend, SolveOptions, full_vec_map, quiet_native
+from lmic.backends.outcomes import settle_inexact_infeasible
 from lmic.errors import BackendUnavailable
 from lmic.ir.problem import Problem
 from lmic.solution import Solution
@@ -67,6 +68,13 @@ def _sdpa(o: SolveOptions) -> dict[str, Any]:
     return out
 
 
+def _cvxopt_qr(c: Any, G: Any, h: Any, dims: Any, A: Any, b: Any) -> Any:
+    """CVXOPT's 'qr' KKT solver in the form CVXPY accepts for ``kktsolver`` (a factory)."""
+    from cvxopt import misc
+
+    return misc.kkt_qr(G, dims, A)
+
+
 #: how the uniform options map onto each CVXPY sub-solver's keyword arguments
 SUBSOLVER_OPTIONS = {"CLARABEL": _clarabel, "SCS": _scs, "CVXOPT": _cvxopt, "SDPA": _sdpa}
 _NATIVE_LIMIT = {"CLARABEL", "SCS"}
@@ -83,13 +91,13 @@ class CVXPYBackend(Backend):
         "optimal": "optimal",
         "optimal_inaccurate": "inaccurate",
         "infeasible": "infeasible",
-        # an inexact infeasibility claim stays a claim of infeasibility: the certifier checks
-        # the Farkas ray (verdict infeasible-certified or not)
-        "infeasible_inaccurate": "infeasible",
+        # an inexact infeasibility claim: kept only if its ray verifies (settle_inexact_infeasible)
+        "infeasible_inaccurate": "inaccurate",
         "unbounded": "unbounded",
-        "unbounded_inaccurate": "unbounded",
+        "unbounded_inaccurate": "inaccurate",
         "infeasible_or_unbounded": "error",
-        "user_limit": "error",
+        # an iteration or time limit with the last iterate (SOLUTION_PRESENT): the certifier decides
+        "user_limit": "inaccurate",
         "solver_error": "error",
     }
 
@@ -153,15 +161,26 @@ class CVXPYBackend(Backend):
         kwargs = SUBSOLVER_OPTIONS[self.solver](options)
         kwargs.update(options.extra)
         build_s = time.perf_counter() - t_build
+        # CVXPY calls CVXOPT with the 'chol' KKT solver and turns CVXOPT's failures into
+        # solver_error; like the cvxopt backend, 'qr' is tried next (given to CVXPY as a KKT
+        # factory), which solves SDPLIB control1 and the bounded-real lemma where 'chol' fails
+        attempts: list[Any] = [None]
+        if self.solver == "CVXOPT" and "kktsolver" not in kwargs:
+            attempts = ["chol", _cvxopt_qr]
         t0 = time.perf_counter()
-        try:
-            with quiet_native(not options.verbose), warnings.catch_warnings():
-                warnings.simplefilter("ignore", UserWarning)  # "may be inaccurate": a status
-                prob.solve(solver=self.solver, verbose=options.verbose, **kwargs)
-            native = str(prob.status)
-            message = ""
-        except cp.error.SolverError as err:
-            native, message = "solver_error", " ".join(str(err).split())
+        for kkt in attempts:
+            if kkt is not None:
+                kwargs["kktsolver"] = kkt
+            try:
+                with quiet_native(not options.verbose), warnings.catch_warnings():
+                    warnings.simplefilter("ignore", UserWarning)  # "may be inaccurate": a status
+                    prob.solve(solver=self.solver, verbose=options.verbose, **kwargs)
+                native = str(prob.status)
+                message = ""
+            except cp.error.SolverError as err:
+                native, message = "solver_error", " ".join(str(err).split())
+            if native != "solver_error":
+                break
         wall = time.perf_counter() - t0
         stats = prob.solver_stats
         solver_s = getattr(stats, "solve_time", None) if stats is not None else None
@@ -193,7 +212,11 @@ class CVXPYBackend(Backend):
             mats = [np.asarray(con.dual_value, dtype=float) for con in lmi_cons]
             return {"lmis": [0.5 * (Z + Z.T) for Z in mats], "linear": y}
 
-        if status in ("optimal", "inaccurate") and x.value is not None:
+        if native == "infeasible_inaccurate":
+            settle_inexact_infeasible(problem, sol, multipliers())
+        elif native == "unbounded_inaccurate":
+            sol.message = f"CVXPY/{self.solver} returned status '{native}' (inexact unboundedness claim)"
+        elif status in ("optimal", "inaccurate") and x.value is not None:
             sol.x = np.asarray(x.value, dtype=float)
             if problem.objective.sense != "feasibility":
                 sol.objective = float(problem.objective.value(sol.x))

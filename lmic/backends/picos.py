@@ -6,6 +6,19 @@ with ``M`` the full column-major vectorisation :func:`lmic.backends.base.full_ve
 PICOS sees the LMI as written with no per-entry expression building. Linear rows are one
 affine vector each for ``>= 0`` and ``== 0``.
 
+PICOS reports a *problem* status and a claimed *primal* status (``picos.modeling.solution``:
+``PS_*`` and ``SS_*``); the native status is ``"<problem>/<primal>"`` and
+:attr:`PICOSBackend.STATUS_MAP` lists every pair lmic understands (any other pair is
+``error``). With CVXOPT underneath, PICOS turns CVXOPT's ``unknown`` (iteration limit or
+numerical trouble; CVXOPT still returns its last iterate) into ``unknown/unknown``: that point
+is kept as ``inaccurate`` and the certifier decides, exactly as the ``cvxopt`` backend does.
+
+PICOS's own CVXOPT call tries the ``chol`` KKT solver and then ``ldl``; ``ldl`` divides by zero
+inside CVXOPT on SDPLIB control1 (``ZeroDivisionError`` in ``misc.update_scaling``). This
+backend follows the ``cvxopt`` backend instead: ``chol`` first, ``qr`` when ``chol`` fails or
+stops ``unknown`` (``extra={"cvxopt_kktsolver": ...}`` chooses one). PICOS has no time limit
+for CVXOPT, so ``SolveOptions.time_limit`` is enforced by the child-process sandbox.
+
 Examples
 --------
 >>> PICOSBackend.name
@@ -34,14 +47,17 @@ class PICOSBackend(Backend):
     requires: ClassVar[dict[str, str]] = {"picos": "picos", "cvxopt": "cvxopt"}
     full_rank: ClassVar[bool] = True
     description: ClassVar[str] = "PICOS modelling layer (solver chosen by PICOS, CVXOPT here)"
-    #: PICOS reports a problem status and a primal/dual solution status; keys are
-    #: "<problem status>/<primal status>"
+    #: ``"<problem status>/<claimed primal status>"`` -> lmic status; unlisted pairs are ``error``
     STATUS_MAP: ClassVar[dict[str, str]] = {
         "feasible/optimal": "optimal",
-        "feasible/feasible": "inaccurate",
         "unknown/optimal": "optimal",
+        "feasible/feasible": "inaccurate",
         "unknown/feasible": "inaccurate",
         "feasible/unknown": "inaccurate",
+        "feasible/premature": "inaccurate",
+        "unknown/premature": "inaccurate",
+        # CVXOPT's 'unknown' with its last iterate: kept when there is a point (else error)
+        "unknown/unknown": "inaccurate",
         "infeasible/infeasible": "infeasible",
         "infeasible/unknown": "infeasible",
         "infeasible/empty": "infeasible",
@@ -49,6 +65,12 @@ class PICOSBackend(Backend):
         "unbounded/empty": "unbounded",
         "unbounded/infeasible": "unbounded",
         "unbounded/feasible": "unbounded",
+        "infeasible or unbounded/unknown": "error",
+        "infeasible or unbounded/empty": "error",
+        "unknown/empty": "error",
+        "unknown/failure": "error",
+        "unstable/unknown": "error",
+        "illposed/unknown": "error",
     }
 
     def _solve(self, problem: Problem, options: SolveOptions) -> Solution:
@@ -90,8 +112,12 @@ class PICOSBackend(Backend):
             "verbosity": 1 if options.verbose else 0,
             "primals": None,
             "duals": None,
+            # CVXOPT's feastol is min(rel_prim_fsb_tol, rel_dual_fsb_tol); abstol, reltol the
+            # ipm tolerances: the same settings as the cvxopt backend
             "abs_prim_fsb_tol": options.tol,
             "abs_dual_fsb_tol": options.tol,
+            "rel_prim_fsb_tol": options.tol,
+            "rel_dual_fsb_tol": options.tol,
             "abs_ipm_opt_tol": options.tol,
             "rel_ipm_opt_tol": options.tol,
         }
@@ -99,11 +125,20 @@ class PICOSBackend(Backend):
         # whose iterates diverge CVXOPT then runs ~100 s into a ZeroDivisionError. CVXOPT's
         # own default (100) is used unless the caller sets one.
         opts["max_iterations"] = int(options.max_iter) if options.max_iter is not None else 100
-        if options.time_limit is not None:
-            opts["timelimit"] = int(max(1, round(options.time_limit)))
         opts.update(options.extra)
+        chosen = opts.pop("cvxopt_kktsolver", None)
+        kkt_order = [chosen] if chosen else ["chol", "qr"]
         t0 = time.perf_counter()
-        solution = P.solve(**opts)
+        for k, kktsolver in enumerate(kkt_order):
+            last = k == len(kkt_order) - 1
+            try:
+                solution = P.solve(cvxopt_kktsolver=kktsolver, **opts)
+            except (ValueError, ArithmeticError):
+                if last:
+                    raise
+                continue
+            if solution.problemStatus != "unknown" or last:
+                break
         wall = time.perf_counter() - t0
         native = f"{solution.problemStatus}/{solution.primalStatus}"
         status = self.map_status(native)
@@ -112,7 +147,12 @@ class PICOSBackend(Backend):
             backend=self.label,
             native_status=native,
             solve_s=wall,
-            info={"picos_solver": solution.solver, "solver_time_s": solution.searchTime},
+            info={
+                "picos_solver": solution.solver,
+                "solver_time_s": solution.searchTime,
+                "kktsolver": kktsolver,
+                "claimed": solution.claimedStatus,
+            },
         )
 
         def multipliers() -> dict | None:
@@ -138,6 +178,8 @@ class PICOSBackend(Backend):
         elif status in ("optimal", "inaccurate"):
             sol.status = "error"
             sol.message = f"PICOS reported '{native}' without a primal point"
+        if sol.status == "inaccurate" and not sol.message:
+            sol.message = f"PICOS returned '{native}' (claimed {solution.claimedStatus}); the point is checked"
         if status == "error":
-            sol.message = f"PICOS returned '{native}' ({solution.claimedStatus})"
+            sol.message = f"PICOS returned '{native}' (claimed {solution.claimedStatus})"
         return sol

@@ -24,6 +24,7 @@ from typing import ClassVar
 import numpy as np
 
 from lmic.backends.base import Backend, SolveOptions, conic_data
+from lmic.backends.outcomes import mark_time_limit, settle_inexact_infeasible
 from lmic.ir.problem import Problem
 from lmic.ir.svec import svec_scale, tril_size, tril_unvec
 from lmic.solution import Solution
@@ -80,10 +81,10 @@ class SCSBackend(Backend):
         "solved": "optimal",
         "solved_inaccurate": "inaccurate",
         "infeasible": "infeasible",
-        # inexact infeasibility claims stay claims: the certifier checks the Farkas ray
-        "infeasible_inaccurate": "infeasible",
+        # an inexact infeasibility claim: kept only if its ray verifies (settle_inexact_infeasible)
+        "infeasible_inaccurate": "inaccurate",
         "unbounded": "unbounded",
-        "unbounded_inaccurate": "unbounded",
+        "unbounded_inaccurate": "inaccurate",
         "indeterminate": "error",
         "failed": "error",
         "sigint": "error",
@@ -132,11 +133,15 @@ class SCSBackend(Backend):
             iterations=int(info.get("iter", 0)),
             info={"solver_time_s": float(info.get("solve_time", 0.0)) / 1e3},
         )
-        if "time_limit" in raw_status:
-            sol.status = "error"
-            sol.message = f"time limit of {options.time_limit:g} s exceeded ({raw_status})"
         y = np.asarray(result["y"], dtype=float)
-        if sol.status in ("optimal", "inaccurate") and native.startswith("solved"):
+        if "time_limit" in raw_status:
+            mark_time_limit(sol, options.time_limit, solve_s)
+            sol.message += f" ({raw_status})"
+        elif native == "infeasible_inaccurate":
+            settle_inexact_infeasible(problem, sol, self.split_duals(data, y, scs_unvec, len(problem.linear)))
+        elif native == "unbounded_inaccurate":
+            sol.info["inexact_ray"] = np.asarray(result["x"], dtype=float)
+        elif sol.status in ("optimal", "inaccurate") and native.startswith("solved"):
             sol.x = np.asarray(result["x"], dtype=float)
             sol.objective = data.sign * (float(data.c @ sol.x) + data.c0)
             sol.duals = self.split_duals(data, y, scs_unvec, len(problem.linear))

@@ -47,6 +47,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", default=None, help="write the Markdown table here")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--executor",
+        default=None,
+        help="run the example files in parallel: local (worker processes), dask (a LocalCluster) or "
+        "tcp://HOST:PORT (a Dask scheduler); default: one after the other in this process",
+    )
+    p.add_argument("--workers", type=int, default=None, help="workers for --executor (default: cores)")
     add_solver_options(p)
     p.set_defaults(func=run)
 
@@ -85,14 +92,29 @@ def run(args: argparse.Namespace) -> int:
                 task, total=ev["total"], completed=ev["done"], info=f"{ev['file']}: {row.row.quantity[:40]} {mark}"
             )
 
-        report = reproduce(
-            args.examples,
-            args.expectations,
-            only=args.only,
-            backend=args.backend,
-            options=solve_options(args),
-            progress=progress,
-        )
+        if args.executor:  # one job per example file (lmic.studies.parallel)
+            from lmic.studies.parallel import reproduce_parallel
+
+            keys = ("tol", "max_iter", "time_limit", "margin", "strict", "verbose")
+            report = reproduce_parallel(
+                args.examples,
+                args.expectations,
+                only=args.only,
+                backend=args.backend,
+                options={k: getattr(args, k) for k in keys if getattr(args, k, None) not in (None, False)},
+                executor=args.executor,
+                workers=args.workers,
+                progress=progress,
+            )
+        else:
+            report = reproduce(
+                args.examples,
+                args.expectations,
+                only=args.only,
+                backend=args.backend,
+                options=solve_options(args),
+                progress=progress,
+            )
     if args.output:
         command = "lmic reproduce -o " + args.output + "".join(f" --only '{p}'" for p in args.only)
         text = render_markdown(report, command=command)

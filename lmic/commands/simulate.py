@@ -5,6 +5,10 @@ theorem designs (its ``t.observer(...)`` declaration, with the certified gains) 
 file's ``simulation:`` section says, prints the final estimation error and whether it decayed,
 and with ``-o`` writes the figure (PNG; written atomically, and only after a successful run).
 
+Where the theorem certifies a number (an L2 gain, a decay rate: the observer roles ``gamma``,
+``decay``), the run measures it on trajectories (:mod:`lmic.simulate.certificate`) and prints
+both; a measured value beyond the certified one is a red flag and exit code 1.
+
 Exit codes: 0 simulated with certified gains; 1 or 3 when the gains are not certified (the
 solve's own code: nothing is simulated); 2 for bad input — no ``simulation:`` section, an
 unknown key, a forbidden token in an expression, a theorem without an observer, or a state that
@@ -86,6 +90,7 @@ def run(args: argparse.Namespace) -> int:
     if png is not None:
         write_atomic(args.output, lambda fh: fh.write(png), mode="wb")
     summary = traj.summary()
+    violated = [c for c in traj.checks if c.get("ok") is False]
     if args.json:
         print_json(
             {
@@ -97,9 +102,10 @@ def run(args: argparse.Namespace) -> int:
                 "observer": {"model": observer.name, "time": observer.time, "roles": observer.names},
                 "simulation": summary,
                 "plot": args.output,
+                "certificate_violated": bool(violated),
             }
         )
-        return 0
+        return 1 if violated else 0
     out = sys.stdout
     out.write(f"theorem    {args.theorem} {args.system}\n")
     out.write(f"solve      {result.backend}: {result.status}, {result.verdict}\n")
@@ -109,6 +115,18 @@ def run(args: argparse.Namespace) -> int:
     out.write(f"error      initial {summary['initial_error']:.4g}, peak {summary['peak_error']:.4g}\n")
     verdict = "decayed" if summary["decayed"] else "did NOT decay"
     out.write(f"final      |x - xhat| = {summary['final_error']:.4g} ({verdict})\n")
+    for c in traj.checks:
+        mark = {True: "holds", False: "VIOLATED", None: "(informative)"}[c.get("ok")]
+        out.write(
+            f"certified  {c['property']}: certified {c['certified']:.6g}, measured {c['measured']:.6g} {mark}\n"
+            f"           {c['detail']}\n"
+        )
+    if violated:
+        sys.stderr.write(
+            "lmic: RED FLAG: the trajectory violates what the theorem certified "
+            f"({', '.join(c['property'] for c in violated)}): the theorem, its transcription or the "
+            "certificate is wrong\n"
+        )
     if args.output:
         out.write(f"wrote      {args.output}\n")
-    return 0
+    return 1 if violated else 0

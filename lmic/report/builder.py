@@ -386,13 +386,28 @@ def _simulation_section(traj: Any, png: bytes | None, note: str, observer: Any) 
         ["final error", number_text(s["final_error"])],
         ["error", _badge("decayed" if s["decayed"] else "did not decay")],
     ]  # fmt: skip
+    for c in getattr(traj, "checks", []):
+        word = {True: "ok", False: "VIOLATED", None: "informative"}[c.get("ok")]
+        rows.append(
+            [
+                c["property"],
+                f"certified {number_text(c['certified'])}, measured {number_text(c['measured'])} "
+                f"{_badge(word)}<br><small>{_esc(c['detail'])}</small>",
+            ]
+        )
+    if any(c.get("ok") is False for c in getattr(traj, "checks", [])):
+        parts.append(
+            '<p class="bad"><strong>Red flag:</strong> the trajectory violates what the theorem certified: '
+            "the theorem, its transcription or the certificate is wrong.</p>"
+        )
     parts.append(_kv(rows))
     data = base64.b64encode(png).decode("ascii")
     parts.append(
         '<figure><img id="simulation-plot" alt="true and estimated states and the estimation error norm" '
         f'src="data:image/png;base64,{data}" '
         "onload=\"this.setAttribute('data-loaded', String(this.naturalWidth))\">"
-        "<figcaption>True states (solid), estimates (dashed) and the error norm (log scale).</figcaption>"
+        "<figcaption>True states (solid), estimates (dashed), reconstructed unknown inputs and the "
+        "control input where the observer has them, and the error norm (log scale).</figcaption>"
         "</figure>"
     )
     parts.append("</section>")

@@ -9,7 +9,7 @@ Examples
 --------
 >>> from lmic.simulate import MODELS
 >>> sorted(MODELS)
-['luenberger', 'sampled', 'uio']
+['euler', 'filter_error', 'luenberger', 'obs_control', 'reduced', 'robust', 'sampled', 'ui_filter', 'uio']
 """
 
 from __future__ import annotations

@@ -31,10 +31,10 @@ Examples
 ...                                                "L": np.array([[0.5], [0.1]])})
 >>> obs.n, obs.p, obs.m
 (2, 1, 0)
->>> make_observer("kalman", "discrete", {})
+>>> make_observer("kalman", "discrete", {})  # doctest: +ELLIPSIS
 Traceback (most recent call last):
 ...
-lmic.errors.DataError: unknown observer model 'kalman' (known: luenberger, sampled, uio)
+lmic.errors.DataError: unknown observer model 'kalman' (known: euler, filter_error, luenberger, ...)
 """
 
 from __future__ import annotations
@@ -47,11 +47,28 @@ import numpy as np
 
 from lmic.errors import DataError
 
-__all__ = ["Observer", "Luenberger", "UnknownInput", "Sampled", "MODELS", "make_observer", "Vector"]
+__all__ = [
+    "SimulationDiverged",
+    "Observer",
+    "Luenberger",
+    "UnknownInput",
+    "Sampled",
+    "MODELS",
+    "make_observer",
+    "Vector",
+]
 
 Vector = np.ndarray
 #: ``f(x, u, t)`` or ``h(x, u, t)``: a vector function of state, input and time
 VectorFn = Callable[[Vector, Vector, float], Vector]
+
+
+class SimulationDiverged(DataError):
+    """The plant or observer state blew up; ``time`` is when it was first seen."""
+
+    def __init__(self, message: str, time: float) -> None:
+        super().__init__(message)
+        self.time = time
 
 
 def _matrix(value: Any, role: str, name: str) -> np.ndarray:

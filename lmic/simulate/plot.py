@@ -1,7 +1,11 @@
 """Figures of a simulated run, drawn with matplotlib's Agg canvas (no display, no pyplot state).
 
 Like the papers' figures: one panel per state with the true state (solid) and its estimate
-(dashed), and a last panel with the estimation error norm ``|x - xhat|`` on a log scale.
+(dashed), one panel per reconstructed unknown input (``nu`` against ``nu^``, the reduced-order
+filters of Papers D and E) and for the control input (observer-based control, Paper F), and a
+last panel with the estimation error norm ``|x - xhat|`` on a log scale. Certificate checks
+(certified against measured, :mod:`lmic.simulate.certificate`) are printed under the title, a
+violation in red.
 
 Examples
 --------
@@ -41,16 +45,22 @@ def figure(traj: Trajectory, title: str = "") -> object:
     from matplotlib.lines import Line2D
 
     n = traj.x.shape[1]
-    cols = 1 if n == 1 else 2
-    rows = math.ceil(n / cols)
-    height = 1.9 * rows + 2.4
+    extra = _extra_panels(traj)
+    panels = n + len(extra)
+    cols = 1 if panels == 1 else 2
+    rows = math.ceil(panels / cols)
+    foot = 0.22 * len(traj.checks)
+    height = 1.9 * rows + 2.4 + foot
     fig = Figure(figsize=(5.2 * cols, height), dpi=100)
     FigureCanvasAgg(fig)
     gs = fig.add_gridspec(rows + 1, cols, height_ratios=[1.0] * rows + [1.25])
-    fig.subplots_adjust(left=0.08, right=0.985, top=1 - 0.75 / height, bottom=0.5 / height, hspace=0.32, wspace=0.2)
+    fig.subplots_adjust(
+        left=0.08, right=0.985, top=1 - 0.75 / height, bottom=(0.5 + foot) / height, hspace=0.32, wspace=0.2
+    )
     discrete = traj.time == "discrete"
     style = {"marker": ".", "markersize": 3} if discrete and traj.t.size <= 200 else {}
-    xlabel = "t = k dt" if discrete else "t (s)"
+    dt = float(traj.t[1] - traj.t[0]) if traj.t.size > 1 else 1.0
+    xlabel = ("sample k" if abs(dt - 1.0) < 1e-12 else f"t = k T (s), T = {dt:g} s") if discrete else "t (s)"
     first = None
     for i in range(n):
         ax = fig.add_subplot(gs[i // cols, i % cols], sharex=first)
@@ -59,7 +69,16 @@ def figure(traj: Trajectory, title: str = "") -> object:
         ax.plot(traj.t, traj.xhat[:, i], color=_EST, lw=1.2, ls="--", **style)
         ax.set_ylabel(f"$x_{{{i + 1}}}$")
         ax.grid(alpha=0.3)
-        ax.tick_params(labelbottom=i >= n - cols)
+        ax.tick_params(labelbottom=i >= panels - cols)
+    for j, (label, true, est) in enumerate(extra):
+        i = n + j
+        ax = fig.add_subplot(gs[i // cols, i % cols], sharex=first)
+        ax.plot(traj.t, true, color=_TRUE, lw=1.4, **style)
+        if est is not None:
+            ax.plot(traj.t, est, color=_EST, lw=1.2, ls="--", **style)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+        ax.tick_params(labelbottom=i >= panels - cols)
     ax = fig.add_subplot(gs[rows, :], sharex=first)
     err = traj.error_norm
     floor = max(float(err.max()) * 1e-16, 1e-300)
@@ -93,7 +112,32 @@ def figure(traj: Trajectory, title: str = "") -> object:
         y=1 - 0.06 / height,
         va="top",
     )
+    for k, c in enumerate(traj.checks):
+        ok = c.get("ok")
+        word = {True: "holds", False: "VIOLATED", None: "informative"}[ok]
+        fig.text(
+            0.5,
+            (0.08 + 0.22 * (len(traj.checks) - 1 - k)) / height,
+            f"{c['property']}: certified {c['certified']:.4g}, measured {c['measured']:.4g} ({word})",
+            ha="center",
+            fontsize=8,
+            color="#c92a2a" if ok is False else "0.25",
+        )
     return fig
+
+
+def _extra_panels(traj: Trajectory) -> list[tuple[str, np.ndarray, np.ndarray | None]]:
+    """Reconstructed unknown inputs (``nu`` against ``nu_hat``) and the control input ``u``."""
+    out: list[tuple[str, np.ndarray, np.ndarray | None]] = []
+    nu, nu_hat = traj.signals.get("nu"), traj.signals.get("nu_hat")
+    if nu is not None and nu_hat is not None:
+        for i in range(nu.shape[1]):
+            out.append((rf"$\nu_{{{i + 1}}}$, $\hat\nu_{{{i + 1}}}$", nu[:, i], nu_hat[:, i]))
+    u = traj.signals.get("u")
+    if u is not None:
+        for i in range(u.shape[1]):
+            out.append((f"control $u_{{{i + 1}}} = -K \\hat x$", u[:, i], None))
+    return out
 
 
 def plot_png(traj: Trajectory, title: str = "", dpi: int = 100) -> bytes:

@@ -44,7 +44,8 @@ from typing import Any
 import numpy as np
 
 from lmic.errors import DataError
-from lmic.simulate.models import Observer, Sampled, make_observer
+from lmic.simulate.families import EXTRA_KEYS, Custom
+from lmic.simulate.models import Observer, Sampled, SimulationDiverged, make_observer
 from lmic.simulate.parser import Expression, parse, parse_vector
 
 __all__ = [
@@ -76,6 +77,7 @@ KEYS = (
     "sampling",
     "noise",
     "method",
+    *EXTRA_KEYS,
 )
 #: a state entry larger than this in magnitude counts as a blow-up
 BLOWUP = 1e12
@@ -86,14 +88,6 @@ DECAY_RATIO = 0.1
 MAX_POINTS = 200_000
 
 _NUMERIC = re.compile(r"[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][-+]?[0-9]+)?", re.ASCII)
-
-
-class SimulationDiverged(DataError):
-    """The plant or observer state blew up; ``time`` is when it was first seen."""
-
-    def __init__(self, message: str, time: float) -> None:
-        super().__init__(message)
-        self.time = time
 
 
 @dataclass
@@ -133,6 +127,8 @@ class SimulationSpec:
     noise_seed: int = 0
     method: str = "RK45"
     where: str = "simulation"
+    #: what a model of :mod:`lmic.simulate.families` read from its extra keys
+    extra: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass
@@ -156,6 +152,10 @@ class Trajectory:
     time: str
     samples: np.ndarray | None = None
     info: dict[str, Any] = field(default_factory=dict)
+    #: further signals by name (``w``, ``z`` performance output, ``nu`` / ``nu_hat``, ``u``...)
+    signals: dict[str, np.ndarray] = field(default_factory=dict)
+    #: certificate-meets-trajectory checks (:mod:`lmic.simulate.certificate`)
+    checks: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def error_norm(self) -> np.ndarray:
@@ -204,6 +204,7 @@ class Trajectory:
             "tail_error": self.tail_error,
             "decayed": self.decayed,
             **self.info,
+            "checks": self.checks,
         }
 
 
@@ -235,7 +236,7 @@ def check_section(section: Any, where: str = "simulation") -> dict[str, Any]:
     Traceback (most recent call last):
     ...
     lmic.errors.DataError: simulation: unknown key 'step' (allowed: nonlinearity, output_nonlinearity, \
-x0, xhat0, z0, input, unknown_input, horizon, dt, sampling, noise, method)
+x0, xhat0, z0, input, unknown_input, horizon, dt, sampling, noise, method, disturbance, uncertainty, delay, history)
     """
     if not isinstance(section, dict):
         raise DataError(f"{where}: must be a mapping of keys ({', '.join(KEYS)})")
@@ -376,6 +377,12 @@ def read_spec(section: Any, observer: Observer, where: str = "simulation") -> Si
     sec = check_section(section, where)
     n, p = observer.n, observer.p
     time = observer.time
+    custom = isinstance(observer, Custom)
+    extra = observer.read_extra(sec, where) if custom else {}
+    if not custom:
+        for key in EXTRA_KEYS:
+            if key in sec:
+                raise DataError(f"{where}: '{key}' does not apply to the '{observer.name}' observer")
     if time == "sampled":
         if "sampling" not in sec:
             raise DataError(f"{where}: the sampled observer needs 'sampling: {{min, max, seed}}'")
@@ -385,12 +392,12 @@ def read_spec(section: Any, observer: Observer, where: str = "simulation") -> Si
         raise DataError(f"{where}: 'method' applies to continuous time; this observer is discrete")
     if "output_nonlinearity" in sec and not observer.output_nonlinearity:
         raise DataError(f"{where}: the '{observer.name}' observer assumes y = C x: remove 'output_nonlinearity'")
-    if "unknown_input" in sec and observer.D1 is None:
+    if "unknown_input" in sec and observer.D1 is None and not custom:
         raise DataError(
             f"{where}: 'unknown_input' needs an unknown-input matrix, and the '{observer.name}' "
             "observer of this theorem declares none (role D1)"
         )
-    if "z0" in sec and observer.name != "uio":
+    if "z0" in sec and observer.name not in ("uio", "ui_filter"):
         raise DataError(f"{where}: 'z0' applies to unknown-input observers, not '{observer.name}' (use xhat0)")
     if "z0" in sec and "xhat0" in sec:
         raise DataError(f"{where}: give either 'xhat0' or 'z0', not both")
@@ -402,7 +409,7 @@ def read_spec(section: Any, observer: Observer, where: str = "simulation") -> Si
     m = observer.m if observer.B is not None else len(u_texts)
     u = parse_vector(u_texts, {"t"}, f"{where}.input") if u_texts else [parse("0", (), where)] * m
     w: list[Expression] = []
-    if "unknown_input" in sec:
+    if "unknown_input" in sec and not custom:
         w_texts = _expr_list(sec["unknown_input"])
         if len(w_texts) != observer.h_dim:
             raise DataError(
@@ -425,7 +432,7 @@ def read_spec(section: Any, observer: Observer, where: str = "simulation") -> Si
 
     x0 = _vector(sec["x0"], n, "x0", where)
     xhat0 = _vector(sec["xhat0"], n, "xhat0", where) if "xhat0" in sec else None
-    z0 = _vector(sec["z0"], n, "z0", where) if "z0" in sec else None
+    z0 = _vector(sec["z0"], getattr(observer, "q1", n), "z0", where) if "z0" in sec else None
     horizon = float(sec["horizon"])
     dt = float(sec.get("dt", 1.0 if time == "discrete" else horizon / 1000.0))
     if horizon / dt > MAX_POINTS:
@@ -461,6 +468,7 @@ def read_spec(section: Any, observer: Observer, where: str = "simulation") -> Si
         noise_seed=noise_seed,
         method=str(sec.get("method", "RK45")),
         where=where,
+        extra=extra,
     )
 
 
@@ -751,6 +759,11 @@ def run(observer: Observer, spec: SimulationSpec) -> Trajectory:
         When the plant or observer state stops being finite, naming the time.
     """
     fn = _Functions(spec, observer.n, observer.p)
+    if isinstance(observer, Custom):
+        out = observer.custom_run(spec, fn)
+        info = dict(out.get("info") or {})
+        return Trajectory(out["t"], out["x"], out["xhat"], observer.name, observer.time, info=info,
+                          signals=dict(out.get("signals") or {}))  # fmt: skip
     if observer.time == "discrete":
         return _discrete(observer, spec, fn)
     if observer.time == "continuous":
@@ -785,4 +798,8 @@ def simulate(problem: Any, x: np.ndarray | None, system: Any) -> tuple[Observer,
     check_section(section, where)
     obs = observer_for(problem, x)
     spec = read_spec(section, obs, where)
-    return obs, run(obs, spec)
+    traj = run(obs, spec)
+    from lmic.simulate.certificate import checks
+
+    traj.checks = checks(obs, spec, _Functions(spec, obs.n, obs.p))
+    return obs, traj

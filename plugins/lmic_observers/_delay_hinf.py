@@ -196,3 +196,8 @@ def build_delay_hinf(t, *, paper: str, pareto: bool) -> None:
             doc="admissible Lipschitz uncertainty delta gamma_max = gamma* - gamma0 (Section 4)",
         )
     t.check("A - L C Schur stable", schur_stable(A - L * C), doc="nominal delay-free error dynamics")
+    delayed = {"Cd": Cd, "MCd": M4} if paper == "B" else {}
+    t.observer(
+        "robust", "discrete", A=A, C=C, L=L, Ad=Ad, D1=B, D2=D, MA=M1, MAd=M2, MC=M3, NF=N, Hz=H,
+        gamma="eta_star" if pareto else "eta", tau0="tau0_eff", tau1="tau1", tau2="tau2", **delayed,
+    )  # fmt: skip

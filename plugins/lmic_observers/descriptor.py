@@ -222,6 +222,7 @@ def descriptor_thm3_1(t):
     t.lmi("Gamma - I < 0", block(Gamma - I(q)) < 0)
     t.lmi("(14)", block([[N.T * P + P * N + gamma**2 * J.T * J, P * M * D], [STAR, -Gamma]]) < 0)
     t.check("N Hurwitz (error dynamics (13))", hurwitz(N))
+    t.observer("filter_error", "continuous", N=N, J=J)
 
 
 @theorem(
@@ -260,6 +261,7 @@ def descriptor_thm3_2(t):
     t.lmi("Gamma - I < 0", block(Gamma - I(q)) < 0)
     t.lmi("(20)", hinf_block(P, Gamma, N, L, J, E, M * D, M * D1, D2, 1 + gamma**2, mu**2) < 0)
     t.check("N Hurwitz (error dynamics (13))", hurwitz(N))
+    t.observer("filter_error", "continuous", N=N, J=J, L=L, M=M, E=E, D1=D1, D2=D2, gamma=mu)
 
 
 @theorem(
@@ -316,6 +318,10 @@ def descriptor_thm3_3(t):
     N, L, J, E = reduced_order_gains(t, s, P, Ybar1, Y2)
     t.derive("MD", s["M"] * s["D"], doc="M D, the nonlinear injection gain")
     t.check("N Hurwitz (error dynamics (13))", hurwitz(N))
+    t.observer(
+        "ui_filter", "continuous", A=s["A"], B=s["B"], C=s["C"], F=s["F"], G=s["G"], N=N, L=L, M=s["M"], J=J, E=E,
+        Gf="Gf", D1=s["D1"], D2=s["D2"], gamma=mu,
+    )  # fmt: skip
     M, D, D1, D2 = s["M"], s["D"], s["D1"], s["D2"]
     t.check(
         "(20) at the recovered gains",

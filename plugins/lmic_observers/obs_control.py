@@ -150,6 +150,7 @@ def obs_control_thm3_1(t):
     t.check("A - B K Hurwitz", hurwitz(Acl))
     t.check("A - L C Hurwitz", hurwitz(Aob))
     t.check("(9) in the Omega form", negative_definite(_nine(P, Q, K, L, mats, scalars, c)))
+    t.observer("obs_control", "continuous", A=A, B=B, C=C, K=K, L=L, E=E, alpha=alpha)
 
 
 @theorem(
@@ -215,6 +216,7 @@ def obs_control_thm3_2(t):
     t.check("A - B K Hurwitz", hurwitz(A - B * K))
     t.check("A - L C Hurwitz", hurwitz(A - L * C))
     t.check("(9) of Theorem 3.1 at P = Gamma^-1, K, L", negative_definite(_nine(P, Q, K, L, mats, scalars, c)))
+    t.observer("obs_control", "continuous", A=A, B=B, C=C, K=K, L=L, E=E, alpha=alpha)
 
 
 THEOREMS = [obs_control_thm3_1, obs_control_thm3_2]

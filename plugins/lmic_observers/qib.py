@@ -177,6 +177,7 @@ def _reduced_order(t, beta, gamma):
     a12 = 0 if gamma is None else w * gamma * N.T
     t.lmi(name, block([[a11, a12, a13], [STAR, -2 * w * I(n), a23], [STAR, STAR, a33]]) < 0)
     t.check("A_Z - K C_Z Schur stable", schur_stable(AZ - K * CZ))
+    t.observer("reduced", "discrete", A="A", C=C, H=H, N=N, M="M", K=K)
 
 
 @theorem(

@@ -221,6 +221,7 @@ def sampled_euler_thm3(t):
     gc_star = t.derive("gamma_c_star", 1 / (T * xi), doc="gamma_c* = gamma_d* / T")
     delta = t.derive("delta_gamma_c", gc_star - gamma_c, doc="Remark 4 margin gamma_c* - gamma_c")
     t.check("gamma_c < gamma_c* (Remark 4)", greater_than(delta, 0.0))
+    t.observer("euler", "discrete", A="A", C=C, L="L", T=T)
 
 
 @theorem(
@@ -286,6 +287,7 @@ def sampled_euler_thm4(t):
     t.minimize(zeta)
     t.derive("mu_star", sympy.sqrt(zeta), doc="mu* = sqrt(zeta*)")
     _finish_gain(t, P, G, L_data, Ad, Cd)
+    t.observer("robust", "discrete", A=Ad, C=Cd, L="L", D1=Bd, Hz="H", gamma="mu_star")
 
 
 THEOREMS = [sampled_euler_thm1, sampled_euler_thm2, sampled_euler_thm3, sampled_euler_thm4]

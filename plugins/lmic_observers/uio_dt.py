@@ -154,6 +154,7 @@ def uio_dt_thm3_1(t):
     P = t.symmetric("P", n, pd=True)
     t.lmi("(9)", _nine(n, q, P, N, M, D, gamma**2) < 0)
     t.check("N Schur stable (error dynamics (7))", schur_stable(N))
+    t.observer("filter_error", "discrete", N=N)
 
 
 @theorem(

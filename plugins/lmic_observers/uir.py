@@ -80,6 +80,7 @@ def uir_thm3_1(t):
     t.lmi("Gamma - I < 0", block(Gamma - I(n)) < 0)
     t.lmi("(11)", block([[N.T * P + P * N + gamma**2 * J.T * J, P * M], [STAR, -Gamma]]) < 0)
     t.check("N Hurwitz (error dynamics (10))", hurwitz(N))
+    t.observer("filter_error", "continuous", N=N, J=J)
 
 
 @theorem(
@@ -113,6 +114,7 @@ def uir_thm3_2(t):
     t.lmi("Gamma - I < 0", block(Gamma - I(n)) < 0)
     t.lmi("(16)", hinf_block(P, Gamma, N, L, J, E, M, M * D1, D2, 1 + gamma**2, mu**2) < 0)
     t.check("N Hurwitz (error dynamics (10))", hurwitz(N))
+    t.observer("filter_error", "continuous", N=N, J=J, L=L, M=M, E=E, D1=D1, D2=D2, gamma=mu)
 
 
 def _robust(t, multiobjective: bool):
@@ -177,6 +179,10 @@ def _robust(t, multiobjective: bool):
         "(16) at the recovered gains with 1 + gamma^2 = 1/rho",
         negative_definite(hinf_block(P, Gamma, N, L, J, E, M, M * D1, D2, 1 / rho, mu_sq)),
     )
+    t.observer(
+        "ui_filter", "continuous", A=s["A"], B=s["B"], C=s["C"], F=s["F"], G=s["G"], N=N, L=L, M=M, J=J, E=E,
+        Gf="Gf", D1=D1, D2=D2, gamma="mu_min" if multiobjective else "mu",
+    )  # fmt: skip
 
 
 @theorem(

@@ -152,7 +152,10 @@ def _filter_lmis(t, d, psi1_rows, eps1, eps2):
 def _gain_and_check(t, d):
     L = d["L"] if d["L"] is not None else t.derive("L", d["P1"].inv() * d["G"], doc="L = P1^-1 G (26)")
     t.check("A - L C Schur stable", schur_stable(d["A"] - L * d["C"]))
-    t.observer("luenberger", "discrete", A=d["A"], C=d["C"], L=L)
+    t.observer(
+        "robust", "discrete", A=d["A"], C=d["C"], L=L, D1=d["B"], D2=d["D"], MA=d["M1"], MC=d["M2"], NF=d["N"],
+        Hz=d["H"], gamma="mu", decay="beta",
+    )  # fmt: skip
 
 
 @theorem(

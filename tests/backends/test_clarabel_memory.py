@@ -3,7 +3,13 @@ and the default backend then takes the auto route instead of exhausting the memo
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
+import pytest
 import scipy.sparse as sp
 
 import lmic.backends.clarabel as clarabel_module
@@ -33,8 +39,29 @@ def maxcut_dual(d: int) -> Problem:
 
 
 def test_memory_estimate_grows_as_d_to_the_fourth():
-    small, big = kkt_bytes(maxcut_dual(10)), kkt_bytes(maxcut_dual(20))
+    def psd_part(d):
+        return (
+            kkt_bytes(maxcut_dual(d)) - clarabel_module.KKT_CONSTANT_BYTES - clarabel_module.BYTES_PER_FILL_ENTRY * d**2
+        )
+
+    small, big = psd_part(10), psd_part(20)
     assert 14 < big / small < 18  # (210/55)^2 = 14.6
+
+
+@pytest.mark.parametrize("kind,d", [("maxcut", 60), ("lyapunov", 50)])
+def test_memory_estimate_covers_the_measured_peak(kind, d):
+    """The guard's estimate is at least the peak RSS a Clarabel solve adds (measured in a fresh
+    process by benchmarks/clarabel_memory.py), and not wildly above it."""
+    script = Path(__file__).resolve().parents[2] / "benchmarks" / "clarabel_memory.py"
+    rows = []
+    for _ in range(2):  # the peak of the two runs (a busy machine can make one read low)
+        out = subprocess.run(
+            [sys.executable, str(script), "--child", kind, str(d)], capture_output=True, text=True, check=True
+        )
+        rows.append(json.loads(out.stdout.strip().splitlines()[-1]))
+    row = max(rows, key=lambda r: r["measured"])
+    assert row["measured"] > 0
+    assert row["measured"] <= row["estimate"] <= 3 * row["measured"], row
 
 
 def test_a_block_too_large_for_memory_is_refused_with_a_reason(monkeypatch):

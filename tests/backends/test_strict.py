@@ -194,11 +194,11 @@ def _infeasible_optimisation():
 def _failing_on(senses, calls, native="NumericalError", message="Clarabel stopped with status NumericalError"):
     real = get_backend("clarabel")._run
 
-    def run(problem, options):
+    def run(problem, options, deadline=None):
         calls.append(problem.objective.sense)
         if problem.objective.sense in senses:
             return Solution("error", backend="clarabel", native_status=native, message=message, solve_s=0.5)
-        return real(problem, options)
+        return real(problem, options, deadline=deadline)
 
     return run
 

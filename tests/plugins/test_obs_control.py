@@ -56,7 +56,9 @@ def test_thm3_1_published_gains_original_coordinates_infeasible():
     system["data"]["L"] = system["published"]["L"]
     del system["params"]["eps"]
     r = solve("obs_control.thm3_1", system, backend="clarabel")
-    assert r.status == "infeasible" and r.certificate.verdict == "infeasible-bounded"
+    # the ray is proven in rational arithmetic: a global proof
+    assert r.status == "infeasible" and r.certificate.verdict == "infeasible-certified"
+    assert r.exit_code() == 3
 
 
 # -- Theorem 3.2 on the Rossler example --------------------------------------------------------------

@@ -165,7 +165,7 @@ def test_thm4_example_is_infeasible(backend):
 
 def test_thm4_infeasible_for_large_gamma_d_and_printed_coupling():
     r = solve("sampled_euler.thm4", system("sampled_euler.thm4.example"), {"gamma_d": 0.5})
-    assert r.verdict == "infeasible-bounded"
+    assert r.verdict == "infeasible-certified" and r.outcome.evidence.kind == "exact-proof"
     d = system("sampled_euler.thm4.example", data={"Bd": [[1.0, 0.0], [0.0, 1.0]]})
     r = solve("sampled_euler.thm4", d, {"coupling": "I"})
     assert r.verdict == "infeasible-bounded"

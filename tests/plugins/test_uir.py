@@ -39,7 +39,8 @@ def test_thm3_1_published_gains_infeasible_at_claimed_gamma():
     """The paper claims feasibility at gamma0 = 0.259; (11) at the printed gains is infeasible."""
     r = solve("uir.thm3_1", example(EX31), backend="clarabel")
     assert r.status == "infeasible"
-    assert r.certificate.verdict == "infeasible-bounded", r.certificate.reason
+    assert r.certificate.verdict == "infeasible-certified", r.certificate.reason
+    assert r.certificate.exact["proven"]  # global: the Farkas ray is proven in rational arithmetic
 
 
 def _hinf_norm(N, M, J):
@@ -61,7 +62,7 @@ def test_thm3_1_threshold_is_the_bounded_real_lemma():
 
     lo, hi = bisect(feasible, 0.03, 0.05, 2e-4)
     assert lo == pytest.approx(bound, abs=5e-4)
-    assert solve("uir.thm3_1", example(EX31), {"gamma": 0.041}).certificate.verdict == "infeasible-bounded"
+    assert solve("uir.thm3_1", example(EX31), {"gamma": 0.041}).certificate.verdict == "infeasible-certified"
 
 
 # -- Theorem 5.1 on the Rossler example --------------------------------------------------------------

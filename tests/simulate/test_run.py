@@ -298,7 +298,7 @@ def test_yaml_style_numeric_strings_are_numbers():
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (("kalman", "discrete", {}), "unknown observer model 'kalman' (known: luenberger, sampled, uio)"),
+        (("kalman", "discrete", {}), "unknown observer model 'kalman' (known: euler, filter_error, luenberger, "),
         (("luenberger", "sampled", {}), "runs in discrete or continuous time, not 'sampled'"),
         (("sampled", "continuous", {}), "runs in sampled time"),
         (("luenberger", "discrete", {"A": AD, "C": C2}), "needs the role(s) L"),
@@ -312,7 +312,9 @@ def test_model_errors(args, message):
     with pytest.raises(DataError) as info:
         make_observer(*args)
     assert message in str(info.value)
-    assert sorted(MODELS) == ["luenberger", "sampled", "uio"]
+    assert sorted(MODELS) == [
+        "euler", "filter_error", "luenberger", "obs_control", "reduced", "robust", "sampled", "ui_filter", "uio"
+    ]  # fmt: skip
 
 
 # -- from a solved problem ------------------------------------------------------------------------

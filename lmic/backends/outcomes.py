@@ -1,0 +1,114 @@
+"""Shared rules for turning a native solver answer into a :class:`~lmic.solution.Solution`.
+
+Every backend declares its native statuses in a ``STATUS_MAP`` table; the rules the tables
+follow are stated here once:
+
+* the solver's own "solved" status is ``optimal`` (a claim the certifier checks);
+* an inexact claim (Clarabel's ``Almost*``, SCS's and CVXPY's ``*_inaccurate``, SDPA's
+  ``pdFEAS``/``pFEAS``/``dFEAS``, CVXOPT's ``unknown`` with an iterate) is ``inaccurate``;
+* a status the table does not list is ``error``, never success
+  (:meth:`lmic.backends.base.Backend.map_status`).
+
+An *inexact infeasibility* claim (``AlmostPrimalInfeasible``, ``infeasible_inaccurate``) is
+``inaccurate``, but its ray is kept: :func:`settle_inexact_infeasible` promotes it to
+``infeasible`` only when the ray verifies as a Farkas certificate of the (closed) problem the
+solver was given (:func:`lmic.certify.farkas.verify_farkas`, the certifier's own check), so a
+decision is not thrown away and the solver's inexact word is never taken.
+
+A stopped solve (time limit) is an ``error`` with ``info["time_limit"] = True``,
+``native_status`` ``"time_limit"`` (or the solver's own word) and a message starting
+``time limit of ...``: callers report it as ``undecided (time limit)``
+(:func:`time_limit_solution`, :func:`is_time_limit`).
+
+Examples
+--------
+>>> sol = time_limit_solution("clarabel", 0.5, elapsed=0.51)
+>>> sol.status, is_time_limit(sol), sol.message
+('error', True, 'time limit of 0.5 s exceeded (stopped after 0.51 s)')
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from lmic.ir.problem import Problem
+from lmic.solution import Solution
+
+__all__ = ["time_limit_solution", "mark_time_limit", "is_time_limit", "settle_inexact_infeasible"]
+
+
+def time_limit_solution(backend: str, limit: float, elapsed: float, native: str = "time_limit") -> Solution:
+    """The ``error`` solution of a solve stopped at its time limit.
+
+    >>> time_limit_solution("sdpa", 2.0, 2.1).info
+    {'time_limit': True, 'time_limit_s': 2.0}
+    """
+    sol = Solution(status="error", backend=backend, native_status=native, solve_s=elapsed)
+    return mark_time_limit(sol, limit, elapsed)
+
+
+def mark_time_limit(sol: Solution, limit: float | None, elapsed: float | None = None) -> Solution:
+    """Mark ``sol`` as stopped by the time limit (status ``error``, flag, message); returns it.
+
+    >>> mark_time_limit(Solution("inaccurate", native_status="MaxTime"), 1.0).status
+    'error'
+    """
+    sol.status = "error"
+    sol.x = None
+    sol.info["time_limit"] = True
+    sol.info["time_limit_s"] = limit
+    after = ""
+    if elapsed is not None:
+        after = f" (stopped after {elapsed:.3g} s)" if elapsed > 0 else " (used up before this solve started)"
+    sol.message = f"time limit of {limit:g} s exceeded{after}" if limit is not None else "time limit exceeded"
+    return sol
+
+
+def is_time_limit(sol: Solution) -> bool:
+    """Whether ``sol`` is a solve stopped by its time limit (report ``undecided (time limit)``).
+
+    >>> is_time_limit(Solution("error", message="NumericalError"))
+    False
+    """
+    return bool(sol.info.get("time_limit"))
+
+
+def settle_inexact_infeasible(problem: Problem, sol: Solution, farkas: dict[str, Any] | None) -> Solution:
+    """Keep an inexact infeasibility claim ``inaccurate`` unless its ray verifies.
+
+    ``sol`` is the ``inaccurate`` solution of an inexact infeasibility status and ``farkas``
+    the solver's ray (``{"lmis": [...], "linear": y}``, normalised or not). When
+    :func:`lmic.certify.farkas.verify_farkas` verifies it for ``problem`` (the closed problem the
+    solver was given), the status becomes ``infeasible`` with the ray as ``sol.farkas`` (the
+    certifier checks it again); otherwise ``sol`` stays ``inaccurate`` with no point, the ray
+    in ``sol.info["inexact_farkas"]``.
+
+    >>> from lmic.testing.conformance import CASES
+    >>> import numpy as np
+    >>> p = CASES["infeasible"].build()
+    >>> s = settle_inexact_infeasible(p, Solution("inaccurate"), {"lmis": [np.zeros((1, 1))], "linear": np.zeros(0)})
+    >>> s.status
+    'inaccurate'
+    """
+    sol.x = None
+    sol.info["claim"] = "infeasible"
+    if farkas is None or farkas.get("lmis") is None:
+        sol.message = sol.message or f"{sol.native_status}: inexact infeasibility claim without a ray"
+        return sol
+    try:
+        from lmic.certify.farkas import verify_farkas
+
+        report = verify_farkas(problem, farkas)
+    except Exception as err:  # noqa: BLE001 - a malformed ray is just not a proof
+        report = {"verified": False, "reason": f"{type(err).__name__}: {err}"}
+    if report.get("verified"):
+        sol.status = "infeasible"
+        sol.farkas = farkas
+        sol.message = f"{sol.native_status}: inexact infeasibility claim whose Farkas ray verifies"
+    else:
+        sol.info["inexact_farkas"] = farkas
+        sol.message = (
+            f"{sol.native_status}: inexact infeasibility claim; its ray is not a verified Farkas "
+            f"certificate ({report.get('reason', 'not verified')})"
+        )
+    return sol
