@@ -25,9 +25,6 @@ __all__ = [
     "to_jsonable",
     "write_atomic",
     "add_param_option",
-    "positive_float",
-    "nonnegative_float",
-    "positive_int",
 ]
 
 
@@ -94,67 +91,3 @@ def write_atomic(path: str | os.PathLike[str], write: Callable[[Any], None], mod
     from lmic.output import write_output
 
     write_output(path, write, binary="b" in mode)
-
-
-def _number(text: str, kind: type, what: str) -> Any:
-    import argparse
-
-    try:
-        value = kind(text)
-    except (ValueError, OverflowError):
-        raise argparse.ArgumentTypeError(f"{text!r} is not {what}") from None
-    if isinstance(value, float) and not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"{text!r} is not {what}")
-    return value
-
-
-def positive_float(text: str) -> float:
-    """argparse type: a finite number > 0 (``--time-limit``, ``--tol``).
-
-    >>> positive_float("1e-8")
-    1e-08
-    >>> positive_float("nan")
-    Traceback (most recent call last):
-    ...
-    argparse.ArgumentTypeError: 'nan' is not a finite positive number
-    """
-    import argparse
-
-    value = _number(text, float, "a finite positive number")
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a finite positive number")
-    return value
-
-
-def nonnegative_float(text: str) -> float:
-    """argparse type: a finite number >= 0 (``--margin``).
-
-    >>> nonnegative_float("-1")
-    Traceback (most recent call last):
-    ...
-    argparse.ArgumentTypeError: '-1' is not a finite non-negative number
-    """
-    import argparse
-
-    value = _number(text, float, "a finite non-negative number")
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a finite non-negative number")
-    return value
-
-
-def positive_int(text: str) -> int:
-    """argparse type: an integer >= 1 (``--max-iter``).
-
-    >>> positive_int("0")
-    Traceback (most recent call last):
-    ...
-    argparse.ArgumentTypeError: '0' is not a positive integer
-    """
-    import argparse
-
-    if len(text) > 18:
-        raise argparse.ArgumentTypeError(f"{text[:20]!r}... is not a positive integer")
-    value = _number(text, int, "a positive integer")
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer")
-    return value

@@ -23,14 +23,11 @@ __all__ = ["register", "run", "add_solver_options", "solve_options"]
 
 def add_solver_options(p: argparse.ArgumentParser) -> None:
     """Options shared by ``solve`` and ``crosscheck``: tolerance, limits, margin, verbosity."""
-    from lmic.commands._common import nonnegative_float, positive_float, positive_int
-
-    p.add_argument("--tol", type=positive_float, default=None, help="solver tolerance (default 1e-8)")
-    p.add_argument("--max-iter", type=positive_int, default=None, help="iteration limit")
-    p.add_argument("--time-limit", type=positive_float, default=None, help="seconds per solve")
-    p.add_argument(
-        "--margin", type=nonnegative_float, default=None, help="absolute margin imposed on strict LMIs (fixed-margin)"
-    )
+    # the values are validated by SolveOptions (lmic.options): bad ones are one line, exit 2
+    p.add_argument("--tol", type=float, default=None, help="solver tolerance (default 1e-8)")
+    p.add_argument("--max-iter", type=int, default=None, help="iteration limit")
+    p.add_argument("--time-limit", type=float, default=None, help="seconds per solve")
+    p.add_argument("--margin", type=float, default=None, help="absolute margin imposed on strict LMIs (fixed-margin)")
     p.add_argument(
         "--strict",
         choices=("auto", "max-margin", "fixed-margin"),
