@@ -67,6 +67,11 @@ EXAMPLES = {
     "reproduce": ["lmic reproduce --only 'qib.*'"],
     "simulate": ["lmic simulate qib.thm1 examples/qib.thm1.flexible-joint.yaml -o sim.png"],
     "report": ["lmic report qib.thm1 examples/qib.thm1.flexible-joint.yaml -o report.html"],
+    "batch": [
+        "lmic batch examples/studies/qib_monte_carlo.yaml -o runs/qib-mc",
+        "lmic batch examples/studies/obs_control_map.yaml -o runs/map --executor dask",
+        "lmic batch --status runs/qib-mc",
+    ],
 }
 
 

@@ -785,8 +785,8 @@ def _recomputed_diff(doc: dict[str, Any], new: dict[str, Any], infeasible: bool)
     for key in keys:
         if _matches(key, INFORMATIONAL) or _matches(key, CLAIMED):
             continue
-        if key not in new:
-            continue  # a claim this lmic cannot recompute: covered by the integrity hash
+        if key not in new or (new[key] is None and doc.get(key) is not None):
+            continue  # a claim this lmic cannot recompute (e.g. the system of an embedded IR): hashed
         if key not in doc:
             return (key, "<missing>", new[key])
         rec, fresh = doc[key], new[key]
@@ -797,7 +797,7 @@ def _recomputed_diff(doc: dict[str, Any], new: dict[str, Any], infeasible: bool)
                 path = f"{key}.{sk}"
                 if _matches(path, INFORMATIONAL) or _matches(path, CLAIMED) or sk in _TEXT_KEYS:
                     continue
-                if sk not in fresh:
+                if sk not in fresh or (fresh[sk] is None and rec.get(sk) is not None):
                     continue  # not recomputable here: hash-covered
                 if sk not in rec:
                     return (path, "<missing>", fresh[sk])
