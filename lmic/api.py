@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from lmic import __version__
+from lmic._version import __version__
 from lmic.backends.base import Backend, SolveOptions
 from lmic.errors import BackendError, LmicError
 from lmic.ir.problem import Problem

@@ -204,7 +204,7 @@ class AuditReport:
 
     def to_dict(self) -> dict[str, Any]:
         """The ``--json`` object."""
-        from lmic import __version__
+        from lmic._version import __version__
 
         return {
             "lmic": __version__,

@@ -210,7 +210,7 @@ class ReproductionReport:
 
     def to_dict(self) -> dict[str, Any]:
         """The ``--json`` object."""
-        from lmic import __version__
+        from lmic._version import __version__
 
         return {
             "lmic": __version__,
@@ -553,7 +553,7 @@ def _cell(text: Any) -> str:
 
 def render_markdown(report: ReproductionReport, *, command: str = "lmic reproduce -o docs/reproduction.md") -> str:
     """The reproduction table as Markdown (what ``lmic reproduce -o`` writes)."""
-    from lmic import __version__
+    from lmic._version import __version__
 
     lines = [
         "# Reproduction of the published examples",

@@ -199,7 +199,7 @@ class SupResult:
 
     def to_dict(self) -> dict[str, Any]:
         """The ``--json`` object."""
-        from lmic import __version__
+        from lmic._version import __version__
 
         binds = [p.bind_s for p in self.points]
         return {
@@ -256,7 +256,7 @@ class SweepResult:
 
     def to_dict(self) -> dict[str, Any]:
         """The ``--json`` object."""
-        from lmic import __version__
+        from lmic._version import __version__
 
         return {
             "lmic": __version__,
