@@ -188,7 +188,7 @@ def test_two_concurrent_runs_leave_one_complete_file(tmp_path, capsys):
 
 
 def test_ctrl_c_exits_130_with_one_line(tmp_path):
-    proc = _lmic("solve", "qib.thm1", SYSTEM, "--sweep", "beta=0:0.01:400")
+    proc = _lmic("solve", "qib.thm1", SYSTEM, "--sweep", "beta=0:0.01:4000")  # far longer than 5 s
     time.sleep(5.0)  # well inside the sweep (imports take ~1-2 s)
     proc.send_signal(signal.SIGINT)
     stdout, err = proc.communicate(timeout=60)
