@@ -22,12 +22,14 @@ from collections.abc import Sequence
 from lmic import __version__
 from lmic.errors import LmicError
 
-__all__ = ["main", "COMMANDS", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_INFEASIBLE"]
+__all__ = ["main", "COMMANDS", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_INFEASIBLE", "EXIT_INTERRUPTED"]
 
 EXIT_OK = 0
 EXIT_FAILED = 1
 EXIT_USAGE = 2
 EXIT_INFEASIBLE = 3
+#: Ctrl-C (128 + SIGINT, the shell convention)
+EXIT_INTERRUPTED = 130
 
 #: sub-command modules, in the order ``lmic --help`` lists them
 COMMANDS = [
@@ -131,13 +133,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv  # accepted anywhere: lmic --debug solve ..., lmic solve ... --debug
     argv = [a for a in argv if a != "--debug"]
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    args.debug = debug
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return EXIT_USAGE
     try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        args.debug = debug
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return EXIT_USAGE
         return int(args.func(args))
     except LmicError as err:
         if debug:
@@ -157,7 +159,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_FAILED
     except KeyboardInterrupt:
         sys.stderr.write("lmic: interrupted\n")
-        return 130  # lmic.outcome.EXIT_CODES["interrupted"]
+        return EXIT_INTERRUPTED  # lmic.outcome.EXIT_CODES["interrupted"]
 
 
 def _entry() -> None:

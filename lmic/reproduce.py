@@ -42,7 +42,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from lmic.errors import DataError, LmicError
 
@@ -230,12 +229,11 @@ class ReproductionReport:
 def load_expectations(path: str | os.PathLike[str]) -> dict[str, list[Row]]:
     """Read ``reproduction.yaml``: ``{file name: [Row, ...]}`` (raises :class:`DataError`)."""
     p = Path(path)
-    try:
-        raw = yaml.safe_load(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise DataError(f"{p}: no such file") from None
-    except yaml.YAMLError as err:
-        raise DataError(f"{p.name}: malformed YAML: {err}") from None
+    from lmic.limits import load_yaml_text, read_text
+
+    if not p.exists():
+        raise DataError(f"{p}: no such file")
+    raw = load_yaml_text(read_text(p, p.name), p.name)  # the input limits of lmic.limits
     if not isinstance(raw, dict) or not isinstance(raw.get("examples"), dict):
         raise DataError(f"{p.name}: expected a mapping with an 'examples' section")
     out: dict[str, list[Row]] = {}

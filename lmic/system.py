@@ -33,9 +33,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from lmic.errors import DataError
+from lmic.limits import MAX_DIMENSION, MAX_INT_DIGITS, check_depth, load_json_text, load_yaml_text, read_text
 
 __all__ = ["System", "load_system", "parse_matrix", "canonical_json", "UnusedDataNote", "edit_distance", "near_miss"]
 
@@ -123,7 +123,8 @@ def canonical_json(obj: Any) -> str:
     return json.dumps(obj, sort_keys=True, separators=(",", ":"), allow_nan=False)
 
 
-_NUMBER = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+#: plain float literals, ASCII digits only (``\d`` would take Unicode digits such as "١٢")
+_NUMBER = re.compile(r"[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][-+]?[0-9]+)?", re.ASCII)
 
 
 def _is_number(v: Any) -> bool:
@@ -132,9 +133,20 @@ def _is_number(v: Any) -> bool:
 
 def _number_literal(v: Any) -> Any:
     """YAML 1.1 reads ``1e-5`` (no dot) as a string: accept plain float literals, nothing else."""
-    if isinstance(v, str) and _NUMBER.match(v.strip()):
+    if isinstance(v, str) and len(v) <= 2 * MAX_INT_DIGITS and _NUMBER.fullmatch(v.strip()):
         return float(v)
     return v
+
+
+def _float(v: Any, where: str) -> float:
+    """``float(v)`` for a number, or one line (an integer too large for a float64)."""
+    try:
+        f = float(v)
+    except (OverflowError, ValueError):
+        raise DataError(f"{where}: the number {str(v)[:20]}... is too large for a float64") from None
+    if not math.isfinite(f):
+        raise DataError(f"{where}: is {f} (NaN and Inf are not allowed)")
+    return f
 
 
 def parse_matrix(value: Any, where: str) -> np.ndarray:
@@ -156,7 +168,7 @@ def parse_matrix(value: Any, where: str) -> np.ndarray:
         value = value.item()
     value = _number_literal(value)
     if _is_number(value):
-        arr = np.array([[float(value)]])
+        arr = np.array([[_float(value, where)]])
     elif isinstance(value, list):
         value = [[_number_literal(v) for v in r] if isinstance(r, list) else _number_literal(r) for r in value]
         if not value:
@@ -168,17 +180,21 @@ def parse_matrix(value: Any, where: str) -> np.ndarray:
         if not all(isinstance(r, list) for r in value):
             raise DataError(f"{where}: mixes numbers and rows; use a nested list of rows")
         width = len(value[0])
+        if len(value) > MAX_DIMENSION or width > MAX_DIMENSION:
+            raise DataError(f"{where}: {len(value)} x {width} exceeds the size limit {MAX_DIMENSION}")
         for i, row in enumerate(value):
             if len(row) != width:
                 raise DataError(f"{where}: row {i + 1} has {len(row)} entries, row 1 has {width}")
             for j, v in enumerate(row):
                 if not _is_number(v):
-                    raise DataError(f"{where}: entry ({i + 1},{j + 1}) is {v!r}, not a number")
+                    raise DataError(f"{where}: entry ({i + 1},{j + 1}) is {_show(v)}, not a number")
+                if isinstance(v, int) and abs(v) >= 10**308:
+                    raise DataError(f"{where}: entry ({i + 1},{j + 1}) is too large for a float64")
         if width == 0:
             raise DataError(f"{where}: has empty rows")
         arr = np.array(value, dtype=float)
     else:
-        raise DataError(f"{where}: is {type(value).__name__} {value!r}, not a number or a matrix")
+        raise DataError(f"{where}: is {type(value).__name__} {_show(value)}, not a number or a matrix")
     bad = ~np.isfinite(arr)
     if bad.any():
         i, j = np.argwhere(bad)[0]
@@ -186,26 +202,35 @@ def parse_matrix(value: Any, where: str) -> np.ndarray:
     return arr
 
 
+def _show(v: Any) -> str:
+    """A short repr for an error message (never a 5000-character one)."""
+    text = repr(v)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _no_duplicate_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in pairs:
+        if k in out:
+            raise DataError(f"key {k!r} appears twice")
+        out[k] = v
+    return out
+
+
 def _read_file(path: Path) -> Any:
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise DataError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise DataError(f"{path}: is a directory, not a system file") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise DataError(f"{path}: cannot be read ({err})") from None
-    try:
-        if path.suffix.lower() == ".json":
-            return json.loads(text)
-        return yaml.safe_load(text)
-    except json.JSONDecodeError as err:
-        raise DataError(f"{path.name}: malformed JSON at line {err.lineno}: {err.msg}") from None
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        line = f" at line {mark.line + 1}" if mark is not None else ""
-        problem = getattr(err, "problem", None) or str(err).splitlines()[0]
-        raise DataError(f"{path.name}: malformed YAML{line}: {problem}") from None
+    """Parse a system file within :mod:`lmic.limits` (size, depth, aliases, integers, duplicate keys)."""
+    if path.is_dir():
+        raise DataError(f"{path}: is a directory, not a system file")
+    if not path.exists():
+        raise DataError(f"{path}: no such file")
+    text = read_text(path, str(path))
+    if path.suffix.lower() == ".json":
+        try:
+            return load_json_text(text, path.name, object_pairs_hook=_no_duplicate_keys)
+        except DataError as err:
+            msg = str(err)
+            raise DataError(msg if msg.startswith(path.name) else f"{path.name}: {msg}") from None
+    return load_yaml_text(text, path.name)
 
 
 def load_system(src: str | os.PathLike[str] | dict[str, Any] | System, label: str | None = None) -> System:
@@ -235,8 +260,9 @@ def load_system(src: str | os.PathLike[str] | dict[str, Any] | System, label: st
         where = p.name
     if not isinstance(raw, dict):
         raise DataError(f"{where}: a system file is a mapping with keys lmic, data, params")
+    check_depth(raw, where)
     version = raw.get("lmic", 1)
-    if version not in SUPPORTED_VERSIONS:
+    if isinstance(version, bool) or version not in SUPPORTED_VERSIONS:
         raise DataError(f"{where}: lmic: {version!r} is not a supported system-file version (1)")
     data_raw = raw.get("data")
     if data_raw is None:
@@ -257,13 +283,11 @@ def load_system(src: str | os.PathLike[str] | dict[str, Any] | System, label: st
             raise DataError(f"{where}: parameter key {key!r} is not a name")
         value = _number_literal(value)
         if _is_number(value):
-            if not math.isfinite(float(value)):
-                raise DataError(f"{where}: parameter '{key}' is {value} (NaN and Inf are not allowed)")
-            params[key] = float(value)
+            params[key] = _float(value, f"{where}: parameter '{key}'")
         elif isinstance(value, str):
             params[key] = value
         else:
-            raise DataError(f"{where}: parameter '{key}' is {value!r}, not a number or an option name")
+            raise DataError(f"{where}: parameter '{key}' is {_show(value)}, not a number or an option name")
     published_raw = raw.get("published") or {}
     if not isinstance(published_raw, dict):
         raise DataError(f"{where}: 'published' must be a mapping")
@@ -273,7 +297,7 @@ def load_system(src: str | os.PathLike[str] | dict[str, Any] | System, label: st
         if isinstance(value, str):
             published[key] = value
         elif _is_number(value):
-            published[key] = float(value)
+            published[key] = _float(value, f"{where}: published '{key}'")
         else:
             published[key] = parse_matrix(value, f"{where}: published '{key}'")
     return System(

@@ -47,10 +47,11 @@ from __future__ import annotations
 
 import dataclasses
 import datetime as _dt
+import fnmatch
+import hashlib
 import json
 import math
 import os
-import tempfile
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -71,6 +72,11 @@ __all__ = [
     "read_certificate",
     "audit_certificate",
     "AuditResult",
+    "INFORMATIONAL",
+    "CLAIMED",
+    "integrity_of",
+    "looser_tolerances",
+    "strictest",
 ]
 
 #: version of the certificate file format (the ``lmic_certificate`` key)
@@ -250,7 +256,9 @@ def certificate_document(
         doc["enclosure"] = enclosure
     if backoff is not None:  # -- backed-off point (lmic.backoff) --
         doc["backoff"] = backoff
-    return _jsonable(doc)
+    doc = _jsonable(doc)
+    doc["integrity"] = integrity_of(doc)
+    return doc
 
 
 def _theorem_identity(meta: dict[str, Any]) -> dict[str, Any]:
@@ -331,6 +339,8 @@ def write_certificate(
     >>> json.load(open(f))["certificate"]["verdict"]
     'certified'
     """
+    from lmic.output import write_output
+
     doc = certificate_document(
         problem,
         solution,
@@ -342,21 +352,7 @@ def write_certificate(
         backoff=backoff,
     )
     text = json.dumps(doc, indent=1, allow_nan=False) + "\n"
-    target = Path(path)
-    folder = target.parent if str(target.parent) else Path(".")
-    if not folder.is_dir():
-        raise CertificateError(f"{target}: folder {folder} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, target)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    write_output(path, text)  # atomic; the output-path rules of lmic.output
     return doc
 
 
@@ -395,7 +391,22 @@ def read_certificate(path: str | os.PathLike[str]) -> dict[str, Any]:
     """
     p = Path(path)
     name = p.name
+    from lmic.limits import MAX_INPUT_BYTES, MAX_INT_DIGITS, check_depth
+
+    def parse_int(t: str) -> int:
+        if len(t.lstrip("-")) > MAX_INT_DIGITS:
+            raise ValueError(f"an integer of {len(t.lstrip('-'))} digits (at most {MAX_INT_DIGITS})")
+        return int(t)
+
+    def parse_float(t: str) -> float:
+        value = float(t)
+        if not math.isfinite(value):
+            raise ValueError(f"the number {t[:24]} overflows float64")
+        return value
+
     try:
+        if p.stat().st_size > MAX_INPUT_BYTES:
+            raise CertificateError(f"{p}: larger than the input limit of {MAX_INPUT_BYTES} bytes")
         text = p.read_text(encoding="utf-8")
     except FileNotFoundError:
         raise CertificateError(f"{p}: no such certificate file") from None
@@ -404,13 +415,16 @@ def read_certificate(path: str | os.PathLike[str]) -> dict[str, Any]:
     if not text.strip():
         raise CertificateError(f"{name}: empty certificate file")
     try:
-        doc = json.loads(text, parse_constant=_reject_constant)
+        doc = json.loads(text, parse_constant=_reject_constant, parse_int=parse_int, parse_float=parse_float)
     except json.JSONDecodeError as err:
         raise CertificateError(
             f"{name}: not valid JSON (truncated or corrupted?) at line {err.lineno} column {err.colno}: {err.msg}"
         ) from None
     except ValueError as err:
         raise CertificateError(f"{name}: {err}") from None
+    except RecursionError:
+        raise CertificateError(f"{name}: nested too deeply") from None
+    check_depth(doc, name, CertificateError)
     if not isinstance(doc, dict) or "lmic_certificate" not in doc:
         raise CertificateError(f"{name}: not an lmic certificate (no 'lmic_certificate' key)")
     version = doc["lmic_certificate"]
@@ -423,13 +437,169 @@ def read_certificate(path: str | os.PathLike[str]) -> dict[str, Any]:
     validator = jsonschema.Draft202012Validator(_schema())
     errors = sorted(validator.iter_errors(doc), key=lambda e: list(e.absolute_path))
     if errors:
-        err = errors[0]
-        where = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in err.absolute_path).lstrip(".")
-        msg = " ".join(err.message.split())
+        first = errors[0]
+        where = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in first.absolute_path).lstrip(".")
+        msg = " ".join(first.message.split())
         if len(msg) > 160:
             msg = msg[:157] + "..."
         raise CertificateError(f"{name}: {where or 'top level'}: {msg}")
     return doc
+
+
+#: fields that carry no claim: never compared, not covered by the integrity hash, free to differ
+#: (``lmic audit --json`` lists them). Patterns match dotted paths (``fnmatch``; ``*`` one key).
+INFORMATIONAL = (
+    "created",
+    "certificate.time_s",
+    "certificate.*.time_s",
+    "certificate.*.*.time_s",
+)
+
+#: claims the audit cannot recompute: the solver's own answer (``solution.x`` and the Farkas
+#: ray are the *inputs* of the recomputation), the backend's report, the writer's version, the
+#: embedded IR (its content is checked through ``ir.sha256``) and where the system file was.
+#: They are covered by the integrity hashes; every other field is recomputed and compared.
+CLAIMED = (
+    "lmic",
+    "theorem.provider",  # a new plugin version with the same template is a note (theorem_changes)
+    "system.path",
+    "ir.embedded",
+    "backend",
+    "solution.x",
+    "solution.objective",
+    "solution.farkas",
+)
+
+#: free text and bit sizes inside recomputed sections: covered by the hash, not compared
+#: (a reason quotes numbers whose last digits may vary between BLAS builds; the exact Farkas
+#: multipliers come out of a float least-squares repair)
+_TEXT_KEYS = ("reason", "note", "detail", "statement", "denominator_bits")
+
+#: tolerances that are looser when larger / when smaller (strict_rel is a required margin,
+#: zero_rel the fraction below which a point counts as ~0 and is rejected)
+_LOOSER_IF_LARGER = ("rel", "objective_rel", "farkas_rel")
+_LOOSER_IF_SMALLER = ("strict_rel", "zero_rel")
+
+
+def _matches(path: str, patterns: tuple[str, ...]) -> bool:
+    parts = path.split(".")
+    for pat in patterns:
+        pp = pat.split(".")
+        if len(pp) <= len(parts) and all(fnmatch.fnmatchcase(a, b) for a, b in zip(parts, pp, strict=False)):
+            if len(pp) == len(parts) or pat in CLAIMED:
+                return True
+    return False
+
+
+def _strip(value: Any, where: str) -> Any:
+    """A copy of ``value`` without its informational fields."""
+    if isinstance(value, dict):
+        out = {}
+        for k, v in value.items():
+            sub = f"{where}.{k}" if where else str(k)
+            if _matches(sub, INFORMATIONAL):
+                continue
+            out[k] = _strip(v, sub)
+        return out
+    if isinstance(value, list):
+        return [_strip(v, where) for v in value]
+    return value
+
+
+def _digest(value: Any) -> str:
+    text = json.dumps(value, sort_keys=True, separators=(",", ":"), allow_nan=False, ensure_ascii=True)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _field_paths(doc: dict[str, Any]) -> list[tuple[str, Any]]:
+    """The hashed fields: every key down to depth 2, in document order (informational left out)."""
+    out: list[tuple[str, Any]] = []
+    for k, v in doc.items():
+        if k == "integrity" or _matches(k, INFORMATIONAL):
+            continue
+        if isinstance(v, dict) and v:
+            for kk, vv in v.items():
+                path = f"{k}.{kk}"
+                if not _matches(path, INFORMATIONAL):
+                    out.append((path, _strip(vv, path)))
+        else:
+            out.append((k, _strip(v, k)))
+    return out
+
+
+def integrity_of(doc: dict[str, Any]) -> dict[str, Any]:
+    """The ``integrity`` section of a certificate: SHA-256 of every field (depth <= 2) and of all.
+
+    Anyone can recompute these hashes: they do not make a forgery harder, the recomputation
+    does. They cover the fields :func:`audit_certificate` cannot recompute (:data:`CLAIMED`,
+    free text), so that a change to any non-informational field is detected and named.
+
+    Examples
+    --------
+    >>> sec = integrity_of({"lmic_certificate": 1, "created": "now", "backend": {"name": "scs"}})
+    >>> sorted(sec["fields"]), len(sec["sha256"])
+    (['backend.name', 'lmic_certificate'], 64)
+    """
+    fields = {path: _digest(v) for path, v in _field_paths(doc)}
+    body = {k: v for k, v in doc.items() if k != "integrity"}
+    return {"algorithm": "sha256", "fields": fields, "sha256": _digest(_strip(body, ""))}
+
+
+def _integrity_finding(doc: dict[str, Any]) -> tuple[str, str] | None:
+    """The first field whose hash differs from the recorded one (field, message), or None."""
+    rec = doc.get("integrity")
+    if not isinstance(rec, dict) or not isinstance(rec.get("fields"), dict):
+        return ("integrity", "integrity: the certificate records no integrity hashes")
+    want = integrity_of(doc)
+    recorded = rec["fields"]
+    for path, digest in want["fields"].items():
+        if recorded.get(path) != digest:
+            why = "not hashed in the file" if path not in recorded else "its hash differs from integrity.fields"
+            return (path, f"{path} was modified ({why})")
+    for path in recorded:
+        if path not in want["fields"]:
+            return (f"integrity.fields.{path}", f"integrity.fields names {path}, which the certificate lacks")
+    if rec.get("sha256") != want["sha256"] or rec.get("algorithm") != "sha256":
+        return ("integrity.sha256", "integrity.sha256 differs from the content")
+    return None
+
+
+def looser_tolerances(recorded: dict[str, Any], than: Tolerances) -> list[tuple[str, Any, float]]:
+    """Tolerances of ``recorded`` that are looser than ``than`` (or unknown): ``(name, value, bound)``.
+
+    Examples
+    --------
+    >>> looser_tolerances({"rel": 1e300, "strict_rel": 1e-12}, Tolerances())
+    [('rel', 1e+300, 1e-08)]
+    >>> looser_tolerances({"strict_rel": 0.0}, Tolerances())
+    [('strict_rel', 0.0, 1e-12)]
+    """
+    ref = than.to_dict()
+    out: list[tuple[str, Any, float]] = []
+    for key, value in recorded.items():
+        num = _num(value)
+        if key not in ref or num is None or not math.isfinite(num):
+            out.append((key, value, float("nan") if key not in ref else ref[key]))
+        elif key in _LOOSER_IF_LARGER and num > ref[key]:
+            out.append((key, value, ref[key]))
+        elif key in _LOOSER_IF_SMALLER and num < ref[key]:
+            out.append((key, value, ref[key]))
+        elif key not in _LOOSER_IF_LARGER and key not in _LOOSER_IF_SMALLER and num != ref[key]:
+            out.append((key, value, ref[key]))
+    return out
+
+
+def strictest(a: Tolerances, b: Tolerances) -> Tolerances:
+    """Key by key, the stricter of two tolerance sets.
+
+    >>> strictest(Tolerances(rel=1e-6), Tolerances(rel=1e-9, strict_rel=0.0)).to_dict()["rel"]
+    1e-09
+    """
+    da, db = a.to_dict(), b.to_dict()
+    out = {}
+    for k in da:
+        out[k] = max(da[k], db[k]) if k in _LOOSER_IF_SMALLER else min(da[k], db[k])
+    return Tolerances(**out)
 
 
 @dataclass
@@ -456,6 +626,10 @@ class AuditResult:
         What was checked, in order.
     label : str
         The verdict as displayed: ``certified (exact)`` when an exact proof backs it.
+    tolerances : dict
+        The tolerances the audit decided with (lmic's defaults or stricter).
+    informational : list of str
+        The fields left unchecked (:data:`INFORMATIONAL`).
     """
 
     ok: bool
@@ -468,6 +642,8 @@ class AuditResult:
     theorem: str | None = None
     checked: list[str] = dataclasses.field(default_factory=list)
     label: str = ""
+    tolerances: dict[str, float] = dataclasses.field(default_factory=lambda: Tolerances().to_dict())
+    informational: list[str] = dataclasses.field(default_factory=lambda: list(INFORMATIONAL))
 
     def __post_init__(self) -> None:
         if not self.label:
@@ -486,16 +662,19 @@ class AuditResult:
                 "exact": self.exact,
                 "label": self.label,
                 "checked": self.checked,
+                "tolerances": self.tolerances,
+                "informational": self.informational,
                 "certificate": None if self.certificate is None else self.certificate.to_dict(),
             }
         )
 
 
 def _fail(doc: dict, fld: str, message: str, cert: Certificate | None = None, **kw: Any) -> AuditResult:
+    rec = doc.get("certificate")
     return AuditResult(
         ok=False,
         verdict="rejected",
-        recorded_verdict=doc["certificate"]["verdict"],
+        recorded_verdict=str(rec.get("verdict")) if isinstance(rec, dict) else "?",
         field=fld,
         message=message,
         certificate=cert,
@@ -503,8 +682,8 @@ def _fail(doc: dict, fld: str, message: str, cert: Certificate | None = None, **
     )
 
 
-def _rebuild(doc: dict[str, Any], base: Path) -> tuple[Problem, str | None, AuditResult | None]:
-    """The problem to audit against; an early AuditResult if a hash already differs."""
+def _rebuild(doc: dict[str, Any], base: Path) -> tuple[Problem, str, Any]:
+    """The problem to audit against, a label, and the loaded system (None for an embedded IR)."""
     embedded = doc["ir"]["embedded"]
     theorem = doc["theorem"]
     if embedded is not None:
@@ -534,18 +713,11 @@ def _rebuild(doc: dict[str, Any], base: Path) -> tuple[Problem, str | None, Audi
         raise CertificateError(f"system file {sys_path} (recorded in the certificate) not found")
     system = load_system(sys_path)
     if system.data_hash() != doc["system"]["sha256"]:
-        return (
-            None,  # type: ignore[return-value]
-            f"theorem {theorem['id']}",
-            _fail(
-                doc,
-                "system.sha256",
-                f"system.sha256 differs: the data of {sys_path.name} changed since the certificate was written",
-            ),
-        )
+        why = f"system.sha256 differs: the data of {sys_path.name} changed since the certificate was written"
+        return None, why, system  # type: ignore[return-value]
     params = doc["params"] or {}
     problem = compile_theorem(thm, system, params=params)
-    return problem, f"theorem {theorem['id']} on {sys_path.name}", None
+    return problem, f"theorem {theorem['id']} on {sys_path.name}", system
 
 
 def _num(v: Any) -> float | None:
@@ -566,24 +738,26 @@ def _close(a: float, b: float, atol: float) -> bool:
     return abs(a - b) <= 1e-9 * max(abs(a), abs(b)) + atol
 
 
-#: text and timings, and the bit size of an exact Farkas certificate (it comes out of a float
-#: least-squares repair, so another BLAS may give other, equally exact, rationals)
-_UNCOMPARED = ("time_s", "reason", "note", "detail", "statement", "denominator_bits")
-
-
 def _first_diff(rec: Any, new: Any, where: str, atol: float = 1e-300) -> tuple[str, Any, Any] | None:
+    """The first leaf where the recorded and the recomputed value differ (numbers to 1e-9 rel)."""
     ra, na = _num(rec), _num(new)
-    if ra is not None and na is not None:
+    if ra is not None and na is not None and type(rec) is not str and type(new) is not str:
+        if isinstance(rec, int) != isinstance(new, int) and (isinstance(rec, int) or isinstance(new, int)):
+            if float(rec) != float(new):
+                return (where, rec, new)
         return None if _close(ra, na, atol) else (where, rec, new)
     if isinstance(rec, dict) and isinstance(new, dict):
         scale = _num(new.get("scale")) if "min_eig" in new else None
         sub_atol = 1e-12 * scale if scale and math.isfinite(scale) else atol
-        for key in list(rec) + [k for k in new if k not in rec]:
-            if key in _UNCOMPARED or where.endswith("tolerances"):
+        keys = [k for k in rec if k not in ("verdict", "label")] + [k for k in new if k not in rec]
+        keys += [k for k in ("verdict", "label") if k in rec or k in new]
+        for key in keys:
+            sub = f"{where}.{key}"
+            if key in _TEXT_KEYS or _matches(sub, INFORMATIONAL):
                 continue
             if key not in rec or key not in new:
-                return (f"{where}.{key}", rec.get(key, "<missing>"), new.get(key, "<missing>"))
-            d = _first_diff(rec[key], new[key], f"{where}.{key}", sub_atol)
+                return (sub, rec.get(key, "<missing>"), new.get(key, "<missing>"))
+            d = _first_diff(rec[key], new[key], sub, sub_atol)
             if d:
                 return d
         return None
@@ -595,6 +769,8 @@ def _first_diff(rec: Any, new: Any, where: str, atol: float = 1e-300) -> tuple[s
             if d:
                 return d
         return None
+    if type(rec) is not type(new):
+        return (where, rec, new)
     return None if rec == new else (where, rec, new)
 
 
@@ -603,8 +779,57 @@ def _short(v: Any) -> str:
     return s if len(s) <= 60 else s[:57] + "..."
 
 
-def audit_certificate(path: str | os.PathLike[str], exact: bool = False) -> AuditResult:
+def _recomputed_diff(doc: dict[str, Any], new: dict[str, Any], infeasible: bool) -> tuple[str, Any, Any] | None:
+    """First difference between the file and the regenerated document, on recomputed fields."""
+    keys = [k for k in doc if k != "integrity"] + [k for k in new if k not in doc and k != "integrity"]
+    for key in keys:
+        if _matches(key, INFORMATIONAL) or _matches(key, CLAIMED):
+            continue
+        if key not in new or (new[key] is None and doc.get(key) is not None):
+            continue  # a claim this lmic cannot recompute (e.g. the system of an embedded IR): hashed
+        if key not in doc:
+            return (key, "<missing>", new[key])
+        rec, fresh = doc[key], new[key]
+        if isinstance(rec, dict) and isinstance(fresh, dict):
+            sub_keys = [k for k in rec if k not in ("verdict", "label")] + [k for k in fresh if k not in rec]
+            sub_keys += [k for k in ("verdict", "label") if k in rec or k in fresh]
+            for sk in sub_keys:
+                path = f"{key}.{sk}"
+                if _matches(path, INFORMATIONAL) or _matches(path, CLAIMED) or sk in _TEXT_KEYS:
+                    continue
+                if sk not in fresh or (fresh[sk] is None and rec.get(sk) is not None):
+                    continue  # not recomputable here: hash-covered
+                if sk not in rec:
+                    return (path, "<missing>", fresh[sk])
+                # a Farkas verification is normalised to sum tr Z_i + sum |y_r| = 1 and a repaired
+                # certificate comes out of least squares: its round-off-level entries may differ
+                # in the last bits between BLAS builds, so they compare with an absolute 1e-12
+                atol = 1e-12 if path == "certificate.farkas" or (path == "certificate.exact" and infeasible) else 1e-300
+                d = _first_diff(rec[sk], fresh[sk], path, atol)
+                if d:
+                    return d
+            continue
+        d = _first_diff(rec, fresh, key)
+        if d:
+            return d
+    return None
+
+
+def audit_certificate(
+    path: str | os.PathLike[str],
+    exact: bool = False,
+    tol: Tolerances | float | dict | None = None,
+) -> AuditResult:
     """Recompute a certificate from scratch and compare it with the file.
+
+    The audit trusts nothing in the file but the data it recomputes from: it decides with its
+    own tolerances (``tol``: lmic's defaults, or stricter), and a file that records looser ones
+    is rejected, naming the tolerance. It rebuilds the IR (recompiling the theorem on the system
+    file, or loading the embedded IR, both checked against ``ir.sha256``), re-runs the certifier
+    on the recorded point (or Farkas ray), regenerates the whole document with
+    :func:`certificate_document` and compares it field by field; the fields it cannot recompute
+    (:data:`CLAIMED`, free text) are checked against the ``integrity`` hashes. Only the
+    :data:`INFORMATIONAL` fields may differ.
 
     Parameters
     ----------
@@ -614,6 +839,8 @@ def audit_certificate(path: str | os.PathLike[str], exact: bool = False) -> Audi
         Also run the exact rational proof when the file does not record one (it is reported,
         not compared). A recorded exact proof is always re-run and compared: the recorded
         verdict may rest on it.
+    tol : Tolerances, float or dict, optional
+        The auditor's tolerances; looser than lmic's defaults is refused (``LmicError``).
 
     Returns
     -------
@@ -641,49 +868,56 @@ def audit_certificate(path: str | os.PathLike[str], exact: bool = False) -> Audi
     >>> r.ok, r.field
     (False, 'solution.variables.p')
     """
+    auditor = Tolerances.coerce(tol)
+    too_loose = looser_tolerances(auditor.to_dict(), Tolerances())
+    if too_loose:
+        k, v, b = too_loose[0]
+        raise LmicError(f"audit tolerance {k}={v} is looser than lmic's default {b}: an audit may only be stricter")
     p = Path(path)
     doc = read_certificate(p)
-    recorded = doc["certificate"]
-    problem, label, early = _rebuild(doc, p.resolve().parent)
-    if early is not None:
-        early.theorem = (doc["theorem"] or {}).get("id")
-        return early
-    checked = ["schema", "system.sha256" if doc["system"] and doc["ir"]["embedded"] is None else "embedded IR"]
     theorem_id = (doc["theorem"] or {}).get("id")
+    common: dict[str, Any] = {"theorem": theorem_id, "tolerances": auditor.to_dict()}
+    recorded = doc["certificate"]
+    # 1. the file may not ask for tolerances looser than the audit's
+    # (looser than lmic's defaults; between those and stricter ones the auditor asked for, the
+    # file's numbers are checked with its own tolerances and the verdict with the auditor's)
+    for key, value, bound in looser_tolerances(doc["tolerances"], Tolerances()):
+        what = "an unknown tolerance" if math.isnan(bound) else f"looser than lmic's default {bound:g}"
+        return _fail(doc, f"tolerances.{key}", f"tolerances.{key} = {_short(value)} is {what}", **common)
+    file_tol = strictest(Tolerances.coerce(dict(doc["tolerances"])), Tolerances())
+    hashed = _integrity_finding(doc)
+    # 2. the IR: recompiled from the theorem and the system file, or the embedded one
+    try:
+        problem, label, system = _rebuild(doc, p.resolve().parent)
+    except LmicError as err:
+        if hashed is not None:  # e.g. a modified system.path or params: name the modified field
+            return _fail(doc, hashed[0], hashed[1], **common)
+        if isinstance(err, CertificateError):
+            raise
+        raise CertificateError(f"cannot rebuild the IR the certificate records: {err}") from None
+    if problem is None:
+        return _fail(doc, "system.sha256", label, **common)
+    checked = ["schema", "tolerances", "system.sha256" if doc["ir"]["embedded"] is None else "embedded IR"]
     if doc["ir"]["embedded"] is None:  # recompiled from the installed theorem: is it the same theorem?
         changed, note = theorem_changes(doc["theorem"], problem)
         if changed:
-            return _fail(doc, "theorem.template_hash", changed, theorem=theorem_id, checked=checked)
+            return _fail(doc, "theorem.template_hash", changed, checked=checked, **common)
         if doc["theorem"] and doc["theorem"].get("template_hash"):
             checked.append("theorem.template_hash" + (f" ({note})" if note else ""))
-    digest = ir_hash(problem)
-    if digest != doc["ir"]["sha256"]:
+    if ir_hash(problem) != doc["ir"]["sha256"]:
         why = (
             "the embedded IR was modified"
             if doc["ir"]["embedded"] is not None
             else "recompiling gives a different IR (the theorem plugin, the compiler or the parameters changed)"
         )
-        return _fail(doc, "ir.sha256", f"ir.sha256 differs: {why}", theorem=theorem_id, checked=checked)
+        return _fail(doc, "ir.sha256", f"ir.sha256 differs: {why}", checked=checked, **common)
     checked.append("ir.sha256")
+    # 3. the solver's claims, as recorded, re-certified
     sol = doc["solution"]
     x = None if sol["x"] is None else np.asarray(sol["x"], dtype=float)
-    if x is not None:
-        if x.shape != (problem.n,):
-            return _fail(
-                doc, "solution.x", f"solution.x has {x.size} entries, the IR {problem.n} variables", theorem=theorem_id
-            )
-        variables = _jsonable(problem.unpack(x))
-        rec_vars = sol["variables"] or {}
-        for v in problem.variables:
-            if v.name not in rec_vars or _first_diff(rec_vars[v.name], variables[v.name], "v", 0.0):
-                return _fail(
-                    doc,
-                    f"solution.variables.{v.name}",
-                    f"solution.variables.{v.name} differs from the value x gives",
-                    theorem=theorem_id,
-                    checked=checked,
-                )
-        checked.append("solution.variables")
+    if x is not None and x.shape != (problem.n,):
+        why = f"solution.x has {x.size} entries, the IR {problem.n} variables"
+        return _fail(doc, "solution.x", why, checked=checked, **common)
     backend = doc["backend"]
     status = backend["status"] if backend["status"] in STATUSES else "error"
     solution = Solution(
@@ -695,65 +929,77 @@ def audit_certificate(path: str | os.PathLike[str], exact: bool = False) -> Audi
         farkas=sol.get("farkas"),
         margin=backend.get("margin"),
         strategy=backend.get("strategy") or "none",
+        iterations=backend.get("iterations"),
+        solve_s=float(backend.get("solve_s") or 0.0),
     )
-    tol = Tolerances.coerce({k: v for k, v in doc["tolerances"].items() if k in Tolerances().to_dict()})
     # recompute in the recorded mode: a certificate that records an exact proof may rest on it
     # (a strict LMI below the float threshold, proved exactly), so the proof is re-run
     recorded_exact = recorded.get("exact") is not None
-    cert = certify(problem, solution, exact=recorded_exact, tol=tol)
-    new = cert.to_dict()
-    new.pop("x", None)
-    rec = dict(recorded)
-    order = [k for k in rec if k != "verdict"] + ["verdict"]
-    for key in order:
-        if key in ("time_s", "reason", "tolerances"):
-            continue
-        # a Farkas verification is normalised to sum tr Z_i + sum |y_r| = 1 and a repaired
-        # certificate comes out of least squares: its round-off-level entries may differ in the
-        # last bits between BLAS builds, so they compare with an absolute 1e-12
-        atol = 1e-12 if key == "farkas" or (key == "exact" and backend["status"] == "infeasible") else 1e-300
-        d = _first_diff(rec.get(key, "<missing>"), new.get(key, "<missing>"), f"certificate.{key}", atol)
-        if d:
-            fld, a, b = d
-            return _fail(
-                doc,
-                fld,
-                f"{fld} differs: recorded {_short(a)}, recomputed {_short(b)}",
-                cert,
-                theorem=theorem_id,
-                exact=recorded_exact,
-                checked=checked,
-            )
-    checked.append("certificate")
+    cert = certify(problem, solution, exact=recorded_exact, tol=file_tol)
+    fresh = certificate_document(
+        problem, solution, cert, system=system, path=p, embed_ir=doc["ir"]["embedded"] is not None
+    )
+    # 4. every recomputed field, in document order; then the hashes of the rest
+    d = _recomputed_diff(doc, fresh, backend["status"] == "infeasible")
+    kw = {"theorem": theorem_id, "exact": recorded_exact, "checked": checked, "tolerances": auditor.to_dict()}
+    if d:
+        fld, a, b = d
+        if fld.startswith("solution.variables."):
+            fld = ".".join(fld.split(".")[:3]).split("[")[0]  # name the variable
+            msg = f"{fld} differs from the value solution.x gives"
+        else:
+            msg = f"{fld} differs: recorded {_short(a)}, recomputed {_short(b)}"
+        return _fail(doc, fld, msg, cert, **kw)
+    checked.append("recomputed fields")
+    # the sections that other modules re-verify (before the hashes: they name what is wrong)
     # -- optimal-value enclosure (lmic.certify.enclosure): both ends re-verified --
     if doc.get("enclosure") is not None:
         from lmic.certify.enclosure import audit_enclosure
 
-        enc = audit_enclosure(problem, doc["enclosure"], cert, doc.get("backoff"))
+        try:
+            enc = audit_enclosure(problem, doc["enclosure"], cert, doc.get("backoff"))
+        except (ValueError, TypeError, KeyError, IndexError, AttributeError) as err:
+            # a malformed section (the enclosure audit expects what lmic writes)
+            fld, why = hashed if hashed is not None else ("enclosure", f"enclosure is malformed: {err}")
+            return _fail(doc, fld, " ".join(why.split())[:200], cert, **kw)
         if not enc["ok"]:
-            return _fail(doc, enc["field"], enc["message"], cert, theorem=theorem_id, checked=checked)
+            return _fail(doc, enc["field"], enc["message"], cert, **kw)
         checked.append("enclosure")
     if doc.get("backoff") is not None and doc["backoff"].get("x") is not None:  # -- lmic.backoff --
         rec_b = doc["backoff"]
-        xb = np.asarray(rec_b["x"], dtype=float)
+        try:
+            xb = np.asarray(rec_b["x"], dtype=float)
+        except (ValueError, TypeError):
+            xb = np.zeros(0)
         if xb.shape != (problem.n,):
-            return _fail(doc, "backoff.x", "backoff.x has the wrong length", cert, theorem=theorem_id, checked=checked)
-        cb = certify(problem, Solution(status=rec_b.get("status") or "optimal", x=xb), tol=tol)
+            return _fail(doc, "backoff.x", "backoff.x has the wrong length", cert, **kw)
+        cb = certify(problem, Solution(status=rec_b.get("status") or "optimal", x=xb), tol=file_tol)
         if cb.verdict != rec_b.get("verdict") or problem.objective.value(xb) != rec_b.get("objective"):
             return _fail(
-                doc,
-                "backoff",
-                f"backoff differs: recorded {rec_b.get('verdict')}, recomputed {cb.verdict}",
-                cert,
-                theorem=theorem_id,
-                checked=checked,
+                doc, "backoff", f"backoff differs: recorded {rec_b.get('verdict')}, recomputed {cb.verdict}", cert, **kw
             )
         checked.append("backoff")
+    if hashed is not None:
+        return _fail(doc, hashed[0], hashed[1], cert, **kw)
+    checked.append("integrity")
+    # 5. the verdict under the auditor's tolerances, when stricter than the file's
+    final = strictest(file_tol, auditor)
+    if final != file_tol:
+        cert = certify(problem, solution, exact=recorded_exact, tol=final)
+        checked.append("auditor tolerances")
+        if cert.verdict != recorded["verdict"]:
+            return _fail(
+                doc,
+                "certificate.verdict",
+                f"under the audit's tolerances the verdict is {cert.verdict}, not {recorded['verdict']}: {cert.reason}",
+                cert,
+                **kw,
+            )
     shown = cert
     msg = f"every hash and number matches ({label}); verdict {cert.label}"
     if exact and not recorded_exact:
         # asked for a proof the file does not record: run it, report it, compare nothing new
-        shown = certify(problem, solution, exact=True, tol=tol)
+        shown = certify(problem, solution, exact=True, tol=final)
         assert shown.exact is not None
         if shown.exact["proven"]:
             msg += "; exact proof (not recorded) holds: " + shown.exact.get("statement", shown.exact["reason"])
@@ -776,4 +1022,5 @@ def audit_certificate(path: str | os.PathLike[str], exact: bool = False) -> Audi
         theorem=theorem_id,
         checked=checked,
         label=label_out,
+        tolerances=auditor.to_dict(),
     )

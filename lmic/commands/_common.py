@@ -12,16 +12,20 @@ import json
 import math
 import os
 import sys
-import tempfile
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from lmic.errors import DataError
 
-__all__ = ["parse_params", "print_json", "to_jsonable", "write_atomic", "add_param_option"]
+__all__ = [
+    "parse_params",
+    "print_json",
+    "to_jsonable",
+    "write_atomic",
+    "add_param_option",
+]
 
 
 def parse_params(items: list[str] | None) -> dict[str, float | str]:
@@ -74,20 +78,16 @@ def print_json(obj: Any) -> None:
 
 
 def write_atomic(path: str | os.PathLike[str], write: Callable[[Any], None], mode: str = "w") -> None:
-    """Write through a temporary file in the same folder, then rename: nothing half-written."""
-    target = Path(path)
-    folder = target.parent if str(target.parent) else Path(".")
-    if not folder.is_dir():
-        raise DataError(f"{target}: folder {folder} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=folder)
-    try:
-        with os.fdopen(fd, mode) as fh:
-            write(fh)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp creates 0600; give the file ordinary permissions
-        os.replace(tmp, target)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    """Write through :func:`lmic.output.write_output` (atomic, output-path rules, one-line errors).
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> f = os.path.join(tempfile.mkdtemp(), "t.txt")
+    >>> write_atomic(f, lambda fh: fh.write("ok"))
+    >>> open(f).read()
+    'ok'
+    """
+    from lmic.output import write_output
+
+    write_output(path, write, binary="b" in mode)

@@ -1,4 +1,8 @@
-"""``lmic audit CERT.json [--exact] [--json]``: recompute a certificate and compare.
+"""``lmic audit CERT.json [--exact] [--json] [--tol NAME=VALUE]``: recompute a certificate and compare.
+
+The audit decides with lmic's default tolerances, or stricter ones given with ``--tol``; a file
+recording looser ones is rejected, naming the tolerance. ``--json`` lists the informational
+fields (the only ones a certificate may change freely).
 
 Exit codes: 0 the certificate is consistent and certifies a solution; 3 it is consistent and
 certifies infeasibility; 1 it was tampered with, no longer matches its system file or theorem,
@@ -18,6 +22,7 @@ True
 from __future__ import annotations
 
 import argparse
+import math
 
 from rich.console import Console
 from rich.table import Table
@@ -33,7 +38,41 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("certificate", metavar="CERT.json", help="a certificate written by 'lmic solve -o'")
     p.add_argument("--exact", action="store_true", help="also prove every LMI in exact rational arithmetic")
     p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument(
+        "--tol",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="a stricter tolerance to decide with (rel, strict_rel, zero_rel, objective_rel, farkas_rel); "
+        "the file's own tolerances are never used when looser than lmic's defaults",
+    )
     p.set_defaults(func=run)
+
+
+def _tolerances(items: list[str]) -> dict[str, float]:
+    """``NAME=VALUE`` strings -> dict of finite non-negative floats (bad input otherwise).
+
+    >>> _tolerances(["rel=1e-10"])
+    {'rel': 1e-10}
+    """
+    from lmic.certify.check import Tolerances
+    from lmic.errors import DataError
+
+    known = Tolerances().to_dict()
+    out: dict[str, float] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep or name not in known:
+            raise DataError(f"--tol {item!r}: write NAME=VALUE with NAME one of {', '.join(known)}")
+        try:
+            num = float(value)
+        except ValueError:
+            raise DataError(f"--tol {item!r}: {value!r} is not a number") from None
+        if not (math.isfinite(num) and num >= 0):
+            raise DataError(f"--tol {item!r}: must be a finite non-negative number")
+        out[name] = num
+    return out
 
 
 def exit_code(result: AuditResult) -> int:
@@ -59,7 +98,7 @@ def _fmt(v: object) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Audit the certificate; print a table (or JSON); return the exit code."""
-    result = audit_certificate(args.certificate, exact=args.exact)
+    result = audit_certificate(args.certificate, exact=args.exact, tol=_tolerances(args.tol) or None)
     code = exit_code(result)
     if args.json:
         from lmic.commands._common import print_json

@@ -24,7 +24,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Compile and write the IR atomically."""
     from lmic.ir.io import save_problem
+    from lmic.output import check_output_path
 
+    check_output_path(args.output)  # before any work
     prob = compile_theorem(args.theorem, args.system, parse_params(args.param))
     save_problem(prob, args.output)
     sizes = ", ".join(f"{lmi.name} ({lmi.dim}x{lmi.dim})" for lmi in prob.lmis)

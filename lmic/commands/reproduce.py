@@ -68,6 +68,10 @@ def run(args: argparse.Namespace) -> int:
     from lmic.commands.solve import solve_options
     from lmic.reproduce import render_markdown, reproduce
 
+    if args.output:
+        from lmic.output import check_output_path
+
+        check_output_path(args.output)  # before any work
     err = Console(stderr=True)
     bar = Progress(
         TextColumn("[bold]reproduce"),

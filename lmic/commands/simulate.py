@@ -44,18 +44,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _check_output(path: str | None) -> None:
     """Fail early (before solving) on an output path that cannot be written."""
-    from pathlib import Path
+    from lmic.output import check_output_path
 
-    from lmic.errors import DataError
-
-    if path is None:
-        return
-    target = Path(path)
-    folder = target.parent if str(target.parent) else Path(".")
-    if not folder.is_dir():
-        raise DataError(f"{path}: folder {folder} does not exist")
-    if target.is_dir():
-        raise DataError(f"{path}: is a directory")
+    if path is not None:
+        check_output_path(path)
 
 
 def simulation_section(system: Any) -> tuple[Any, Any]:

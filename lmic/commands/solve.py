@@ -23,6 +23,7 @@ __all__ = ["register", "run", "add_solver_options", "solve_options"]
 
 def add_solver_options(p: argparse.ArgumentParser) -> None:
     """Options shared by ``solve`` and ``crosscheck``: tolerance, limits, margin, verbosity."""
+    # the values are validated by SolveOptions (lmic.options): bad ones are one line, exit 2
     p.add_argument("--tol", type=float, default=None, help="solver tolerance (default 1e-8)")
     p.add_argument("--max-iter", type=int, default=None, help="iteration limit")
     p.add_argument("--time-limit", type=float, default=None, help="seconds per solve")
@@ -118,6 +119,10 @@ def run(args: argparse.Namespace) -> int:
     from lmic.api import solve
     from lmic.commands._common import parse_params, print_json
 
+    if args.output:
+        from lmic.output import check_output_path
+
+        check_output_path(args.output)  # before any work
     # -- sup and sweep (lmic.sweep) ---------------------------------------------------------------
     if getattr(args, "maximize", None) or getattr(args, "sweep", None):
         from lmic.sweep import run_cli

@@ -67,6 +67,16 @@ from lmic.ir.problem import (
     Variable,
 )
 from lmic.ir.svec import tril_size
+from lmic.limits import (
+    MAX_DIMENSION,
+    MAX_INPUT_BYTES,
+    MAX_INT_DIGITS,
+    MAX_NONZEROS,
+    MAX_VARIABLES,
+    check_alloc,
+    check_depth,
+    check_size,
+)
 
 __all__ = [
     "IR_VERSION",
@@ -459,6 +469,30 @@ def _load_data(value: Any, where: str) -> float | np.ndarray:
     return arr
 
 
+def _check_declared_sizes(d: Mapping[str, Any], source: str) -> None:
+    """Declared sizes against :mod:`lmic.limits` and the data present, before any allocation."""
+    for i, v in enumerate(d["variables"]):
+        for k, s in enumerate(v["shape"]):
+            check_size(s, MAX_VARIABLES, f"variables[{i}].shape[{k}]", source, IRError)
+        check_size(v["offset"], MAX_VARIABLES, f"variables[{i}].offset", source, IRError)
+        for k, b in enumerate(v.get("blocks", [])):
+            check_size(b, MAX_DIMENSION, f"variables[{i}].blocks[{k}]", source, IRError)
+    dense = 0
+    entries = 0
+    for i, m in enumerate(d["lmis"]):
+        dim = check_size(m["dim"], MAX_DIMENSION, f"lmis[{i}].dim", source, IRError)
+        for k, b in enumerate(m.get("block_sizes", [])):
+            check_size(b, MAX_DIMENSION, f"lmis[{i}].block_sizes[{k}]", source, IRError)
+        dense += 8 * dim * dim
+        coeffs = m["coeffs"]
+        entries += max(len(coeffs.get("row", [])), len(coeffs.get("val", [])))
+    check_alloc(dense, "the LMIs (dense)", source, IRError)
+    lin = d["linear"]
+    check_size(len(lin["kinds"]), MAX_NONZEROS, "linear rows", source, IRError)
+    entries += len(lin.get("row", []))
+    check_size(entries, MAX_NONZEROS, "coefficient entries", source, IRError)
+
+
 def problem_from_dict(d: Any, source: str = "<dict>") -> Problem:
     """Build a :class:`Problem` from a decoded IR dict, validating it fully.
 
@@ -508,6 +542,7 @@ def problem_from_dict(d: Any, source: str = "<dict>") -> Problem:
     if bad:
         raise IRError(f"{source}: {bad}: NaN or infinite number")
     validate_ir_dict(dict(d), source)
+    _check_declared_sizes(d, source)
 
     # variables
     variables: list[Variable] = []
@@ -528,6 +563,8 @@ def problem_from_dict(d: Any, source: str = "<dict>") -> Problem:
         if var.offset != offset:
             raise IRError(f"{source}: {where}.offset: {var.offset}, expected {offset}")
         offset += var.size
+        if offset > MAX_VARIABLES:
+            raise IRError(f"{source}: {where}: more than {MAX_VARIABLES} variables in all")
         variables.append(var)
     n = offset
 
@@ -713,7 +750,12 @@ def problem_from_json(text: str, source: str = "<string>") -> Problem:
     lmic.errors.IRError: ir.json: not valid JSON (line 1, column 30): Expecting value
     """
     try:
-        d = json.loads(text, parse_constant=_reject_constant, object_pairs_hook=_no_duplicate_keys)
+        d = json.loads(
+            text,
+            parse_constant=_reject_constant,
+            object_pairs_hook=_no_duplicate_keys,
+            parse_int=lambda t: _parse_int(t, source),
+        )
     except _DuplicateKey as err:
         raise IRError(f"{source}: duplicate key '{err.args[0]}'") from None
     except json.JSONDecodeError as err:
@@ -722,7 +764,15 @@ def problem_from_json(text: str, source: str = "<string>") -> Problem:
         ) from None
     except RecursionError:
         raise IRError(f"{source}: not valid JSON (nested too deeply)") from None
+    check_depth(d, source, IRError)
     return problem_from_dict(d, source)
+
+
+def _parse_int(text: str, source: str) -> int:
+    digits = len(text.lstrip("-"))
+    if digits > MAX_INT_DIGITS:
+        raise IRError(f"{source}: an integer of {digits} digits (at most {MAX_INT_DIGITS})")
+    return int(text)
 
 
 def dump_problem(problem: Problem, path: str | os.PathLike[str]) -> None:
@@ -739,11 +789,9 @@ def dump_problem(problem: Problem, path: str | os.PathLike[str]) -> None:
     >>> load_problem_json(f).objective.c
     array([0., 1.])
     """
-    text = problem_to_json(problem)
-    try:
-        Path(path).write_text(text, encoding="utf-8")
-    except OSError as err:
-        raise IRError(f"{os.fspath(path)}: cannot write: {err.strerror or err}") from None
+    from lmic.output import write_output
+
+    write_output(path, problem_to_json(problem))  # atomic: nothing half-written
 
 
 def load_problem_json(path: str | os.PathLike[str]) -> Problem:
@@ -760,6 +808,9 @@ def load_problem_json(path: str | os.PathLike[str]) -> Problem:
     """
     source = os.fspath(path)
     try:
+        size = os.stat(path).st_size
+        if size > MAX_INPUT_BYTES:
+            raise IRError(f"{source}: file of {size} bytes exceeds the input limit of {MAX_INPUT_BYTES}")
         raw = Path(path).read_bytes()
     except OSError as err:
         raise IRError(f"{source}: cannot read: {err.strerror or err}") from None

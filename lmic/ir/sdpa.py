@@ -67,6 +67,7 @@ import scipy.sparse as sp
 from lmic.errors import IRError
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 from lmic.ir.svec import tril_index, tril_rows_cols, tril_size
+from lmic.limits import MAX_DIMENSION, MAX_INPUT_BYTES, MAX_NONZEROS, MAX_VARIABLES, check_alloc, load_json_text
 
 __all__ = ["read_sdpa", "write_sdpa", "sdpa_text"]
 
@@ -75,22 +76,24 @@ _FIELDS = "'matno blkno i j value'"
 _LMIC_TAG = "* lmic:"
 # the number syntax of C's strtol / strtod (Python and numpy also take '1_000', non-ASCII digits)
 _INT_RE = re.compile(r"[+-]?[0-9]+\Z")
+# no nested or adjacent overlapping quantifiers ("[0-9]+(?:\.[0-9]*)?", not "[0-9]+\.?[0-9]*"):
+# a long digit run followed by garbage fails in linear time
 _FLOAT_RE = re.compile(
-    r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\Z|[+-]?(?:nan|inf|infinity)\Z",
+    r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?\Z|[+-]?(?:nan|inf|infinity)\Z",
     re.IGNORECASE,
 )
 _WS = r"[^\S\n]"  # white space within a line
 _ENTRY = (
     rf"{_WS}*(?:(?:[+-]?[0-9]+{_WS}+){{4}}"
-    rf"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?{_WS}*)?"
+    rf"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?{_WS}*)?"
 )
 # the first line that is neither blank nor a well-formed finite entry (after separators)
 _BAD_ENTRY = re.compile(rf"^(?!{_ENTRY}$).*$", re.MULTILINE)
 
 
 def _int(tok: str) -> int:
-    """``int(tok)`` for C-style integer syntax only (ValueError otherwise)."""
-    if not _INT_RE.match(tok):
+    """``int(tok)`` for C-style integer syntax of at most 19 digits only (ValueError otherwise)."""
+    if len(tok) > 20 or not _INT_RE.match(tok):
         raise ValueError(tok)
     return int(tok)
 
@@ -127,7 +130,7 @@ class _Header:
         try:
             return lineno, _int(toks[0])
         except ValueError:
-            raise self.fail(lineno, f"expected {what}, got '{toks[0]}'") from None
+            raise self.fail(lineno, f"expected {what}, got '{_short(toks[0])}'") from None
 
     def numbers(self, count: int, what: str, conv: Any) -> list[tuple[int, Any]]:
         """``count`` numbers starting on the next line, possibly spread over several lines.
@@ -146,9 +149,13 @@ class _Header:
                     out.append((lineno, conv(tok)))
                 except ValueError:
                     raise self.fail(
-                        lineno, f"expected {count} {what}; '{tok}' is not a valid number"
+                        lineno, f"expected {count} {what}; '{_short(tok)}' is not a valid number"
                     ) from None
         return out
+
+
+def _short(tok: str) -> str:
+    return tok if len(tok) <= 24 else tok[:21] + "..."
 
 
 def _diagnose(line: str) -> str:
@@ -157,18 +164,21 @@ def _diagnose(line: str) -> str:
     if len(toks) != 5:
         return f"expected 5 fields {_FIELDS}, got {len(toks)}"
     for tok in toks[:4]:
+        if _INT_RE.match(tok) and len(tok.lstrip("+-")) > 18:
+            return f"index '{tok[:24]}{'...' if len(tok) > 24 else ''}' is out of range"
         try:
             v = _int(tok)
         except ValueError:
-            return f"index '{tok}' is not an integer"
+            return f"index '{tok[:24]}' is not an integer"
         if abs(v) >= 2**63:
             return f"index '{tok}' is out of range"
+    shown = toks[4] if len(toks[4]) <= 24 else toks[4][:21] + "..."
     try:
         value = _float(toks[4])
     except ValueError:
-        return f"value '{toks[4]}' is not a number"
+        return f"value '{shown}' is not a number"
     if not math.isfinite(value):
-        return f"value {toks[4]} is not finite"
+        return f"value {shown} is not finite"
     return f"malformed entry {line.strip()!r}"  # pragma: no cover - the regex and this agree
 
 
@@ -183,6 +193,9 @@ def _source_and_text(path_or_text: str | os.PathLike[str]) -> tuple[str, str]:
         return "<sdpa text>", path_or_text
     source = os.fspath(path_or_text)
     try:
+        size = os.stat(source).st_size
+        if size > MAX_INPUT_BYTES:
+            raise IRError(f"{source}: file of {size} bytes exceeds the input limit of {MAX_INPUT_BYTES}")
         raw = Path(source).read_bytes()
     except OSError as err:
         raise IRError(f"{source}: cannot read: {err.strerror or err}") from None
@@ -193,10 +206,7 @@ def _source_and_text(path_or_text: str | os.PathLike[str]) -> tuple[str, str]:
 
 
 def _parse_lmic_comment(line: str, lineno: int, source: str) -> dict[str, Any]:
-    try:
-        info = json.loads(line[len(_LMIC_TAG) :])
-    except json.JSONDecodeError as err:
-        raise IRError(f"{source}: line {lineno}: malformed lmic comment: {err.msg}") from None
+    info = load_json_text(line[len(_LMIC_TAG) :], f"{source}: line {lineno}: malformed lmic comment", IRError)
     if not isinstance(info, dict):
         raise IRError(f"{source}: line {lineno}: malformed lmic comment: not an object")
     if info.get("sense", "min") not in ("min", "max", "feasibility"):
@@ -262,13 +272,27 @@ def read_sdpa(path_or_text: str | os.PathLike[str]) -> Problem:
     line_m, m = head.first_int("m (the number of constraint matrices)")
     if m < 0:
         raise head.fail(line_m, f"m = {m} is negative")
+    if m > MAX_VARIABLES:
+        raise head.fail(line_m, f"m = {m} exceeds the limit of {MAX_VARIABLES} variables")
     line_nb, nblocks = head.first_int("nBlocks (the number of blocks)")
     if nblocks < 0:
         raise head.fail(line_nb, f"nBlocks = {nblocks} is negative")
+    if nblocks > MAX_VARIABLES:
+        raise head.fail(line_nb, f"nBlocks = {nblocks} exceeds the limit of {MAX_VARIABLES}")
     sizes_l = head.numbers(nblocks, "block sizes", _int)
+    dense_bytes = 0
+    diag_rows = 0
     for lineno, s in sizes_l:
         if s == 0:
             raise head.fail(lineno, "a block size of 0")
+        if abs(s) > (MAX_DIMENSION if s > 0 else MAX_VARIABLES):
+            limit = MAX_DIMENSION if s > 0 else MAX_VARIABLES
+            raise head.fail(lineno, f"block size {s} exceeds the limit of {limit}")
+        dense_bytes += 8 * s * s if s > 0 else 0
+        diag_rows += -s if s < 0 else 0
+    if diag_rows > MAX_VARIABLES:
+        raise head.fail(sizes_l[-1][0], f"diagonal blocks of {diag_rows} rows in all exceed the limit {MAX_VARIABLES}")
+    check_alloc(dense_bytes, "the matrix blocks (dense)", source, IRError)
     sizes = np.array([s for _, s in sizes_l], dtype=np.int64)
     c_l = head.numbers(m, "entries of the objective vector c", _float)
     c = np.array([v for _, v in c_l], dtype=float)
@@ -286,6 +310,8 @@ def read_sdpa(path_or_text: str | os.PathLike[str]) -> Problem:
         raise IRError(f"{source}: line {start + k + 1}: {_diagnose(bad.group(0))}")
     toks = body.split()
     rows = len(toks) // 5
+    if rows > MAX_NONZEROS:
+        raise IRError(f"{source}: {rows} entries exceed the limit of {MAX_NONZEROS}")
 
     def lineno(r: int) -> int:
         """Line number of the ``r``-th entry (blank lines are allowed between entries)."""
@@ -296,8 +322,9 @@ def read_sdpa(path_or_text: str | os.PathLike[str]) -> Problem:
 
     try:
         matno, blkno, ii, jj = (np.array(toks[k::5], dtype=np.int64) for k in range(4))
-    except OverflowError:
-        r = next(r for r in range(rows) if any(abs(int(t)) >= 2**63 for t in toks[5 * r : 5 * r + 4]))
+    except (OverflowError, ValueError):
+        huge = (r for r in range(rows) if any(len(t.lstrip("+-")) > 18 for t in toks[5 * r : 5 * r + 4]))
+        r = next(huge, 0)
         entry = " ".join(toks[5 * r : 5 * r + 5])
         raise IRError(f"{source}: line {lineno(r)}: {_diagnose(entry)}") from None
     val = np.array(toks[4::5], dtype=float)
@@ -308,7 +335,7 @@ def read_sdpa(path_or_text: str | os.PathLike[str]) -> Problem:
             r = int(hits[0])
             raise IRError(f"{source}: line {lineno(r)}: {msg(r)}")
 
-    check(~np.isfinite(val), lambda r: f"value {toks[5 * r + 4]} is not finite")
+    check(~np.isfinite(val), lambda r: f"value {toks[5 * r + 4][:24]} is not finite")
     check((matno < 0) | (matno > m), lambda r: f"matrix number {matno[r]} out of range 0..{m}")
     check(
         (blkno < 1) | (blkno > nblocks),
@@ -506,8 +533,6 @@ def write_sdpa(problem: Problem, path: str | os.PathLike[str]) -> None:
     >>> (read_sdpa(f).lmis[0].coeffs != p.lmis[0].coeffs).nnz
     0
     """
-    text = sdpa_text(problem)
-    try:
-        Path(path).write_text(text, encoding="utf-8")
-    except OSError as err:
-        raise IRError(f"{os.fspath(path)}: cannot write: {err.strerror or err}") from None
+    from lmic.output import write_output
+
+    write_output(path, sdpa_text(problem))  # atomic: nothing half-written

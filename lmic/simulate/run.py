@@ -35,6 +35,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -86,7 +87,7 @@ DECAY_RATIO = 0.1
 #: most time steps, grid points or samples one simulation may take
 MAX_POINTS = 200_000
 
-_NUMERIC = re.compile(r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+_NUMERIC = re.compile(r"[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][-+]?[0-9]+)?", re.ASCII)
 
 
 @dataclass
@@ -212,7 +213,7 @@ class Trajectory:
 
 def _numbers(value: Any) -> Any:
     """YAML 1.1 reads ``1e-3`` as a string: numeric literals in numeric fields become floats."""
-    if isinstance(value, str) and _NUMERIC.match(value.strip()):
+    if isinstance(value, str) and len(value) < 400 and _NUMERIC.fullmatch(value.strip()):
         return float(value)
     if isinstance(value, list):
         return [_numbers(v) for v in value]
@@ -243,6 +244,7 @@ x0, xhat0, z0, input, unknown_input, horizon, dt, sampling, noise, method, distu
         if key not in KEYS:
             raise DataError(f"{where}: unknown key '{key}' (allowed: {', '.join(KEYS)})")
     sec = dict(section)
+    _check_values(sec, where)
     for key in ("x0", "xhat0", "z0", "horizon", "dt"):
         if key in sec:
             sec[key] = _numbers(sec[key])
@@ -257,6 +259,35 @@ x0, xhat0, z0, input, unknown_input, horizon, dt, sampling, noise, method, distu
                     raise DataError(f"{where}.{key}: unknown key '{sub}' (allowed: {', '.join(allowed)})")
     _validate_schema(sec, where)
     return sec
+
+
+def _check_values(sec: dict[str, Any], where: str) -> None:
+    """Before any conversion: bounded nesting, names as keys, finite numbers of float64 range.
+
+    >>> _check_values({"sampling": {"max": float("nan")}}, "simulation")
+    Traceback (most recent call last):
+    ...
+    lmic.errors.DataError: simulation.sampling.max: nan is not a finite number
+    """
+    from lmic.limits import check_depth
+
+    check_depth(sec, where)
+    stack: list[tuple[Any, str]] = [(sec, where)]
+    while stack:
+        value, path = stack.pop()
+        if isinstance(value, bool):
+            continue
+        if isinstance(value, float) and not math.isfinite(value):
+            raise DataError(f"{path}: {value} is not a finite number")
+        if isinstance(value, int) and abs(value) >= 2**63:
+            raise DataError(f"{path}: the integer {str(value)[:12]}... is too large")
+        if isinstance(value, dict):
+            for k, v in value.items():
+                if not isinstance(k, str):
+                    raise DataError(f"{path}: key {k!r} is not a name")
+                stack.append((v, f"{path}.{k}"))
+        elif isinstance(value, list):
+            stack.extend((v, f"{path}[{i + 1}]") for i, v in enumerate(value))
 
 
 def _validate_schema(sec: dict[str, Any], where: str) -> None:
@@ -305,7 +336,10 @@ def _per_component(value: Any, size: int, prefix: str, key: str, where: str) -> 
     if isinstance(value, dict):
         out: list[Any] = ["0"] * size
         for k, v in value.items():
-            i = int(str(k)[len(prefix) :])
+            digits = str(k)[len(prefix) :]
+            if not str(k).startswith(prefix) or not (digits.isascii() and digits.isdigit() and len(digits) < 9):
+                raise DataError(f"{where}.{key}: '{k}' is not {prefix}1..{prefix}{size}")
+            i = int(digits)
             if not 1 <= i <= size:
                 raise DataError(f"{where}.{key}: '{k}' is out of range ({prefix}1..{prefix}{size})")
             out[i - 1] = v

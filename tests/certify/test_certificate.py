@@ -15,6 +15,7 @@ from lmic.certify import certify
 from lmic.certify.certificate import (
     SCHEMA_VERSION,
     audit_certificate,
+    integrity_of,
     ir_hash,
     read_certificate,
     write_certificate,
@@ -63,7 +64,7 @@ def test_audit_of_an_untouched_certificate_passes(raw_cert):
     path, _ = raw_cert
     r = audit_certificate(path)
     assert r.ok and r.verdict == "certified" and r.field is None
-    assert r.checked == ["schema", "embedded IR", "ir.sha256", "solution.variables", "certificate"]
+    assert r.checked == ["schema", "tolerances", "embedded IR", "ir.sha256", "recomputed fields", "integrity"]
     exact = audit_certificate(path, exact=True)
     assert exact.ok and exact.certificate.exact["proven"]
 
@@ -147,7 +148,9 @@ def test_failed_write_leaves_the_old_file_intact(raw_cert, lyapunov_point, monke
     monkeypatch.setattr(os, "replace", boom)
     prob, x = lyapunov_point
     sol = Solution("optimal", x=2 * x)
-    with pytest.raises(OSError, match="disk full"):
+    from lmic.output import OutputError
+
+    with pytest.raises(OutputError, match="disk full"):  # one line, exit code 2 on the command line
         write_certificate(path, prob, sol, certify(prob, sol))
     assert path.read_text() == before
     assert sorted(p.name for p in path.parent.iterdir()) == ["raw.json"]
@@ -197,7 +200,7 @@ def test_theorem_certificate_recompiles(theorem_cert):
     assert doc["ir"]["embedded"] is None
     r = audit_certificate(path)
     assert r.ok, r.message
-    assert r.checked[:4] == ["schema", "system.sha256", "theorem.template_hash", "ir.sha256"]
+    assert r.checked[:5] == ["schema", "tolerances", "system.sha256", "theorem.template_hash", "ir.sha256"]
     assert "theorem thesis.lyapunov on lyap.yaml" in r.message
 
 
@@ -272,10 +275,15 @@ def test_audit_rejects_a_certificate_whose_theorem_changed(tmp_path):
 def test_theorem_not_installed_and_missing_system(theorem_cert):
     path, doc, sysfile = theorem_cert
     doc["theorem"]["id"] = "nobody.thm9"
+    _rewrite(path, doc)  # a modified theorem id: rejected, named
+    r = audit_certificate(path)
+    assert not r.ok and r.field == "theorem.id"
+    doc["integrity"] = integrity_of(doc)  # as written by an lmic with that theorem installed
     _rewrite(path, doc)
     with pytest.raises(CertificateError, match="theorem 'nobody.thm9' is not installed"):
         audit_certificate(path)
     doc["theorem"]["id"] = "thesis.lyapunov"
+    doc["integrity"] = integrity_of(doc)
     _rewrite(path, doc)
     sysfile.unlink()
     with pytest.raises(CertificateError, match="not found"):
