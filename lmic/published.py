@@ -137,7 +137,7 @@ class Claim:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form."""
-        from lmic.commands._common import to_jsonable
+        from lmic.jsonable import to_jsonable
 
         return to_jsonable(
             {

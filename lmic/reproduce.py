@@ -167,7 +167,7 @@ class RowResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form."""
-        from lmic.commands._common import to_jsonable
+        from lmic.jsonable import to_jsonable
 
         r = self.row
         return to_jsonable(

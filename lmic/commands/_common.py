@@ -8,6 +8,7 @@ Examples
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import os
@@ -15,9 +16,8 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-import numpy as np
-
 from lmic.errors import DataError
+from lmic.jsonable import to_jsonable
 
 __all__ = [
     "parse_params",
@@ -25,6 +25,7 @@ __all__ = [
     "to_jsonable",
     "write_atomic",
     "add_param_option",
+    "solve_options",
 ]
 
 
@@ -56,22 +57,6 @@ def add_param_option(parser: Any) -> None:
     )
 
 
-def to_jsonable(obj: Any) -> Any:
-    """numpy arrays and scalars -> lists and floats, recursively (non-finite floats -> None)."""
-    if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [to_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, float | np.floating):
-        f = float(obj)
-        return f if math.isfinite(f) else None
-    return obj
-
-
 def print_json(obj: Any) -> None:
     """Print one JSON object on stdout."""
     sys.stdout.write(json.dumps(to_jsonable(obj), indent=2, allow_nan=False) + "\n")
@@ -91,3 +76,21 @@ def write_atomic(path: str | os.PathLike[str], write: Callable[[Any], None], mod
     from lmic.output import write_output
 
     write_output(path, write, binary="b" in mode)
+
+
+def solve_options(args: argparse.Namespace) -> Any:
+    """A :class:`~lmic.options.SolveOptions` from the parsed arguments."""
+    from lmic.options import SolveOptions
+
+    opts = SolveOptions(verbose=bool(getattr(args, "verbose", False)))
+    if getattr(args, "tol", None) is not None:
+        opts.tol = args.tol
+    if getattr(args, "max_iter", None) is not None:
+        opts.max_iter = args.max_iter
+    if getattr(args, "time_limit", None) is not None:
+        opts.time_limit = args.time_limit
+    if getattr(args, "margin", None) is not None:
+        opts.margin = args.margin
+    if getattr(args, "strict", None) is not None:
+        opts.strict = args.strict
+    return opts

@@ -69,8 +69,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
     from rich.table import Table
 
-    from lmic.commands._common import parse_params, print_json
-    from lmic.commands.solve import solve_options
+    from lmic.commands._common import parse_params, print_json, solve_options
     from lmic.published import audit_published
 
     report = audit_published(

@@ -32,4 +32,3 @@ def run(args: argparse.Namespace) -> int:
     sizes = ", ".join(f"{lmi.name} ({lmi.dim}x{lmi.dim})" for lmi in prob.lmis)
     sys.stderr.write(f"lmic: wrote {args.output}: {prob.n} variables, LMIs {sizes}\n")
     return 0
-

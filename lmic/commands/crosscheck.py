@@ -83,8 +83,7 @@ def _progress_bar(enabled: bool) -> Iterator[Any]:
 def run(args: argparse.Namespace) -> int:
     """Cross-check and print the table (or JSON)."""
     from lmic.backends.registry import get_backend
-    from lmic.commands._common import parse_params, print_json
-    from lmic.commands.solve import solve_options
+    from lmic.commands._common import parse_params, print_json, solve_options
     from lmic.crosscheck import DEFAULT_RTOL, crosscheck
 
     names = [b.strip() for b in args.backends.split(",") if b.strip()] if args.backends else None

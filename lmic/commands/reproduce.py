@@ -64,8 +64,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
     from rich.table import Table
 
-    from lmic.commands._common import print_json, write_atomic
-    from lmic.commands.solve import solve_options
+    from lmic.commands._common import print_json, solve_options, write_atomic
     from lmic.reproduce import render_markdown, reproduce
 
     if args.output:

@@ -7,9 +7,10 @@ Forms::
     lmic solve THEOREM SYSTEM --maximize PARAM [--lo a --hi b --xtol t --rtol r]   (lmic.sweep)
     lmic solve THEOREM SYSTEM --sweep PARAM=a:b:n | PARAM=log:a:b:n            (lmic.sweep)
 
-Exit codes (DESIGN section 7): 0 certified, 3 infeasible, 1 rejected / inaccurate / failed
-solve, 2 bad usage or input (unknown backend, missing solver package, a problem the backend
-cannot take).
+Exit codes (:func:`lmic.outcome.exit_code`, one table for every command): 0 certified,
+1 rejected or undecided, 2 bad usage or input (unknown backend, missing solver package, a problem
+the backend cannot take), 3 infeasible-certified (a global proof), 4 infeasible-bounded (no
+solution with ``||x||_inf <= R`` only), 130 interrupted.
 """
 
 from __future__ import annotations
@@ -17,6 +18,8 @@ from __future__ import annotations
 import argparse
 import sys
 from typing import Any
+
+from lmic.commands._common import solve_options  # re-exported: older code imports it from here
 
 __all__ = ["register", "run", "add_solver_options", "solve_options"]
 
@@ -36,24 +39,6 @@ def add_solver_options(p: argparse.ArgumentParser) -> None:
         "(default; docs/backends.md)",
     )
     p.add_argument("--verbose", action="store_true", help="show the solver's own output")
-
-
-def solve_options(args: argparse.Namespace) -> Any:
-    """A :class:`~lmic.backends.base.SolveOptions` from the parsed arguments."""
-    from lmic.backends.base import SolveOptions
-
-    opts = SolveOptions(verbose=bool(getattr(args, "verbose", False)))
-    if getattr(args, "tol", None) is not None:
-        opts.tol = args.tol
-    if getattr(args, "max_iter", None) is not None:
-        opts.max_iter = args.max_iter
-    if getattr(args, "time_limit", None) is not None:
-        opts.time_limit = args.time_limit
-    if getattr(args, "margin", None) is not None:
-        opts.margin = args.margin
-    if getattr(args, "strict", None) is not None:
-        opts.strict = args.strict
-    return opts
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -87,7 +72,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     add_solver_options(p)
     # -- sup and sweep: options and logic live in lmic.sweep (owner: sweep/published) ------------
-    from lmic.sweep import add_cli_options
+    from lmic.commands.sweep_cli import add_cli_options
 
     add_cli_options(p)
     # -- end sup and sweep ------------------------------------------------------------------------
@@ -125,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
         check_output_path(args.output)  # before any work
     # -- sup and sweep (lmic.sweep) ---------------------------------------------------------------
     if getattr(args, "maximize", None) or getattr(args, "sweep", None):
-        from lmic.sweep import run_cli
+        from lmic.commands.sweep_cli import run_cli
 
         return run_cli(args)
     # -- end sup and sweep ------------------------------------------------------------------------

@@ -63,9 +63,9 @@ class Report:
 
     def write(self, path: str | os.PathLike[str]) -> None:
         """Write the page atomically (nothing half-written)."""
-        from lmic.commands._common import write_atomic
+        from lmic.output import write_output
 
-        write_atomic(path, lambda fh: fh.write(self.html), mode="w")
+        write_output(path, lambda fh: fh.write(self.html))
 
     def exit_code(self) -> int:
         """The solve's exit code (0 certified, 3 infeasible, 1 otherwise)."""
