@@ -137,15 +137,23 @@ class DaskCluster:
         self.log.close()
 
 
-def runner_pids() -> set[int]:
-    """Process ids of every live job runner (``python -m lmic.studies.runner``) on this machine."""
+def runner_pids(parent: int | None = None) -> set[int]:
+    """Process ids of the live job runners (``python -m lmic.studies.runner``) on this machine.
+
+    ``parent``: only the runners whose parent process is ``parent`` (other test runs on the
+    same machine have runners of their own).
+    """
     out = set()
     for d in Path("/proc").iterdir():
         if d.name.isdigit():
             try:
                 cmd = (d / "cmdline").read_bytes().split(b"\0")
+                stat = (d / "stat").read_text()
             except OSError:
                 continue
-            if b"lmic.studies.runner" in cmd:
+            if b"lmic.studies.runner" not in cmd:
+                continue
+            ppid = int(stat.rsplit(")", 1)[1].split()[1])  # field 4, after the command in parentheses
+            if parent is None or ppid == parent:
                 out.add(int(d.name))
     return out

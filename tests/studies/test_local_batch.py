@@ -137,7 +137,7 @@ def test_resume_after_killing_the_batch_process(tmp_path):
     old_runners = runner_pids()
     proc = subprocess.Popen(cmd, env=env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     wait_for(lambda: len(lines(out)) >= 3 or proc.poll() is not None, 120, "three results")
-    ours = runner_pids() - old_runners
+    ours = runner_pids(parent=proc.pid) - old_runners
     assert len(ours) == 2  # the two workers of the killed run
     from lmic.studies.report import status
 
