@@ -24,6 +24,13 @@ blocks differ by ``1e12`` near the supremum (``-rho I`` against ``P``), which is
 solver get within ``1e-4`` of ``gamma_max = 51.5`` on ``uio_dt.thm4_1``. If a point is undecided
 the same problem is tried unscaled, then as the max-margin problem.
 
+The certified end's point (:func:`certified_end`) is certified again on the theorem's own
+problem (objective kept): where the theorem has an objective and derives gains, a backed-off
+point (:mod:`lmic.backoff`, objective within ``1e-3`` of the bisection point's, ``||x||_inf``
+minimised) if it certifies, else the bisection point itself (exactly where its float margins
+are too small). Its gains and derived values are reported, and ``-o`` writes its certificate
+(:func:`write_end_certificate`). :func:`minimize` is the mirror image (an infimum).
+
 Bisection (:func:`maximize`) assumes that the feasible values form an interval that contains the
 lower end of the bracket (true for Lipschitz constants, delay bounds and similar parameters). Its
 report is honest about both ends: ``lower`` is certified; ``upper`` is the smallest value tried
@@ -252,7 +259,8 @@ def certified_end(
         from lmic.backoff import backoff as run_backoff
 
         be = "clarabel" if backend in (None, "auto") else backend
-        rec = run_backoff(problem, float(problem.objective.value(x)), be, options, rel=float(rel))
+        ref = problem.objective.value(x)
+        rec = run_backoff(problem, float(ref if ref is not None else 0.0), be, options, rel=float(rel))
         if rec.get("verdict") == "certified" and rec.get("x") is not None:
             xb = np.asarray(rec["x"], dtype=float)
             sol = Solution(status=rec["status"], x=xb, objective=problem.objective.value(xb), backend=str(be))
@@ -273,32 +281,42 @@ def certified_end(
                 )
         notes.append(f"backed-off point ({rel:g}) not certified, the bisection point is used: {rec.get('reason')}")
     label = str(getattr(backend, "label", backend) or "auto")
-    sol = Solution(status="optimal", x=x, objective=problem.objective.value(x), backend=label)
-    cert = certify(problem, sol)
+    # the bisection solve had no objective: the recorded objective is lmic's value at x
+    sol = Solution(status=point.status or "optimal", x=x, objective=problem.objective.value(x), backend=label)
+    end_cert: Any = certify(problem, sol)
     proof = "certified"
-    if cert.verdict != "certified":
-        cert = exact_rescue_point(problem, sol, cert)
+    if end_cert.verdict != "certified":
+        end_cert = exact_rescue_point(problem, sol, end_cert)
         proof = "certified (exact)"
-    if cert is None or cert.verdict != "certified":
+    if end_cert is None or end_cert.verdict != "certified":
         return None
     return EndPoint(
         value=point.value,
         source="bisection point",
         verdict="certified",
         proof=proof,
-        derived=_derived_values(cert),
+        derived=_derived_values(end_cert),
         norm_inf=float(np.max(np.abs(x), initial=0.0)),
         notes=notes,
         problem=problem,
         solution=sol,
-        certificate=cert,
+        certificate=end_cert,
     )
 
 
 def write_end_certificate(result: SupResult, path: str) -> dict[str, Any]:
-    """Write the certificate of the certified lower end of ``result`` (``lmic audit`` verifies it).
+    """Write the certificate of the certified end of ``result`` (``lmic audit`` verifies it).
 
-    Raises :class:`LmicError` when there is no certified end.
+    The file is the ordinary certificate of :func:`lmic.certify.write_certificate` for the
+    theorem at ``param = result.certified`` (recorded in ``params``), at the point of
+    ``result.end``. Raises :class:`LmicError` when there is no certified end.
+
+    Examples
+    --------
+    >>> r = maximize("uio_dt.thm4_1", "examples/uio_dt.thm4_1.flexible_joint.yaml", "gamma",
+    ...              lo=50.0, hi=51.5, rtol=1e-2)                     # doctest: +SKIP
+    >>> write_end_certificate(r, "end.json")["params"]["gamma"] == r.lower  # doctest: +SKIP
+    True
     """
     from lmic.certify import write_certificate
 
@@ -328,6 +346,12 @@ class SupResult:
         never count. ``None``: no proven upper end (the supremum may be infinite).
     converged : bool
         ``upper - lower <= max(xtol, rtol * |upper|)``.
+    end : EndPoint or None
+        The certified point at the certified end, its gains and derived values, and what the
+        certificate file needs (:func:`write_end_certificate`).
+    sense : {"max", "min"}
+        A supremum (:func:`maximize`) or an infimum (:func:`minimize`; then ``upper`` is the
+        certified end and ``upper_kind`` / ``upper_proven`` describe the ``lower`` end).
     """
 
     theorem: str
@@ -373,10 +397,11 @@ class SupResult:
 
     @property
     def estimate(self) -> float | None:
-        """Midpoint of ``[lower, upper]`` (or ``lower`` alone)."""
-        if self.certified is None:
+        """Midpoint of ``[lower, upper]`` (or the certified end alone)."""
+        c, o = self.certified, self.other
+        if c is None:
             return None
-        return self.certified if self.other is None else 0.5 * (self.lower + self.upper)
+        return c if o is None else 0.5 * (c + o)
 
     def exit_code(self) -> int:
         """0 a certified lower bound; else 3 / 4 / 1 as :func:`lmic.outcome.exit_code` of the points
