@@ -24,6 +24,13 @@ blocks differ by ``1e12`` near the supremum (``-rho I`` against ``P``), which is
 solver get within ``1e-4`` of ``gamma_max = 51.5`` on ``uio_dt.thm4_1``. If a point is undecided
 the same problem is tried unscaled, then as the max-margin problem.
 
+The certified end's point (:func:`certified_end`) is certified again on the theorem's own
+problem (objective kept): where the theorem has an objective and derives gains, a backed-off
+point (:mod:`lmic.backoff`, objective within ``1e-3`` of the bisection point's, ``||x||_inf``
+minimised) if it certifies, else the bisection point itself (exactly where its float margins
+are too small). Its gains and derived values are reported, and ``-o`` writes its certificate
+(:func:`write_end_certificate`). :func:`minimize` is the mirror image (an infimum).
+
 Bisection (:func:`maximize`) assumes that the feasible values form an interval that contains the
 lower end of the bracket (true for Lipschitz constants, delay bounds and similar parameters). Its
 report is honest about both ends: ``lower`` is certified; ``upper`` is the smallest value tried
@@ -57,10 +64,14 @@ from lmic.solution import Solution
 __all__ = [
     "PointResult",
     "SupResult",
+    "EndPoint",
+    "certified_end",
+    "write_end_certificate",
     "SweepResult",
     "decide",
     "precondition",
     "maximize",
+    "minimize",
     "sweep",
     "parse_grid",
 ]
@@ -113,6 +124,8 @@ class PointResult:
     x: np.ndarray | None = field(default=None, repr=False)
     farkas_radius: float | None = None
     certificate: Any = field(default=None, repr=False)
+    #: the bound problem (kept at feasible points: the certified end's gains and certificate)
+    problem: Problem | None = field(default=None, repr=False)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form (without the point ``x``)."""
@@ -131,6 +144,186 @@ class PointResult:
             "solve_s": self.solve_s,
             "certify_s": self.certify_s,
         }
+
+
+@dataclass
+class EndPoint:
+    """The certified point at the lower end of a supremum's bracket, and what it yields.
+
+    Attributes
+    ----------
+    value : float
+        The parameter value (``SupResult.lower``).
+    source : str
+        ``backed-off point`` (the objective within ``backoff`` of the bisection point's,
+        ``||x||_inf`` minimised: well-scaled gains, :mod:`lmic.backoff`) or ``bisection point``.
+    verdict, proof : str
+        The certifier's verdict on the theorem's own problem at this value, and how
+        (``certified`` / ``certified (exact)``).
+    derived : dict
+        Every derived quantity (gains as nested lists, scalars as floats).
+    norm_inf : float
+        ``||x||_inf`` of the point.
+    problem, solution, certificate
+        What :func:`lmic.certify.write_certificate` needs (not in the JSON).
+    """
+
+    value: float
+    source: str
+    verdict: str
+    proof: str
+    derived: dict[str, Any]
+    norm_inf: float
+    backoff: float | None = None
+    notes: list[str] = field(default_factory=list)
+    problem: Problem | None = field(default=None, repr=False)
+    solution: Solution | None = field(default=None, repr=False)
+    certificate: Any = field(default=None, repr=False)
+
+    def gain_norms(self) -> dict[str, float]:
+        """Spectral norm of every matrix-valued derived quantity.
+
+        >>> EndPoint(1.0, "bisection point", "certified", "certified", {"L": [[3.0, 0.0], [0.0, 4.0]],
+        ...          "g": 2.0}, 4.0).gain_norms()
+        {'L': 4.0}
+        """
+        out: dict[str, float] = {}
+        for name, v in self.derived.items():
+            if isinstance(v, list):
+                arr = np.asarray(v, dtype=float)
+                if arr.size and np.all(np.isfinite(arr)):
+                    out[name] = float(np.linalg.norm(np.atleast_2d(arr), 2))
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able form (without the problem, solution and certificate objects)."""
+        return {
+            "value": self.value,
+            "evidence": "certified point",
+            "source": self.source,
+            "verdict": self.verdict,
+            "proof": self.proof,
+            "backoff": self.backoff,
+            "norm_inf": self.norm_inf,
+            "derived": self.derived,
+            "derived_norms": self.gain_norms(),
+            "notes": self.notes,
+        }
+
+
+def _derived_values(cert: Any) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for item in getattr(cert, "derived", None) or []:
+        v = item.get("value")
+        if isinstance(v, np.ndarray):
+            v = v.tolist()
+        out[item["name"]] = float(v) if isinstance(v, int | float) and not isinstance(v, bool) else v
+    return out
+
+
+def certified_end(
+    point: PointResult, backend: Any = None, options: Any = None, backoff: float | None = None
+) -> EndPoint | None:
+    """The certified point at a feasible bisection value, on the theorem's own problem.
+
+    With ``backoff`` (default :data:`lmic.backoff.DEFAULT_BACKOFF` when the theorem derives
+    quantities, ``0`` off) and an objective, the problem at this value is re-solved with the
+    objective within ``backoff`` (relative) of the bisection point's and ``||x||_inf``
+    minimised; a certified backed-off point is used (well-scaled gains). Otherwise the bisection
+    point itself is certified against the theorem's problem (objective kept), with an exact
+    proof where its float margins are too small. ``None`` when neither is certified (never a
+    false certificate).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> pt = decide(p, value=1.0); pt.problem = p
+    >>> certified_end(pt).verdict
+    'certified'
+    """
+    from lmic.certify import certify
+    from lmic.policy import exact_rescue_point
+
+    problem = point.problem
+    if point.outcome != "feasible" or problem is None or point.x is None:
+        return None
+    notes: list[str] = []
+    x = np.asarray(point.x, dtype=float)
+    rel = backoff
+    if rel is None:
+        from lmic.backoff import DEFAULT_BACKOFF
+
+        rel = DEFAULT_BACKOFF if problem.derived else 0.0
+    if rel and problem.objective.sense != "feasibility":
+        from lmic.backoff import backoff as run_backoff
+
+        be = "clarabel" if backend in (None, "auto") else backend
+        ref = problem.objective.value(x)
+        rec = run_backoff(problem, float(ref if ref is not None else 0.0), be, options, rel=float(rel))
+        if rec.get("verdict") == "certified" and rec.get("x") is not None:
+            xb = np.asarray(rec["x"], dtype=float)
+            sol = Solution(status=rec["status"], x=xb, objective=problem.objective.value(xb), backend=str(be))
+            cert = certify(problem, sol)
+            if cert.verdict == "certified":
+                return EndPoint(
+                    value=point.value,
+                    source="backed-off point",
+                    verdict="certified",
+                    proof="certified",
+                    derived=_derived_values(cert),
+                    norm_inf=float(np.max(np.abs(xb), initial=0.0)),
+                    backoff=float(rel),
+                    notes=notes,
+                    problem=problem,
+                    solution=sol,
+                    certificate=cert,
+                )
+        notes.append(f"backed-off point ({rel:g}) not certified, the bisection point is used: {rec.get('reason')}")
+    label = str(getattr(backend, "label", backend) or "auto")
+    # the bisection solve had no objective: the recorded objective is lmic's value at x
+    sol = Solution(status=point.status or "optimal", x=x, objective=problem.objective.value(x), backend=label)
+    end_cert: Any = certify(problem, sol)
+    proof = "certified"
+    if end_cert.verdict != "certified":
+        end_cert = exact_rescue_point(problem, sol, end_cert)
+        proof = "certified (exact)"
+    if end_cert is None or end_cert.verdict != "certified":
+        return None
+    return EndPoint(
+        value=point.value,
+        source="bisection point",
+        verdict="certified",
+        proof=proof,
+        derived=_derived_values(end_cert),
+        norm_inf=float(np.max(np.abs(x), initial=0.0)),
+        notes=notes,
+        problem=problem,
+        solution=sol,
+        certificate=end_cert,
+    )
+
+
+def write_end_certificate(result: SupResult, path: str) -> dict[str, Any]:
+    """Write the certificate of the certified end of ``result`` (``lmic audit`` verifies it).
+
+    The file is the ordinary certificate of :func:`lmic.certify.write_certificate` for the
+    theorem at ``param = result.certified`` (recorded in ``params``), at the point of
+    ``result.end``. Raises :class:`LmicError` when there is no certified end.
+
+    Examples
+    --------
+    >>> r = maximize("uio_dt.thm4_1", "examples/uio_dt.thm4_1.flexible_joint.yaml", "gamma",
+    ...              lo=50.0, hi=51.5, rtol=1e-2)                     # doctest: +SKIP
+    >>> write_end_certificate(r, "end.json")["params"]["gamma"] == r.lower  # doctest: +SKIP
+    True
+    """
+    from lmic.certify import write_certificate
+
+    end = result.end
+    if end is None or end.problem is None or end.solution is None or end.certificate is None:
+        raise LmicError(f"no certified point of '{result.param}': no certificate written")
+    return write_certificate(path, end.problem, end.solution, end.certificate, system=result.system)
 
 
 @dataclass
@@ -153,6 +346,12 @@ class SupResult:
         never count. ``None``: no proven upper end (the supremum may be infinite).
     converged : bool
         ``upper - lower <= max(xtol, rtol * |upper|)``.
+    end : EndPoint or None
+        The certified point at the certified end, its gains and derived values, and what the
+        certificate file needs (:func:`write_end_certificate`).
+    sense : {"max", "min"}
+        A supremum (:func:`maximize`) or an infimum (:func:`minimize`; then ``upper`` is the
+        certified end and ``upper_kind`` / ``upper_proven`` describe the ``lower`` end).
     """
 
     theorem: str
@@ -171,6 +370,23 @@ class SupResult:
     total_s: float
     message: str = ""
     domain: tuple[float, float] = (-math.inf, math.inf)
+    #: the certified point at the lower end (:class:`EndPoint`; ``None``: no certified value)
+    end: EndPoint | None = None
+    #: the loaded system (for the certificate file)
+    system: Any = field(default=None, repr=False)
+    #: ``max`` (a supremum, :func:`maximize`) or ``min`` (an infimum, :func:`minimize`: ``upper`` is
+    #: the certified end, and ``upper_kind`` / ``upper_proven`` describe the ``lower`` end)
+    sense: str = "max"
+
+    @property
+    def certified(self) -> float | None:
+        """The certified end of the bracket (``lower`` of a supremum, ``upper`` of an infimum)."""
+        return self.lower if self.sense == "max" else self.upper
+
+    @property
+    def other(self) -> float | None:
+        """The bisection's other end (not certified)."""
+        return self.upper if self.sense == "max" else self.lower
 
     @property
     def width(self) -> float | None:
@@ -181,17 +397,49 @@ class SupResult:
 
     @property
     def estimate(self) -> float | None:
-        """Midpoint of ``[lower, upper]`` (or ``lower`` alone)."""
-        if self.lower is None:
+        """Midpoint of ``[lower, upper]`` (or the certified end alone)."""
+        c, o = self.certified, self.other
+        if c is None:
             return None
-        return self.lower if self.upper is None else 0.5 * (self.lower + self.upper)
+        return c if o is None else 0.5 * (c + o)
 
     def exit_code(self) -> int:
         """0 a certified lower bound; else 3 / 4 / 1 as :func:`lmic.outcome.exit_code` of the points
         (every value globally infeasible / every value at least bounded-infeasible / otherwise)."""
-        if self.lower is not None:
+        if self.certified is not None:
             return 0
         return _points_exit(self.points)
+
+    def ends(self) -> dict[str, Any]:
+        """Each end of the bracket with its evidence.
+
+        ``lower`` and ``upper`` (in the parameter's order): the certified end is the certified
+        point with its gains (:meth:`EndPoint.to_dict`, ``evidence: certified point``); the other
+        end says whether it is a GLOBAL infeasibility proof (``is_bound: true``), a bounded one
+        (``infeasible-bounded``: not a bound) or undecided. ``proven_bound``: the nearest value
+        with a global infeasibility proof (may lie beyond the bisection's end).
+        """
+        other_pt = next((p for p in self.points if p.value == self.other and _kind(p) != "feasible"), None)
+        cert_end: dict[str, Any] | None = None
+        if self.end is not None:
+            cert_end = self.end.to_dict()
+        elif self.certified is not None:  # certified in the bisection, not re-certified on the theorem's problem
+            cert_end = {"value": self.certified, "evidence": "certified point", "derived": None}
+        other = None
+        if self.other is not None:
+            other = {
+                "value": self.other,
+                "evidence": self.upper_kind,
+                "is_bound": self.upper_kind == "infeasible-certified",
+                "proof": None if other_pt is None else other_pt.proof,
+                "farkas_radius": None if other_pt is None else other_pt.farkas_radius,
+            }
+        proven = None
+        if self.upper_proven is not None:
+            pp = next((p for p in self.points if p.value == self.upper_proven), None)
+            proven = {"value": self.upper_proven, "proof": None if pp is None else pp.proof}
+        lower, upper = (cert_end, other) if self.sense == "max" else (other, cert_end)
+        return {"lower": lower, "upper": upper, "proven_bound": proven}
 
     def to_dict(self) -> dict[str, Any]:
         """The ``--json`` object."""
@@ -200,7 +448,9 @@ class SupResult:
         binds = [p.bind_s for p in self.points]
         return {
             "lmic": __version__,
-            "mode": "maximize",
+            "mode": "maximize" if self.sense == "max" else "minimize",
+            "sense": self.sense,
+            "certified": self.certified,
             "theorem": self.theorem,
             "param": self.param,
             "backend": self.backend,
@@ -217,6 +467,7 @@ class SupResult:
             "iterations": self.iterations,
             "evaluations": len(self.points),
             "message": self.message,
+            "ends": self.ends(),
             "points": [p.to_dict() for p in self.points],
             "timings": _timings(self.plan_s, binds, self.points, self.total_s),
             "exit_code": self.exit_code(),
@@ -493,8 +744,10 @@ class _Evaluator:
         keep_objective: bool,
         exact: bool,
         progress: Progress | None,
+        sign: float = 1.0,
     ) -> None:
         self.plan, self.sysobj, self.overrides, self.param = plan, sysobj, overrides, param
+        self.sign = sign  # called with u, binds the parameter at sign * u (infima: -1)
         self.backend, self.options = backend, options
         self.keep_objective, self.exact = keep_objective, exact
         self.progress = progress
@@ -506,6 +759,7 @@ class _Evaluator:
     def __call__(self, value: float, phase: str, **info: Any) -> PointResult:
         from lmic.compile import bind
 
+        value = self.sign * value
         t0 = time.perf_counter()
         problem = bind(self.plan, self.sysobj, {**self.overrides, self.param: float(value)})
         bind_s = time.perf_counter() - t0
@@ -522,6 +776,7 @@ class _Evaluator:
         )
         res.bind_s = bind_s
         if res.outcome == "feasible" and res.x is not None:
+            res.problem = problem
             self.reference = res.x
             norm = float(np.max(np.abs(res.x))) if res.x.size else 0.0
             self.scale = norm if self.scale is None else max(self.scale, norm)
@@ -550,6 +805,7 @@ def maximize(
     exact: bool = True,
     max_evals: int = 100,
     progress: Progress | None = None,
+    backoff: float | None = None,
 ) -> SupResult:
     """Supremum of a scalar parameter by bisection on certified feasibility.
 
@@ -576,10 +832,13 @@ def maximize(
         Bound on the number of points.
     progress : callable, optional
         Called with ``{"phase", "value", "point", "lower", "upper", "iteration", "total"}``.
+    backoff : float, optional
+        Relative backoff of the certified end's point (:func:`certified_end`; ``0`` off).
 
     Returns
     -------
     SupResult
+        With ``end``: the certified point at ``lower``, its gains and derived values.
 
     Examples
     --------
@@ -588,18 +847,99 @@ def maximize(
     >>> round(r.lower, 1), next(p.proof for p in r.points if p.value == r.lower)  # doctest: +SKIP
     (51.5, 'certified (exact)')
     """
+    return _bisect(
+        theorem, system, param, 1.0, lo, hi, xtol, rtol, params, backend, options, exact, max_evals, progress, backoff
+    )
+
+
+def minimize(
+    theorem: str,
+    system: Any,
+    param: str,
+    *,
+    lo: float | None = None,
+    hi: float | None = None,
+    xtol: float = 1e-6,
+    rtol: float = 1e-5,
+    params: Mapping[str, Any] | None = None,
+    backend: Any = None,
+    options: Any = None,
+    exact: bool = True,
+    max_evals: int = 100,
+    progress: Progress | None = None,
+    backoff: float | None = None,
+) -> SupResult:
+    """Infimum of a scalar parameter by bisection on certified feasibility (:func:`maximize` mirrored).
+
+    Assumes that the feasible values form an interval that contains the upper end of the
+    bracket (e.g. a decay rate or a gain bound ``gamma``). The result has ``sense == "min"``:
+    ``upper`` is the certified end (``end`` its point), ``lower`` the largest value tried below
+    it that was not certified, ``upper_kind`` / ``upper_proven`` that end's evidence and the
+    largest value with a GLOBAL infeasibility proof.
+
+    Parameters
+    ----------
+    As :func:`maximize`; ``hi`` is the certified end of the bracket, ``lo`` the other.
+
+    Returns
+    -------
+    SupResult
+
+    Examples
+    --------
+    >>> r = minimize("uio_dt.thm4_1", "examples/uio_dt.thm4_1.flexible_joint.yaml", "gamma",
+    ...              lo=1.0, hi=2.0)                                   # doctest: +SKIP
+    >>> r.sense, r.upper                                               # doctest: +SKIP
+    ('min', 1.0)
+    """
+    return _bisect(
+        theorem, system, param, -1.0, lo, hi, xtol, rtol, params, backend, options, exact, max_evals, progress, backoff
+    )
+
+
+def _bisect(
+    theorem: str,
+    system: Any,
+    param: str,
+    sign: float,
+    lo_v: float | None,
+    hi_v: float | None,
+    xtol: float,
+    rtol: float,
+    params: Mapping[str, Any] | None,
+    backend: Any,
+    options: Any,
+    exact: bool,
+    max_evals: int,
+    progress: Progress | None,
+    backoff: float | None,
+) -> SupResult:
+    """The bisection in ``u = sign * value`` (a supremum of ``u``), reported in the parameter's terms."""
     t_start = time.perf_counter()
     if not (xtol > 0 or rtol > 0) or xtol < 0 or rtol < 0:
         raise LmicError("--xtol and --rtol must be non-negative and not both 0")
     t0 = time.perf_counter()
     sysobj, plan, overrides, decl = _setup(theorem, system, param, params)
     plan_s = time.perf_counter() - t0
-    dom = _domain(decl)
-    for name, v in (("--lo", lo), ("--hi", hi)):
-        if v is not None and (not math.isfinite(v) or not _in_domain(v, dom)):
+    dom_v = _domain(decl)
+    for name, v in (("--lo", lo_v), ("--hi", hi_v)):
+        if v is not None and (not math.isfinite(v) or not _in_domain(v, dom_v)):
             raise DataError(f"theorem {plan.id}: {name} {v:g} is outside the domain {decl.domain} of '{param}'")
-    if lo is not None and hi is not None and not lo < hi:
-        raise DataError(f"--lo {lo:g} must be below --hi {hi:g}")
+    if lo_v is not None and hi_v is not None and not lo_v < hi_v:
+        raise DataError(f"--lo {lo_v:g} must be below --hi {hi_v:g}")
+    is_max = sign > 0
+    # u = sign * value: a supremum of u (the certified end first, as --lo of a supremum)
+    dom = dom_v if is_max else (-dom_v[1], -dom_v[0], dom_v[3], dom_v[2])
+    lo = lo_v if is_max else (None if hi_v is None else -hi_v)
+    hi = hi_v if is_max else (None if lo_v is None else -lo_v)
+    lo_flag, hi_flag = ("--lo", "--hi") if is_max else ("--hi", "--lo")
+    what = "supremum" if is_max else "infimum"
+
+    def vv(u: float | None) -> float | None:
+        return None if u is None else sign * u
+
+    def bracket_v(a: float | None, b: float | None) -> tuple[float | None, float | None]:
+        return (a, b) if is_max else (vv(b), vv(a))
 
     state: dict[str, Any] = {"lower": None, "upper": None, "iteration": 0, "total": None}
 
@@ -607,7 +947,7 @@ def maximize(
         if progress is not None:
             progress({**event, **state})
 
-    ev = _Evaluator(plan, sysobj, overrides, param, backend, options, False, exact, report)
+    ev = _Evaluator(plan, sysobj, overrides, param, backend, options, False, exact, report, sign)
     lower: float | None = None
     upper: float | None = None
     upper_pt: PointResult | None = None
@@ -621,7 +961,7 @@ def maximize(
                 lower = v
         elif upper is None or v < upper:
             upper, upper_pt = v, pt
-        state["lower"], state["upper"] = lower, upper
+        state["lower"], state["upper"] = bracket_v(lower, upper)
         return pt.outcome == "feasible"
 
     dlo, dhi, dlo_in, dhi_in = dom
@@ -644,13 +984,14 @@ def maximize(
     # -- bracket ---------------------------------------------------------------------------
     if lo is not None:
         if not feasible(lo, "bracket"):
-            message = f"no certified point at --lo {lo:g}"
+            message = f"no certified point at {lo_flag} {vv(lo):g}"
     if hi is not None and (lo is None or lower is not None):
         if feasible(hi, "bracket"):
-            message = f"--hi {hi:g} is certified: the supremum is at or above the bracket"
+            side = "at or above" if is_max else "at or below"
+            message = f"{hi_flag} {vv(hi):g} is certified: the {what} is {side} the bracket"
     if lo is None and hi is None:
         start = sysobj.params.get(param, decl.default)
-        x0 = float(start) if isinstance(start, int | float) and float(start) != 0 else 1.0
+        x0 = sign * float(start) if isinstance(start, int | float) and float(start) != 0 else sign
         if not _in_domain(x0, dom):
             x0 = 0.5 * (dlo + dhi) if math.isfinite(dlo) and math.isfinite(dhi) else (dlo + 1.0)
         feasible(x0, "bracket")
@@ -659,8 +1000,9 @@ def maximize(
             k, base = 1, lower
             while upper is None and len(ev.points) < max_evals:
                 cand = up(base, k)
-                if cand <= lower or (ev.points and cand == ev.points[-1].value):
-                    message = f"'{param}' is certified up to the end of its domain ({lower:g})"
+                if cand <= lower or (ev.points and cand == sign * ev.points[-1].value):
+                    way = "up" if is_max else "down"
+                    message = f"'{param}' is certified {way} to the end of its domain ({vv(lower):g})"
                     break
                 feasible(cand, "bracket")
                 k += 1
@@ -668,7 +1010,7 @@ def maximize(
             k, base = 1, upper
             while lower is None and len(ev.points) < max_evals:
                 cand = down(base, k)
-                if cand >= upper or (ev.points and cand == ev.points[-1].value):
+                if cand >= upper or (ev.points and cand == sign * ev.points[-1].value):
                     message = f"no certified value of '{param}' found down to the end of its domain"
                     break
                 feasible(cand, "bracket")
@@ -676,7 +1018,7 @@ def maximize(
         if lower is None and not message:
             message = f"no certified value of '{param}' found"
         elif upper is None and not message:
-            message = f"no upper bound found for '{param}' within {max_evals} points"
+            message = f"no {'upper' if is_max else 'lower'} bound found for '{param}' within {max_evals} points"
 
     # -- bisection ---------------------------------------------------------------------------
     def target(a: float, b: float) -> float:
@@ -695,20 +1037,33 @@ def maximize(
     converged = lower is not None and upper is not None and upper - lower <= target(lower, upper)
     if lower is not None and upper is not None and not converged and not message:
         message = f"stopped after {len(ev.points)} points (--max-evals) before the tolerance"
-    proven = [p.value for p in ev.points if _kind(p) == "infeasible-certified" and (lower is None or p.value > lower)]
+    proven = [
+        sign * p.value
+        for p in ev.points
+        if _kind(p) == "infeasible-certified" and (lower is None or sign * p.value > lower)
+    ]
     upper_kind = "none" if upper_pt is None else _kind(upper_pt)
+    end = None
+    if lower is not None:
+        lower_pt = next(p for p in ev.points if sign * p.value == lower and p.outcome == "feasible")
+        end = certified_end(lower_pt, backend, options, backoff)
+        for p in ev.points:  # only the end's problem is needed
+            if p is not lower_pt:
+                p.problem = None
     if upper is not None and upper_kind != "infeasible-certified" and not message:
+        end_name, rel_op, more = ("upper", ">=", "larger (even infinite)") if is_max else ("lower", "<=", "smaller")
         message = (
-            f"the bisection's upper end {upper:g} is {upper_kind}, not a proof: the supremum is >= "
-            f"{lower if lower is not None else '-'} and may be larger (even infinite)"
+            f"the bisection's {end_name} end {vv(upper):g} is {upper_kind}, not a proof: the {what} is {rel_op} "
+            f"{vv(lower) if lower is not None else '-'} and may be {more}"
         )
+    lower_v, upper_v = bracket_v(lower, upper)
     return SupResult(
         theorem=plan.id,
         param=param,
-        lower=lower,
-        upper=upper,
+        lower=lower_v,
+        upper=upper_v,
         upper_kind=upper_kind,
-        upper_proven=min(proven) if proven else None,
+        upper_proven=vv(min(proven)) if proven else None,
         converged=converged,
         xtol=xtol,
         rtol=rtol,
@@ -718,7 +1073,10 @@ def maximize(
         plan_s=plan_s,
         total_s=time.perf_counter() - t_start,
         message=message,
-        domain=(dlo, dhi),
+        domain=(dom_v[0], dom_v[1]),
+        end=end,
+        sense="max" if is_max else "min",
+        system=sysobj,
     )
 
 

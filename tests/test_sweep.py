@@ -225,8 +225,8 @@ def test_solve_sweep_json_obs_control_young_eps(capsys):
     [
         (["--maximize", "nope"], "numeric parameters"),
         (["--sweep", "gamma=1:2"], "PARAM=a:b:n"),
-        (["--maximize", "gamma", "--sweep", "gamma=1:2:3"], "not both"),
-        (["--maximize", "gamma", "-o", "x.json"], "-o is not available"),
+        (["--maximize", "gamma", "--sweep", "gamma=1:2:3"], "give one of"),
+        (["--sweep", "gamma=1:2:3", "-o", "x.json"], "-o is not available"),
         (["--maximize", "gamma", "--lo", "-1"], "outside the domain"),
     ],
 )

@@ -4,7 +4,8 @@ Forms::
 
     lmic solve THEOREM SYSTEM [-p k=v]... [--backend B] [--json] [-o CERT.json]
     lmic solve FILE.json|FILE.dat-s [--backend B] [--json] [-o CERT.json]
-    lmic solve THEOREM SYSTEM --maximize PARAM [--lo a --hi b --xtol t --rtol r]   (lmic.sweep)
+    lmic solve THEOREM SYSTEM --maximize|--minimize PARAM [--lo a --hi b --xtol t --rtol r] [-o CERT.json]
+                                                                                    (lmic.sweep)
     lmic solve THEOREM SYSTEM --sweep PARAM=a:b:n | PARAM=log:a:b:n            (lmic.sweep)
 
 Exit codes (:func:`lmic.outcome.exit_code`, one table for every command): 0 certified,
@@ -109,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
 
         check_output_path(args.output)  # before any work
     # -- sup and sweep (lmic.sweep) ---------------------------------------------------------------
-    if getattr(args, "maximize", None) or getattr(args, "sweep", None):
+    if getattr(args, "maximize", None) or getattr(args, "minimize", None) or getattr(args, "sweep", None):
         from lmic.commands.sweep_cli import run_cli
 
         return run_cli(args)

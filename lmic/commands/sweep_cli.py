@@ -16,19 +16,32 @@ import sys
 from typing import Any
 
 from lmic.errors import LmicError
-from lmic.sweep import PointResult, SupResult, SweepResult, maximize, parse_grid, sweep
+from lmic.sweep import PointResult, SupResult, SweepResult, maximize, minimize, parse_grid, sweep, write_end_certificate
 
 __all__ = ["add_cli_options", "run_cli"]
 
 
 def add_cli_options(p: argparse.ArgumentParser) -> None:
-    """``--maximize PARAM [--lo a --hi b --xtol t --rtol r --max-evals k]`` and ``--sweep P=a:b:n``."""
+    """``--maximize|--minimize PARAM [--lo a --hi b --xtol t --rtol r --max-evals k]``, ``--sweep P=a:b:n``."""
     g = p.add_argument_group("supremum and sweep (a theorem's scalar parameter)")
     g.add_argument(
         "--maximize", metavar="PARAM", default=None, help="supremum of PARAM by bisection on certified feasibility"
     )
-    g.add_argument("--lo", type=float, default=None, help="lower end of the bracket (certified)")
-    g.add_argument("--hi", type=float, default=None, help="upper end of the bracket (not certified)")
+    g.add_argument(
+        "--minimize", metavar="PARAM", default=None, help="infimum of PARAM by bisection on certified feasibility"
+    )
+    g.add_argument(
+        "--lo",
+        type=float,
+        default=None,
+        help="lower end of the bracket (certified with --maximize, not with --minimize)",
+    )
+    g.add_argument(
+        "--hi",
+        type=float,
+        default=None,
+        help="upper end of the bracket (certified with --minimize, not with --maximize)",
+    )
     g.add_argument("--xtol", type=float, default=1e-6, help="absolute tolerance on PARAM (default 1e-6)")
     g.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance on PARAM (default 1e-5)")
     g.add_argument("--max-evals", type=int, default=100, help="at most this many points (default 100)")
@@ -96,23 +109,25 @@ def run_cli(args: argparse.Namespace) -> int:
     """Run ``lmic solve THEOREM SYSTEM --maximize P`` or ``--sweep P=a:b:n``; return the exit code."""
     from lmic.commands._common import parse_params, print_json, solve_options
 
-    if args.maximize and args.sweep:
-        raise LmicError("give --maximize or --sweep, not both")
+    if sum(bool(a) for a in (args.maximize, args.minimize, args.sweep)) > 1:
+        raise LmicError("give one of --maximize, --minimize, --sweep")
     if args.system is None:
-        raise LmicError("--maximize and --sweep need THEOREM SYSTEM (a theorem and its system file)")
-    if getattr(args, "output", None):
-        raise LmicError("-o is not available with --maximize / --sweep (use --json for the full record)")
+        raise LmicError("--maximize, --minimize and --sweep need THEOREM SYSTEM (a theorem and its system file)")
+    if getattr(args, "output", None) and args.sweep:
+        raise LmicError("-o is not available with --sweep (use --json for the full record)")
     if getattr(args, "exact", False):
         sys.stderr.write("lmic: note: exact proofs are used automatically where float margins are too small\n")
     params = parse_params(args.param)
     opts = solve_options(args)
     show = not args.json and not args.no_progress
-    if args.maximize:
-        with _Bar(f"sup {args.maximize}", show) as bar:
-            res = maximize(
+    if args.maximize or args.minimize:
+        name = args.maximize or args.minimize
+        run = maximize if args.maximize else minimize
+        with _Bar(f"{'sup' if args.maximize else 'inf'} {name}", show) as bar:
+            res = run(
                 args.target,
                 args.system,
-                args.maximize,
+                name,
                 lo=args.lo,
                 hi=args.hi,
                 xtol=args.xtol,
@@ -122,11 +137,21 @@ def run_cli(args: argparse.Namespace) -> int:
                 options=opts,
                 max_evals=args.max_evals,
                 progress=bar,
+                backoff=getattr(args, "backoff", None),
             )
+        written = None
+        if getattr(args, "output", None):
+            if res.end is not None:
+                write_end_certificate(res, args.output)
+                written = args.output
+            else:
+                sys.stderr.write(f"lmic: no certified point of '{name}': no certificate written\n")
         if args.json:
-            print_json(res.to_dict())
+            doc = res.to_dict()
+            doc["certificate_file"] = written
+            print_json(doc)
         else:
-            _print_sup(res)
+            _print_sup(res, written)
         return res.exit_code()
     name, values = parse_grid(args.sweep)
     with _Bar(f"sweep {name}", show) as bar:
@@ -147,37 +172,52 @@ def run_cli(args: argparse.Namespace) -> int:
     return sw.exit_code()
 
 
-def _print_sup(r: SupResult) -> None:
+def _print_sup(r: SupResult, written: str | None = None) -> None:
     from rich.console import Console
 
     out = Console(highlight=False, soft_wrap=True)
     if not out.is_terminal:
         out.width = 160
-    out.print(f"theorem    {r.theorem}   sup {r.param} (bisection on certified feasibility, backend {r.backend})")
+    is_max = r.sense == "max"
+    op = "sup" if is_max else "inf"
+    out.print(f"theorem    {r.theorem}   {op} {r.param} (bisection on certified feasibility, backend {r.backend})")
     tol = f"xtol {r.xtol:g}, rtol {r.rtol:g}"
-    if r.lower is None:
+    c, o = r.certified, r.other
+    if c is None:
         out.print(f"[red]no certified value of {r.param}[/]: {r.message}")
     else:
+        lo_hi = (c, o) if is_max else (o, c)
         if r.upper_kind == "infeasible-certified":
-            out.print(f"[bold]sup {r.param} in [{_fmt(r.lower, 10)}, {_fmt(r.upper, 10)}][/]   ({tol})")
+            out.print(f"[bold]{op} {r.param} in [{_fmt(lo_hi[0], 10)}, {_fmt(lo_hi[1], 10)}][/]   ({tol})")
         elif r.upper_proven is not None:
-            out.print(f"[bold]sup {r.param} in [{_fmt(r.lower, 10)}, {_fmt(r.upper_proven, 10)}][/]   (proven ends)")
+            ends = (c, r.upper_proven) if is_max else (r.upper_proven, c)
+            out.print(f"[bold]{op} {r.param} in [{_fmt(ends[0], 10)}, {_fmt(ends[1], 10)}][/]   (proven ends)")
         else:
+            rel, more = (">=", "larger, even infinite") if is_max else ("<=", "smaller")
             out.print(
-                f"[bold]sup {r.param} >= {_fmt(r.lower, 10)}[/]   (no proven upper end: may be larger, even infinite)"
+                f"[bold]{op} {r.param} {rel} {_fmt(c, 10)}[/]   "
+                f"(no proven {'upper' if is_max else 'lower'} end: may be {more})"
             )
-        lower_pt = next((p for p in r.points if p.value == r.lower and p.outcome == "feasible"), None)
-        how = lower_pt.proof if lower_pt else "certified"
-        out.print(f"  lower    {_fmt(r.lower, 10)}  {how}")
-        if r.upper is not None:
+        cert_pt = next((p for p in r.points if p.value == c and p.outcome == "feasible"), None)
+        how = cert_pt.proof if cert_pt else "certified"
+        side, other_side = ("lower", "upper") if is_max else ("upper", "lower")
+        out.print(f"  {side:<8} {_fmt(c, 10)}  {how} (evidence: a certified point)")
+        if o is not None:
             kind = {
-                "undecided": "not certified (neither certified nor proven infeasible): not an upper bound",
-                "infeasible-bounded": "infeasible-bounded (no solution with ||x||_inf <= R only): not an upper bound",
+                "undecided": f"not certified (neither certified nor proven infeasible): not an {other_side} bound",
+                "infeasible-bounded": "infeasible-bounded (no solution with ||x||_inf <= R only): "
+                f"not an {other_side} bound",
                 "infeasible-certified": "infeasible-certified (global proof)",
             }.get(r.upper_kind, r.upper_kind)
-            out.print(f"  bisection upper {_fmt(r.upper, 10)}  {kind}")
-        if r.upper_proven is not None and r.upper_proven != r.upper:
+            out.print(f"  bisection {other_side} {_fmt(o, 10)}  {kind}")
+        if r.upper_proven is not None and r.upper_proven != o:
             out.print(f"  proven infeasible (global) from {_fmt(r.upper_proven, 10)}")
+        _print_end(out, r)
+    if written:
+        out.print(
+            f"  certificate of the point at {r.param} = {_fmt(c, 10)} written to {written} "
+            f"(check: lmic audit {written})"
+        )
     if r.message:
         out.print(f"  note     {r.message}")
     binds = [p.bind_s for p in r.points]
@@ -186,6 +226,31 @@ def _print_sup(r: SupResult) -> None:
         f"(analysis once {r.plan_s * 1e3:.0f} ms, re-bind {1e3 * sum(binds) / max(len(binds), 1):.1f} ms a point, "
         f"solve {sum(p.solve_s for p in r.points):.2f} s, certify {sum(p.certify_s for p in r.points):.2f} s)"
     )
+
+
+def _print_end(out: Any, r: SupResult) -> None:
+    """The certified end's point: how it was certified, its derived scalars and gain norms."""
+    import numpy as np
+
+    end = r.end
+    if end is None:
+        out.print("  [yellow]the certified end's point could not be re-certified on the theorem's problem: no gains[/]")
+        return
+    extra = f", objective within {end.backoff:g} relative" if end.backoff else ""
+    out.print(
+        f"  point at {r.param} = {_fmt(end.value, 10)}: {end.source}{extra}, {end.proof}, ||x||_inf {end.norm_inf:.3g}"
+    )
+    for note in end.notes:
+        out.print(f"    note: {note}")
+    norms = end.gain_norms()
+    for name, v in end.derived.items():
+        if name in norms:
+            shape = "x".join(str(d) for d in np.atleast_2d(np.asarray(v, dtype=float)).shape)
+            out.print(f"    {name:<12} {shape} matrix, ||.||_2 = {norms[name]:.4g}")
+        elif isinstance(v, float):
+            out.print(f"    {name:<12} {_fmt(v, 10)}")
+    if norms:
+        out.print("    (the matrices in full: --json, or the certificate file with -o)")
 
 
 def _print_sweep(r: SweepResult) -> None:
