@@ -1,4 +1,10 @@
-"""``lmic reproduce --executor``: one job per example file, on the study executors.
+"""``lmic reproduce --executor`` and ``lmic crosscheck --executor``: their jobs on the study executors.
+
+``lmic crosscheck --executor`` (:func:`crosscheck_parallel`) runs one job per backend (task
+``crosscheck-backend``, :func:`lmic.studies.tasks.run_crosscheck_backend`) and joins the rows,
+in backend order, into the report the sequential :func:`lmic.crosscheck.crosscheck` builds.
+
+``lmic reproduce --executor`` (:func:`reproduce_parallel`) runs one job per example file.
 
 Each example file becomes a job of task ``reproduce-file`` that runs
 :func:`lmic.reproduce.reproduce` restricted to that file in a job runner

@@ -16,7 +16,7 @@ import subprocess
 import sys
 
 import pytest
-from study_helpers import REPO, env
+from study_helpers import REPO, env, lyapunov_truth
 
 from lmic.crosscheck import DECISIONS, crosscheck
 from lmic.options import SolveOptions
@@ -144,3 +144,17 @@ def test_help_shows_the_executor_examples():
     assert proc.returncode == 0
     assert "--executor" in proc.stdout and "--workers" in proc.stdout
     assert "lmic crosscheck qib.thm1 examples/qib.thm1.flexible-joint.yaml --executor dask" in proc.stdout
+
+
+def test_a_backend_that_cannot_run_is_the_same_failure_row_in_a_worker():
+    """An unknown backend: an ``undecided`` row with the same message, a failure, not a conflict."""
+    system = {"data": {"A": [[-1.0, 2.0], [0.0, -3.0]]}}
+    seq = _json(crosscheck("thesis.lyapunov", system, backends=["clarabel", "no-such-backend"]))
+    rep = crosscheck_parallel(
+        "thesis.lyapunov", system, backends=["clarabel", "no-such-backend"], executor="local", workers=1
+    )
+    par = _json(rep)
+    _assert_same(seq, par)
+    assert [r["decision"] for r in par["results"]] == [lyapunov_truth(system), "undecided"]
+    assert par["failures"] == 1 and par["agree"] and par["exit_code"] == 0
+    assert "no-such-backend" in par["results"][1]["message"]
