@@ -61,7 +61,11 @@ EXAMPLES = {
         "lmic solve qib.thm1 examples/qib.thm1.flexible-joint.yaml -o cert.json",
         "lmic solve thesis.thm3_2_2 examples/thesis.thm3_2_2.ex3_2_2.yaml --maximize gamma",
     ],
-    "crosscheck": ["lmic crosscheck qib.thm1 examples/qib.thm1.flexible-joint.yaml"],
+    "crosscheck": [
+        "lmic crosscheck qib.thm1 examples/qib.thm1.flexible-joint.yaml",
+        "lmic crosscheck control1.dat-s --backends clarabel,scs,cvxopt --executor local --workers 2",
+        "lmic crosscheck qib.thm1 examples/qib.thm1.flexible-joint.yaml --executor dask",
+    ],
     "audit": ["lmic audit cert.json", "lmic audit cert.json --exact"],
     "audit-published": ["lmic audit-published qib.thm1 examples/qib.thm1.flexible-joint.yaml"],
     "reproduce": ["lmic reproduce --only 'qib.*'"],

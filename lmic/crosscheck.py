@@ -35,7 +35,19 @@ from lmic.backends.base import SolveOptions
 from lmic.errors import LmicError
 from lmic.ir.problem import Problem
 
-__all__ = ["CrosscheckReport", "crosscheck", "status_class", "conflicts", "DEFAULT_RTOL", "DECISIONS", "Progress"]
+__all__ = [
+    "CrosscheckReport",
+    "crosscheck",
+    "backend_row",
+    "error_row",
+    "assemble",
+    "target_label",
+    "status_class",
+    "conflicts",
+    "DEFAULT_RTOL",
+    "DECISIONS",
+    "Progress",
+]
 
 #: verdicts that are decisions (the others are failures)
 DECISIONS = ("certified", "infeasible-certified", "infeasible-bounded")
@@ -170,54 +182,104 @@ def crosscheck(
     for k, name in enumerate(names):
         if progress is not None:
             progress(k, len(names), name, None)
-        try:
-            res = solve(problem, backend=name, options=options)
-        except LmicError as err:
-            row: dict[str, Any] = {
-                "backend": name,
-                "decision": "undecided",
-                "status": "error",
-                "objective": None,
-                "verdict": "undecided",
-                "radius": None,
-                "x_norm": None,
-                "min_margin": None,
-                "strategy": None,
-                "margin": None,
-                "solve_s": 0.0,
-                "attempts": [],
-                "message": " ".join(str(err).split()),
-            }
-        else:
+        row, res = backend_row(problem, name, options)
+        if res is not None:
             runs.append(res)
-            x = res.solution.x
-            decision = res.verdict
-            row = {
-                "backend": res.backend,
-                "decision": decision,
-                "status": res.status,
-                "objective": res.objective if decision == "certified" else None,
-                "verdict": decision,
-                "radius": res.outcome.evidence.radius if decision == "infeasible-bounded" else None,
-                "x_norm": float(np.max(np.abs(x))) if decision == "certified" and x is not None and len(x) else None,
-                "min_margin": res.min_margin,
-                "strategy": res.solution.strategy,
-                "margin": res.solution.margin,
-                "solve_s": res.timings["solve_s"],
-                "attempts": res.attempts,
-                "message": res.solution.message if decision not in DECISIONS else "",
-            }
-            if decision not in DECISIONS:
-                row["message"] = res.outcome.reason or res.solution.message
         rows.append(row)
         if progress is not None:
             progress(k + 1, len(names), name, row)
-    found, gap = conflicts(rows, problem.objective.sense, rtol)
-    agree = not found and any(r["decision"] in DECISIONS for r in rows)
+    return assemble(target_label(target, system), rows, problem.objective.sense, rtol, runs)
+
+
+def error_row(name: str, message: str, status: str = "error") -> dict[str, Any]:
+    """The row of a backend that could not run (decision ``undecided``, the reason as message).
+
+    >>> r = error_row("mosek", "not installed")
+    >>> r["decision"], r["status"], r["message"]
+    ('undecided', 'error', 'not installed')
+    """
+    return {
+        "backend": name,
+        "decision": "undecided",
+        "status": status,
+        "objective": None,
+        "verdict": "undecided",
+        "radius": None,
+        "x_norm": None,
+        "min_margin": None,
+        "strategy": None,
+        "margin": None,
+        "solve_s": 0.0,
+        "attempts": [],
+        "message": " ".join(str(message).split()),
+    }
+
+
+def backend_row(
+    problem: Problem, name: str, options: SolveOptions | None = None
+) -> tuple[dict[str, Any], Result | None]:
+    """Decide ``problem`` with backend ``name`` alone: its crosscheck row, and the result if it ran.
+
+    This is one job of a cross-check (:func:`crosscheck` runs it for each backend in turn;
+    ``lmic crosscheck --executor`` runs it in a worker, :func:`lmic.studies.parallel.crosscheck_parallel`).
+
+    Examples
+    --------
+    >>> from lmic.testing.conformance import CASES
+    >>> row, res = backend_row(CASES["lyapunov_stable"].build(), "clarabel")
+    >>> row["backend"], row["decision"], res.verdict
+    ('clarabel', 'certified', 'certified')
+    """
+    try:
+        res = solve(problem, backend=name, options=options)
+    except LmicError as err:
+        return error_row(name, str(err)), None
+    x = res.solution.x
+    decision = res.verdict
+    row = {
+        "backend": res.backend,
+        "decision": decision,
+        "status": res.status,
+        "objective": res.objective if decision == "certified" else None,
+        "verdict": decision,
+        "radius": res.outcome.evidence.radius if decision == "infeasible-bounded" else None,
+        "x_norm": float(np.max(np.abs(x))) if decision == "certified" and x is not None and len(x) else None,
+        "min_margin": res.min_margin,
+        "strategy": res.solution.strategy,
+        "margin": res.solution.margin,
+        "solve_s": res.timings["solve_s"],
+        "attempts": res.attempts,
+        "message": res.solution.message if decision not in DECISIONS else "",
+    }
+    if decision not in DECISIONS:
+        row["message"] = res.outcome.reason or res.solution.message
+    return row, res
+
+
+def target_label(target: Any, system: Any = None) -> str:
+    """How a report names what was cross-checked (target, then the system file if any).
+
+    >>> target_label("qib.thm1", "plant.yaml")
+    'qib.thm1 plant.yaml'
+    """
     label = target if isinstance(target, str) else ("<problem>" if isinstance(target, Problem) else os.fspath(target))
     if system is not None:
         if isinstance(system, str | os.PathLike):
             label = f"{label} {os.fspath(system)}"
         else:  # a dict, a System or a plant object
             label = f"{label} {getattr(system, 'path', None) or '<system>'}"
-    return CrosscheckReport(str(label), rows, agree, gap, rtol, runs, found)
+    return str(label)
+
+
+def assemble(
+    label: str, rows: list[dict[str, Any]], sense: str, rtol: float = DEFAULT_RTOL, runs: list[Result] | None = None
+) -> CrosscheckReport:
+    """The report of a cross-check from its rows (in backend order): conflicts, agreement, gap.
+
+    >>> rows = [{"backend": "a", "decision": "certified", "objective": 1.0, "x_norm": 1.0}]
+    >>> assemble("p", rows, "feasibility").agree
+    True
+    """
+    found, gap = conflicts(rows, sense, rtol)
+    agree = not found and any(r["decision"] in DECISIONS for r in rows)
+    return CrosscheckReport(label, rows, agree, gap, rtol, list(runs or []), found)

@@ -4,6 +4,10 @@ Decides one problem on each backend alone (one row per backend with its decision
 whether the decisions agree (:mod:`lmic.crosscheck`). Failed or undecided backends are listed
 and counted as failures, not as disagreement. Exit code: 0 when at least one backend decided
 and no two decisions conflict, 1 on a conflict (or when no backend decided), 2 for bad input.
+
+``--executor local|dask|tcp://HOST:PORT`` (``--workers N``) runs one job per backend on the
+study executors (:func:`lmic.studies.parallel.crosscheck_parallel`), with the same rows and
+decisions; without it the backends run one after the other in this process.
 """
 
 from __future__ import annotations
@@ -28,6 +32,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--backends", default=None, help="comma-separated backends (default: every available one)")
     p.add_argument("--rtol", type=float, default=None, help="objective agreement tolerance")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument(
+        "--executor",
+        default=None,
+        help="run the backends in parallel: local (worker processes), dask (a LocalCluster) or "
+        "tcp://HOST:PORT (a Dask scheduler); default: one after the other in this process",
+    )
+    p.add_argument("--workers", type=int, default=None, help="workers for --executor (default: cores)")
     add_solver_options(p)
     p.set_defaults(func=run)
 
@@ -85,21 +96,41 @@ def run(args: argparse.Namespace) -> int:
     from lmic.backends.registry import get_backend
     from lmic.commands._common import parse_params, print_json, solve_options
     from lmic.crosscheck import DEFAULT_RTOL, crosscheck
+    from lmic.errors import DataError
 
     names = [b.strip() for b in args.backends.split(",") if b.strip()] if args.backends else None
     for name in names or []:
         get_backend(name)  # an unknown or missing backend is bad input (exit 2)
     params = parse_params(args.param)
+    if args.workers is not None and args.workers < 1:
+        raise DataError(f"--workers {args.workers}: give at least 1")
+    if args.executor is not None and not (args.executor in ("local", "dask") or args.executor.startswith("tcp://")):
+        raise DataError(f"--executor {args.executor}: use local, dask or tcp://HOST:PORT")
     with _progress_bar(enabled=not args.json) as progress:
-        report = crosscheck(
-            args.target,
-            system=args.system,
-            params=params or None,
-            backends=names,
-            options=solve_options(args),
-            rtol=args.rtol if args.rtol is not None else DEFAULT_RTOL,
-            progress=progress,
-        )
+        if args.executor:  # one job per backend (lmic.studies.parallel)
+            from lmic.studies.parallel import crosscheck_parallel
+
+            report = crosscheck_parallel(
+                args.target,
+                args.system,
+                params=params or None,
+                backends=names,
+                options=solve_options(args),
+                rtol=args.rtol,
+                executor=args.executor,
+                workers=args.workers,
+                progress=progress,
+            )
+        else:
+            report = crosscheck(
+                args.target,
+                system=args.system,
+                params=params or None,
+                backends=names,
+                options=solve_options(args),
+                rtol=args.rtol if args.rtol is not None else DEFAULT_RTOL,
+                progress=progress,
+            )
     if args.json:
         print_json(report.to_dict())
         return report.exit_code()

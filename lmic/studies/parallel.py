@@ -1,4 +1,10 @@
-"""``lmic reproduce --executor``: one job per example file, on the study executors.
+"""``lmic reproduce --executor`` and ``lmic crosscheck --executor``: their jobs on the study executors.
+
+``lmic crosscheck --executor`` (:func:`crosscheck_parallel`) runs one job per backend (task
+``crosscheck-backend``, :func:`lmic.studies.tasks.run_crosscheck_backend`) and joins the rows,
+in backend order, into the report the sequential :func:`lmic.crosscheck.crosscheck` builds.
+
+``lmic reproduce --executor`` (:func:`reproduce_parallel`) runs one job per example file.
 
 Each example file becomes a job of task ``reproduce-file`` that runs
 :func:`lmic.reproduce.reproduce` restricted to that file in a job runner
@@ -24,7 +30,7 @@ from typing import Any
 
 from lmic.errors import DataError
 
-__all__ = ["reproduce_parallel"]
+__all__ = ["reproduce_parallel", "crosscheck_parallel"]
 
 
 def reproduce_parallel(
@@ -137,4 +143,119 @@ def reproduce_parallel(
         backend=used,
         total_s=time.perf_counter() - t0,
         file_times=file_times,
+    )
+
+
+def _portable(value: Any) -> Any:
+    """A target or system as a worker can load it: an existing file as an absolute path."""
+    if isinstance(value, str | os.PathLike) and Path(value).is_file():
+        return str(Path(value).resolve())
+    return value
+
+
+def crosscheck_parallel(
+    target: str | os.PathLike[str],
+    system: str | os.PathLike[str] | dict[str, Any] | None = None,
+    params: dict[str, Any] | None = None,
+    backends: list[str] | None = None,
+    options: Any = None,
+    rtol: float | None = None,
+    *,
+    executor: str = "local",
+    workers: int | None = None,
+    progress: Callable[[int, int, str, dict[str, Any] | None], None] | None = None,
+) -> Any:
+    """:func:`lmic.crosscheck.crosscheck` with one job per backend on an executor.
+
+    The problem is loaded here once (bad input fails before any job starts); each job loads it
+    again in its worker and decides it with one backend (:func:`lmic.crosscheck.backend_row`).
+    The rows are joined in the order of ``backends`` into the report the sequential run builds
+    (same rows, same decisions; ``runs`` stays empty: results do not travel). A job that crashes
+    or passes its time limit is an ``undecided`` row saying so (a failure, not a conflict).
+
+    Parameters
+    ----------
+    target, system, params, backends, rtol
+        As :func:`lmic.crosscheck.crosscheck` (a theorem id or an IR/SDPA file; a system file
+        or dict).
+    options : SolveOptions, optional
+        Sent to the workers field by field; its ``time_limit`` (plus a grace) also bounds each job.
+    executor : str
+        ``local``, ``dask`` or ``tcp://HOST:PORT``.
+    workers : int, optional
+    progress : callable, optional
+        ``progress(done, total, backend, row)`` after each backend's row arrives.
+
+    Returns
+    -------
+    CrosscheckReport
+
+    Examples
+    --------
+    >>> rep = crosscheck_parallel("thesis.lyapunov", {"data": {"A": [[-2.0]]}},
+    ...                           backends=["clarabel", "scs"], executor="local", workers=1)
+    >>> [(r["backend"], r["decision"]) for r in rep.results], rep.exit_code()
+    ([('clarabel', 'certified'), ('scs', 'certified')], 0)
+    """
+    import dataclasses
+    import json
+
+    from lmic.api import load_target
+    from lmic.backends.registry import available_backend_names
+    from lmic.crosscheck import DEFAULT_RTOL, assemble, error_row, target_label
+    from lmic.errors import LmicError
+    from lmic.studies.executors import make_executor
+
+    problem, _theorem, _ = load_target(target, system, params)
+    names = backends or available_backend_names()
+    if not names:
+        raise LmicError("no backend to cross-check with")
+    fields: dict[str, Any] = {}
+    limit = None
+    if options is not None:
+        default = type(options)()
+        for f in dataclasses.fields(options):
+            value = getattr(options, f.name)
+            if value != getattr(default, f.name):
+                try:
+                    json.dumps(value, allow_nan=False)
+                except (TypeError, ValueError):
+                    raise LmicError(f"solve option {f.name}={value!r} cannot be sent to a worker") from None
+                fields[f.name] = value
+        limit = options.time_limit
+    jobs = [
+        {
+            "hash": f"{k}:{name}",
+            "task": "crosscheck-backend",
+            "target": _portable(target),
+            "system": _portable(system),
+            "params": params or {},
+            "backend": name,
+            "options": fields,
+        }
+        for k, name in enumerate(names)
+    ]
+    rows: dict[str, dict[str, Any]] = {}
+    ex = make_executor(executor, workers)
+    try:
+        ex.submit_many(jobs, limit)
+        for rec in ex.results():
+            key = rec["hash"]
+            if key in rows:  # a re-run of a lost Dask task: keep the first result
+                continue
+            name = key.split(":", 1)[1]
+            row = rec.get("row")
+            if row is None:  # crashed, stopped at the time limit, or raised in the worker
+                row = error_row(name, str(rec.get("message") or rec.get("status")), status=str(rec.get("status")))
+            rows[key] = row
+            if progress is not None:
+                progress(len(rows), len(jobs), name, row)
+    finally:
+        ex.close()
+    ordered = [rows[job["hash"]] for job in jobs]
+    return assemble(
+        target_label(target, system),
+        ordered,
+        problem.objective.sense,
+        DEFAULT_RTOL if rtol is None else rtol,
     )

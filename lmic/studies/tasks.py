@@ -25,7 +25,7 @@ import time
 import traceback
 from typing import Any
 
-__all__ = ["OUTCOMES", "outcome", "run_job", "run_reproduce_file"]
+__all__ = ["OUTCOMES", "outcome", "run_job", "run_reproduce_file", "run_crosscheck_backend"]
 
 #: the outcomes a study counts, in display order (HELPERS vocabulary plus ``error``)
 OUTCOMES = ("certified", "infeasible-certified", "infeasible-bounded", "rejected", "undecided", "error")
@@ -232,6 +232,37 @@ def run_reproduce_file(job: dict[str, Any]) -> dict[str, Any]:
     }
 
 
+def run_crosscheck_backend(job: dict[str, Any]) -> dict[str, Any]:
+    """The worker side of ``lmic crosscheck --executor``: one backend's row (``lmic.crosscheck.backend_row``).
+
+    The job names the target (theorem id or IR/SDPA file), the system (file or dict), the parameters,
+    the backend and the ``SolveOptions`` fields; the problem is loaded here as the sequential
+    command loads it, so the row is the one the sequential run gets.
+
+    >>> rec = run_crosscheck_backend({"target": "thesis.lyapunov", "system": {"data": {"A": [[-2.0]]}},
+    ...                               "params": {}, "backend": "clarabel", "options": {}})
+    >>> rec["outcome"], rec["row"]["decision"]
+    ('certified', 'certified')
+    """
+    from lmic.api import load_target
+    from lmic.crosscheck import backend_row
+    from lmic.options import SolveOptions
+
+    options = SolveOptions()
+    for key, value in (job.get("options") or {}).items():
+        setattr(options, key, value)
+    problem, _theorem, _ = load_target(job["target"], job.get("system"), job.get("params") or None)
+    row, _res = backend_row(problem, job["backend"], options)
+    return {
+        "outcome": row["decision"],
+        "status": row["status"],
+        "verdict": row["verdict"],
+        "objective": row["objective"],
+        "message": row["message"] or "",
+        "row": row,
+    }
+
+
 def run_job(job: dict[str, Any], time_limit: float | None = None) -> dict[str, Any]:
     """Run one job; never raises (a job that raises is an ``error`` record with its message).
 
@@ -260,6 +291,8 @@ def run_job(job: dict[str, Any], time_limit: float | None = None) -> dict[str, A
             rec = _audit(job)
         elif task == "reproduce-file":
             rec = run_reproduce_file(job)
+        elif task == "crosscheck-backend":
+            rec = run_crosscheck_backend(job)
         else:
             from lmic.system import load_system
 
