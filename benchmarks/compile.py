@@ -64,8 +64,10 @@ def main() -> None:
     plan = analyse(thm)
     plan_s = time.perf_counter() - t0
     print(f"plan (one-off analysis of qib.thm1): {plan_s * 1e3:.1f} ms")
-    print(f"{'n':>4} {'p':>3} {'LMI dim':>8} {'nnz':>9} {'first bind ms':>14} {'bind ms':>8} {'ns/nnz':>7}"
-          f" {'cvxpy ms':>9} {'x first':>8} {'x bind':>7}")
+    print(
+        f"{'n':>4} {'p':>3} {'LMI dim':>8} {'nnz':>9} {'first bind ms':>14} {'bind ms':>8} {'ns/nnz':>7}"
+        f" {'cvxpy ms':>9} {'x first':>8} {'x bind':>7}"
+    )
     for n in (int(s) for s in args.sizes.split(",")):
         system = load_system(random_system(n))  # parsing the file is not part of bind
         t0 = time.perf_counter()

@@ -65,9 +65,7 @@ def _locate(fname: str) -> tuple[str, str]:
     path = _CHECKOUT_DIR / fname
     if path.is_file():
         return str(path), path.read_text(encoding="utf-8")
-    raise LmicError(
-        f"schema '{fname}' not found (looked in the lmic/_schemas package data and {_CHECKOUT_DIR})"
-    )
+    raise LmicError(f"schema '{fname}' not found (looked in the lmic/_schemas package data and {_CHECKOUT_DIR})")
 
 
 @cache

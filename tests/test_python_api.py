@@ -40,8 +40,10 @@ def test_statespace_plant_fills_the_theorems_data():
         assert r.verdict == "certified"
         assert r.objective == pytest.approx(1 / (0.5 * np.sqrt(1.9375)), rel=1e-4)
     # a dict with a plant and extra parameters
-    r2 = lmic.solve("qib.thm1", {"plant": control.ss(np.diag([0.5, 0.2]), np.zeros((2, 1)), [[1, 0]], 0, True),
-                                 "params": {"beta": 0.01}})
+    r2 = lmic.solve(
+        "qib.thm1",
+        {"plant": control.ss(np.diag([0.5, 0.2]), np.zeros((2, 1)), [[1, 0]], 0, True), "params": {"beta": 0.01}},
+    )
     assert r2.verdict == "certified"
     assert sorted(r2.problem.data) >= ["A", "C"]
 

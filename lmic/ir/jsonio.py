@@ -93,8 +93,7 @@ __all__ = [
 #: Version of the JSON format written (``"lmic_ir"``).
 IR_VERSION = 1
 
-_TOP_KEYS = ("lmic_ir", "meta", "variables", "lmis", "linear", "objective", "data", "derived",
-             "checks")
+_TOP_KEYS = ("lmic_ir", "meta", "variables", "lmis", "linear", "objective", "data", "derived", "checks")
 
 
 # --------------------------------------------------------------------------------------------
@@ -228,10 +227,7 @@ def _skeleton(d: Any, key: str = "") -> Any:
     if isinstance(d, dict):
         if key == "data":
             return {k: _prefix(v) for k, v in d.items()}
-        return {
-            k: (v[:_PREFIX] if k in _LONG_KEYS and isinstance(v, list) else _skeleton(v, k))
-            for k, v in d.items()
-        }
+        return {k: (v[:_PREFIX] if k in _LONG_KEYS and isinstance(v, list) else _skeleton(v, k)) for k, v in d.items()}
     if isinstance(d, list):
         return [_skeleton(v) for v in d]
     return d
@@ -353,9 +349,7 @@ def problem_to_dict(problem: Problem) -> dict[str, Any]:
     derived = []
     for i, d in enumerate(problem.derived):
         _expr.validate(d.expr, f"derived[{i}].expr")
-        derived.append(
-            {"name": d.name, "expr": _jsonable(d.expr, f"derived[{i}].expr"), "doc": d.doc}
-        )
+        derived.append({"name": d.name, "expr": _jsonable(d.expr, f"derived[{i}].expr"), "doc": d.doc})
     checks = []
     for i, ch in enumerate(problem.checks):
         _expr.validate(ch.expr, f"checks[{i}].expr")
@@ -418,24 +412,18 @@ def _value_array(values: list, where: str) -> np.ndarray:
     return arr
 
 
-def _sparse(
-    t: Mapping[str, Any], shape: tuple[int, int], where: str, what: str
-) -> sp.csc_matrix:
+def _sparse(t: Mapping[str, Any], shape: tuple[int, int], where: str, what: str) -> sp.csc_matrix:
     """A sparse matrix from ``{"row", "col", "val"}`` with range and duplicate checks."""
     row = _index_array(t["row"], f"{where}.row")
     col = _index_array(t["col"], f"{where}.col")
     val = _value_array(t["val"], f"{where}.val")
     if not (len(row) == len(col) == len(val)):
-        raise IRError(
-            f"{where}: row, col and val have different lengths ({len(row)}, {len(col)}, {len(val)})"
-        )
+        raise IRError(f"{where}: row, col and val have different lengths ({len(row)}, {len(col)}, {len(val)})")
     nr, nc = shape
     if row.size and row.max() >= nr:
         raise IRError(f"{where}: row index {int(row.max())} out of range for {what}")
     if col.size and col.max() >= nc:
-        raise IRError(
-            f"{where}: col index {int(col.max())} out of range for 1 + n = {nc} columns"
-        )
+        raise IRError(f"{where}: col index {int(col.max())} out of range for 1 + n = {nc} columns")
     if row.size:
         key = col * nr + row
         uniq, first, counts = np.unique(key, return_index=True, return_counts=True)
@@ -534,10 +522,7 @@ def problem_from_dict(d: Any, source: str = "<dict>") -> Problem:
     if "lmic_ir" not in d:
         raise IRError(f"{source}: lmic_ir: missing format version (not an lmic IR file?)")
     if d["lmic_ir"] != IR_VERSION or isinstance(d["lmic_ir"], bool):
-        raise IRError(
-            f"{source}: lmic_ir: unsupported IR version {d['lmic_ir']!r} "
-            f"(this lmic reads {IR_VERSION})"
-        )
+        raise IRError(f"{source}: lmic_ir: unsupported IR version {d['lmic_ir']!r} (this lmic reads {IR_VERSION})")
     bad = _first_nonfinite(dict(d), "")
     if bad:
         raise IRError(f"{source}: {bad}: NaN or infinite number")
@@ -554,8 +539,14 @@ def problem_from_dict(d: Any, source: str = "<dict>") -> Problem:
             raise IRError(f"{source}: {where}.name: duplicate variable name '{v['name']}'")
         seen.add(v["name"])
         var = _wrap(
-            source, where, Variable, v["name"], v["kind"], (int(v["shape"][0]), int(v["shape"][1])),
-            offset=int(v["offset"]), blocks=tuple(int(b) for b in v.get("blocks", [])),
+            source,
+            where,
+            Variable,
+            v["name"],
+            v["kind"],
+            (int(v["shape"][0]), int(v["shape"][1])),
+            offset=int(v["offset"]),
+            blocks=tuple(int(b) for b in v.get("blocks", [])),
             sign=v.get("sign", "free"),
         )
         if var.kind != "blockdiag" and var.blocks:
@@ -575,18 +566,23 @@ def problem_from_dict(d: Any, source: str = "<dict>") -> Problem:
         dim = int(m["dim"])
         sizes = tuple(int(b) for b in m.get("block_sizes", [])) or (dim,)
         if sum(sizes) != dim:
-            raise IRError(
-                f"{source}: {where}.block_sizes: {list(sizes)} do not add up to dimension {dim}"
-            )
+            raise IRError(f"{source}: {where}.block_sizes: {list(sizes)} do not add up to dimension {dim}")
         try:
-            coeffs = _sparse(m["coeffs"], (tril_size(dim), 1 + n), f"{where}.coeffs",
-                             f"dimension {dim}")
+            coeffs = _sparse(m["coeffs"], (tril_size(dim), 1 + n), f"{where}.coeffs", f"dimension {dim}")
         except IRError as err:
             raise IRError(f"{source}: {err}") from None
         lmis.append(
-            _wrap(source, where, LMI, m["name"], dim, coeffs, strict=bool(m.get("strict", True)),
-                  relation=m.get("relation", ">" if m.get("strict", True) else ">="),
-                  block_sizes=sizes)
+            _wrap(
+                source,
+                where,
+                LMI,
+                m["name"],
+                dim,
+                coeffs,
+                strict=bool(m.get("strict", True)),
+                relation=m.get("relation", ">" if m.get("strict", True) else ">="),
+                block_sizes=sizes,
+            )
         )
 
     # linear constraints
@@ -597,8 +593,7 @@ def problem_from_dict(d: Any, source: str = "<dict>") -> Problem:
             f"{source}: linear: kinds, strict and names have different lengths "
             f"({rows}, {len(lin['strict'])}, {len(lin['names'])})"
         )
-    for i, (kind, strict, name) in enumerate(zip(lin["kinds"], lin["strict"], lin["names"],
-                                                  strict=True)):
+    for i, (kind, strict, name) in enumerate(zip(lin["kinds"], lin["strict"], lin["names"], strict=True)):
         if kind not in ("eq", "ge"):
             raise IRError(f"{source}: linear.kinds[{i}]: {kind!r} is not 'eq' or 'ge'")
         if type(strict) is not bool:
@@ -609,8 +604,15 @@ def problem_from_dict(d: Any, source: str = "<dict>") -> Problem:
         A = _sparse(lin, (rows, 1 + n), "linear", f"{rows} rows")
     except IRError as err:
         raise IRError(f"{source}: {err}") from None
-    linear = _wrap(source, "linear", LinearConstraints, A.tocsr(), list(lin["kinds"]),
-                   [bool(s) for s in lin["strict"]], [str(s) for s in lin["names"]])
+    linear = _wrap(
+        source,
+        "linear",
+        LinearConstraints,
+        A.tocsr(),
+        list(lin["kinds"]),
+        [bool(s) for s in lin["strict"]],
+        [str(s) for s in lin["names"]],
+    )
 
     # objective
     obj = d["objective"]
@@ -620,14 +622,9 @@ def problem_from_dict(d: Any, source: str = "<dict>") -> Problem:
     except IRError as err:
         raise IRError(f"{source}: {err}") from None
     if len(idx) != len(val):
-        raise IRError(
-            f"{source}: objective.c: idx and val have different lengths ({len(idx)}, {len(val)})"
-        )
+        raise IRError(f"{source}: objective.c: idx and val have different lengths ({len(idx)}, {len(val)})")
     if idx.size and idx.max() >= 1 + n:
-        raise IRError(
-            f"{source}: objective.c: index {int(idx.max())} out of range "
-            f"for 1 + n = {1 + n} entries"
-        )
+        raise IRError(f"{source}: objective.c: index {int(idx.max())} out of range for 1 + n = {1 + n} entries")
     if np.unique(idx).size != idx.size:
         raise IRError(f"{source}: objective.c: duplicate index")
     c = np.zeros(1 + n)
@@ -649,8 +646,7 @@ def problem_from_dict(d: Any, source: str = "<dict>") -> Problem:
         unknown = sorted(_expr.names(item["expr"]) - known)
         if unknown:
             raise IRError(
-                f"{source}: {where}: uses '{unknown[0]}', which is not data, a variable or an "
-                "earlier derived quantity"
+                f"{source}: {where}: uses '{unknown[0]}', which is not data, a variable or an earlier derived quantity"
             )
         derived.append(NamedExpr(item["name"], item["expr"], item.get("doc", "")))
         known.add(item["name"])
@@ -661,20 +657,36 @@ def problem_from_dict(d: Any, source: str = "<dict>") -> Problem:
         unknown = sorted(_expr.names(item["expr"]) - known)
         if unknown:
             raise IRError(
-                f"{source}: {where}.expr: uses '{unknown[0]}', which is not data, a variable or "
-                "a derived quantity"
+                f"{source}: {where}.expr: uses '{unknown[0]}', which is not data, a variable or a derived quantity"
             )
         bound = item.get("bound")
         if item["kind"] in ("less_than", "greater_than") and bound is None:
             raise IRError(f"{source}: {where}.bound: a '{item['kind']}' check needs a bound")
         checks.append(
-            _wrap(source, where, Check, item["name"], item["kind"], item["expr"],
-                  None if bound is None else float(bound), item.get("doc", ""))
+            _wrap(
+                source,
+                where,
+                Check,
+                item["name"],
+                item["kind"],
+                item["expr"],
+                None if bound is None else float(bound),
+                item.get("doc", ""),
+            )
         )
 
     return _wrap(
-        source, "problem", Problem, variables, lmis, linear, objective, data=data,
-        derived=derived, checks=checks, meta=dict(d.get("meta", {})),
+        source,
+        "problem",
+        Problem,
+        variables,
+        lmis,
+        linear,
+        objective,
+        data=data,
+        derived=derived,
+        checks=checks,
+        meta=dict(d.get("meta", {})),
     )
 
 
@@ -759,9 +771,7 @@ def problem_from_json(text: str, source: str = "<string>") -> Problem:
     except _DuplicateKey as err:
         raise IRError(f"{source}: duplicate key '{err.args[0]}'") from None
     except json.JSONDecodeError as err:
-        raise IRError(
-            f"{source}: not valid JSON (line {err.lineno}, column {err.colno}): {err.msg}"
-        ) from None
+        raise IRError(f"{source}: not valid JSON (line {err.lineno}, column {err.colno}): {err.msg}") from None
     except RecursionError:
         raise IRError(f"{source}: not valid JSON (nested too deeply)") from None
     check_depth(d, source, IRError)
@@ -837,7 +847,10 @@ def problem_hash(problem: Problem) -> str:
     64
     """
     text = json.dumps(
-        problem_to_dict(problem), sort_keys=True, separators=(",", ":"), allow_nan=False,
+        problem_to_dict(problem),
+        sort_keys=True,
+        separators=(",", ":"),
+        allow_nan=False,
         ensure_ascii=True,
     )
     return hashlib.sha256(text.encode("utf-8")).hexdigest()

@@ -414,9 +414,7 @@ class Problem:
         n = offset
         for lmi in self.lmis:
             if lmi.coeffs.shape[1] != 1 + n:
-                raise IRError(
-                    f"LMI '{lmi.name}' has {lmi.coeffs.shape[1]} coefficient columns, expected {1 + n}"
-                )
+                raise IRError(f"LMI '{lmi.name}' has {lmi.coeffs.shape[1]} coefficient columns, expected {1 + n}")
             if not np.all(np.isfinite(lmi.coeffs.data)):
                 raise IRError(f"LMI '{lmi.name}' has a non-finite coefficient")
         if self.linear.A.shape[1] != 1 + n:

@@ -148,9 +148,7 @@ class _Header:
                 try:
                     out.append((lineno, conv(tok)))
                 except ValueError:
-                    raise self.fail(
-                        lineno, f"expected {count} {what}; '{_short(tok)}' is not a valid number"
-                    ) from None
+                    raise self.fail(lineno, f"expected {count} {what}; '{_short(tok)}' is not a valid number") from None
         return out
 
 
@@ -187,9 +185,7 @@ def _is_number(tok: str) -> bool:
 
 
 def _source_and_text(path_or_text: str | os.PathLike[str]) -> tuple[str, str]:
-    if isinstance(path_or_text, str) and (
-        "\n" in path_or_text or "\r" in path_or_text or not path_or_text.strip()
-    ):
+    if isinstance(path_or_text, str) and ("\n" in path_or_text or "\r" in path_or_text or not path_or_text.strip()):
         return "<sdpa text>", path_or_text
     source = os.fspath(path_or_text)
     try:
@@ -374,15 +370,18 @@ def read_sdpa(path_or_text: str | os.PathLike[str]) -> Problem:
             )
         keep = np.ones(len(val), dtype=bool)
         keep[order[dup + 1]] = False
-        matno, blkno, lo, hi, val, diag = (
-            matno[keep], blkno[keep], lo[keep], hi[keep], val[keep], diag[keep]
-        )
+        matno, blkno, lo, hi, val, diag = (matno[keep], blkno[keep], lo[keep], hi[keep], val[keep], diag[keep])
 
     # F0 enters the IR with a minus sign: F(x) = F0_ir + sum x_k F_k with F0_ir = -F0
     val = np.where(matno == 0, -val, val)
     nonzero = val != 0
     matno, blkno, lo, hi, val, diag = (
-        matno[nonzero], blkno[nonzero], lo[nonzero], hi[nonzero], val[nonzero], diag[nonzero]
+        matno[nonzero],
+        blkno[nonzero],
+        lo[nonzero],
+        hi[nonzero],
+        val[nonzero],
+        diag[nonzero],
     )
 
     lmis: list[LMI] = []
@@ -419,7 +418,10 @@ def read_sdpa(path_or_text: str | os.PathLike[str]) -> Problem:
     if comments:
         meta["comments"] = comments
     return Problem(
-        [Variable("x", "full", (m, 1), offset=0)], lmis, linear, Objective(sense, cvec),
+        [Variable("x", "full", (m, 1), offset=0)],
+        lmis,
+        linear,
+        Objective(sense, cvec),
         meta=meta,
     )
 
@@ -472,9 +474,7 @@ def sdpa_text(problem: Problem) -> str:
         r_of, c_of = tril_rows_cols(lmi.dim)
         sizes.append(lmi.dim)
         # storage position k is (r, c) with r >= c; SDPA gets the upper triangle, 1-based
-        parts.append(
-            _block_entries(lmi.coeffs, len(sizes), lambda k, r=r_of, c=c_of: (c[k] + 1, r[k] + 1))
-        )
+        parts.append(_block_entries(lmi.coeffs, len(sizes), lambda k, r=r_of, c=c_of: (c[k] + 1, r[k] + 1)))
     lin = problem.linear
     if len(lin):
         eq = np.flatnonzero(np.array(lin.kinds) == "eq")
@@ -502,8 +502,12 @@ def sdpa_text(problem: Problem) -> str:
         out.extend(
             f"{a} {b} {p} {q} {v!r}"
             for a, b, p, q, v in zip(
-                matno[order].tolist(), blk[order].tolist(), i[order].tolist(),
-                j[order].tolist(), val[order].tolist(), strict=True,
+                matno[order].tolist(),
+                blk[order].tolist(),
+                i[order].tolist(),
+                j[order].tolist(),
+                val[order].tolist(),
+                strict=True,
             )
         )
     return "\n".join(out) + "\n"

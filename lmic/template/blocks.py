@@ -101,9 +101,7 @@ class Block:
         k = len(rows)
         for i, r in enumerate(rows):
             if len(r) != k:
-                raise TemplateError(
-                    f"block row {i + 1} has {len(r)} entries; a symmetric block matrix needs {k}"
-                )
+                raise TemplateError(f"block row {i + 1} has {len(r)} entries; a symmetric block matrix needs {k}")
         self.rows = [list(r) for r in rows]
 
     @property

@@ -60,21 +60,15 @@ __all__ = [
 # -- building blocks -------------------------------------------------------------------------
 
 
-def dense_lmi(
-    name: str, F0: np.ndarray, Fs: list[np.ndarray], strict: bool, relation: str = ">"
-) -> LMI:
+def dense_lmi(name: str, F0: np.ndarray, Fs: list[np.ndarray], strict: bool, relation: str = ">") -> LMI:
     """An IR LMI ``F0 + sum_k x_k Fs[k] (>= or >) 0`` from dense symmetric matrices.
 
     >>> L = dense_lmi("x > 0", np.zeros((1, 1)), [np.eye(1)], strict=True)
     >>> L.matrix([2.0])
     array([[2.]])
     """
-    cols = [tril_vec(np.asarray(F0, dtype=float))] + [
-        tril_vec(np.asarray(F, dtype=float)) for F in Fs
-    ]
-    return LMI(
-        name, F0.shape[0], sp.csc_matrix(np.column_stack(cols)), strict=strict, relation=relation
-    )
+    cols = [tril_vec(np.asarray(F0, dtype=float))] + [tril_vec(np.asarray(F, dtype=float)) for F in Fs]
+    return LMI(name, F0.shape[0], sp.csc_matrix(np.column_stack(cols)), strict=strict, relation=relation)
 
 
 def _basis_mats(var: Variable) -> list[np.ndarray]:
@@ -93,9 +87,7 @@ def lyapunov_problem(A: np.ndarray) -> Problem:
     n = A.shape[0]
     P = Variable("P", "symmetric", (n, n))
     Ps = _basis_mats(P)
-    lyap = dense_lmi(
-        "A'P + PA < 0", np.zeros((n, n)), [-(A.T @ Pk + Pk @ A) for Pk in Ps], True, "<"
-    )
+    lyap = dense_lmi("A'P + PA < 0", np.zeros((n, n)), [-(A.T @ Pk + Pk @ A) for Pk in Ps], True, "<")
     pos = dense_lmi("P > 0", np.zeros((n, n)), Ps, True, ">")
     return Problem(
         [P],
@@ -208,11 +200,7 @@ def stationarity_residual(problem: Problem, duals: dict) -> float:
     """
     grad, _, _ = 0.0, 0.0, 0.0
     sign = -1.0 if problem.objective.sense == "max" else 1.0
-    c = (
-        np.zeros(problem.n)
-        if problem.objective.sense == "feasibility"
-        else sign * problem.objective.c[1:]
-    )
+    c = np.zeros(problem.n) if problem.objective.sense == "feasibility" else sign * problem.objective.c[1:]
     total = np.zeros(1 + problem.n)
     for lmi, Z in zip(problem.lmis, duals["lmis"], strict=True):
         Z = np.asarray(Z, dtype=float)
@@ -265,14 +253,8 @@ def _check_feasible_point(problem: Problem, sol: Solution, tol: float) -> str:
         return "no point returned"
     margins = _strict_margins(problem, sol.x)
     scale = max(1.0, float(np.max(np.abs(sol.x))))
-    bad = [
-        (lmi.name, m)
-        for lmi, m in zip(problem.lmis, margins, strict=False)
-        if m <= 0 and lmi.strict
-    ]
-    bad += [
-        (lmi.name, m) for lmi, m in zip(problem.lmis, margins, strict=False) if m < -tol * scale
-    ]
+    bad = [(lmi.name, m) for lmi, m in zip(problem.lmis, margins, strict=False) if m <= 0 and lmi.strict]
+    bad += [(lmi.name, m) for lmi, m in zip(problem.lmis, margins, strict=False) if m < -tol * scale]
     if bad:
         return f"constraint '{bad[0][0]}' violated: min eigenvalue {bad[0][1]:.3g}"
     if sol.margin is None or sol.margin <= 0:
@@ -289,11 +271,7 @@ def _check_infeasible(problem: Problem, sol: Solution, tol: float) -> str:
         if value > tol * scale or grad > tol * scale * 10 or sign < -tol * scale:
             return f"strict Farkas ray fails: grad {grad:.2g}, value {value:.2g}, sign {sign:.2g}"
         return ""
-    if not (
-        value < 0
-        and grad <= tol * 10 * abs(value) * scale
-        and sign >= -tol * 10 * abs(value) * scale
-    ):
+    if not (value < 0 and grad <= tol * 10 * abs(value) * scale and sign >= -tol * 10 * abs(value) * scale):
         return f"Farkas certificate fails: grad {grad:.2g}, value {value:.2g}, sign {sign:.2g}"
     return ""
 
@@ -341,9 +319,7 @@ def _strict_affine() -> Problem:
 
 def _infeasible() -> Problem:
     x = Variable("x", "scalar", (1, 1))
-    lmi = dense_lmi(
-        "diag(x - 1, -1 - x) >= 0", np.diag([-1.0, -1.0]), [np.diag([1.0, -1.0])], False
-    )
+    lmi = dense_lmi("diag(x - 1, -1 - x) >= 0", np.diag([-1.0, -1.0]), [np.diag([1.0, -1.0])], False)
     return Problem([x], [lmi], LinearConstraints.empty(1), Objective("min", np.array([0.0, 1.0])))
 
 
@@ -355,9 +331,7 @@ def _unbounded() -> Problem:
         [np.diag([1.0, 0.0]), np.array([[0.0, 1.0], [1.0, 0.0]])],
         False,
     )
-    return Problem(
-        [x], [lmi], LinearConstraints.empty(2), Objective("max", np.array([0.0, 1.0, 0.0]))
-    )
+    return Problem([x], [lmi], LinearConstraints.empty(2), Objective("max", np.array([0.0, 1.0, 0.0])))
 
 
 _C = np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 2.0]])
@@ -368,9 +342,7 @@ def _linear_equalities() -> Problem:
     Xs = _basis_mats(X)
     lmi = dense_lmi("X >= 0", np.zeros((3, 3)), Xs, False)
     tr = np.array([np.trace(M) for M in Xs])
-    rows = LinearConstraints(
-        sp.csr_matrix(np.concatenate([[-1.0], tr]).reshape(1, -1)), ["eq"], [False], ["tr X = 1"]
-    )
+    rows = LinearConstraints(sp.csr_matrix(np.concatenate([[-1.0], tr]).reshape(1, -1)), ["eq"], [False], ["tr X = 1"])
     c = np.concatenate([[0.0], [np.sum(_C * M) for M in Xs]])
     return Problem([X], [lmi], rows, Objective("min", c))
 
@@ -381,9 +353,7 @@ def _max_sense() -> Problem:
     return Problem([t], [lmi], LinearConstraints.empty(1), Objective("max", np.array([0.0, 1.0])))
 
 
-def _check_value(
-    expected: float, with_duals: bool = True
-) -> Callable[[Problem, Solution, float], str]:
+def _check_value(expected: float, with_duals: bool = True) -> Callable[[Problem, Solution, float], str]:
     def check(problem: Problem, sol: Solution, tol: float) -> str:
         if sol.x is None or sol.objective is None:
             return "no point returned"

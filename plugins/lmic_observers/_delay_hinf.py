@@ -140,9 +140,9 @@ def build_delay_hinf(t, *, paper: str, pareto: bool) -> None:
     # Psi1 (rows e, x, alpha-e [, alpha-x]) and Omega (same rows, Psi2's columns)
     z8 = [0] * 8
     rows = [
-        [-P1 + H.T * H, 0, I(n)] + ([0] if psi1 == "corrected" else [])
-        + [A.T * P1 - C.T * Ups.T, 0, 0, 0, 0, 0, 0, 0],
-        [STAR, (eps2 + tau0 * eps3) * N.T * N - P2, 0] + ([I(n)] if psi1 == "corrected" else [])
+        [-P1 + H.T * H, 0, I(n)] + ([0] if psi1 == "corrected" else []) + [A.T * P1 - C.T * Ups.T, 0, 0, 0, 0, 0, 0, 0],
+        [STAR, (eps2 + tau0 * eps3) * N.T * N - P2, 0]
+        + ([I(n)] if psi1 == "corrected" else [])
         + [0, A.T * P2, 0, 0, 0, omega26, Ad.T * P2, 0],
         [STAR, STAR, -alpha] + ([0] if psi1 == "corrected" else []) + z8,
     ]

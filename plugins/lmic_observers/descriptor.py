@@ -73,8 +73,7 @@ def _eta_cbar_pinv(values: Mapping[str, Any]) -> np.ndarray:
     nh = X.shape[1]
     if rank(X) != nh:
         raise ValueError(
-            f"Assumption 2 fails: rank [eta; Cbar] = {rank(X)} < n + h = {nh} "
-            "(zeta = [x; nu] is not observable)"
+            f"Assumption 2 fails: rank [eta; Cbar] = {rank(X)} < n + h = {nh} (zeta = [x; nu] is not observable)"
         )
     R = values["R"]
     if rank(R) != R.shape[0]:

@@ -81,8 +81,12 @@ def nonuniform_thm1(t):
         "(9a)",
         block(
             [
-                [top + d * (PA + A.T * P), (1 + d) * LtC + P - d * A.T * P + N1 - N2.T,
-                 (1 + d) * PG - N3.T, d * A.T * P],
+                [
+                    top + d * (PA + A.T * P),
+                    (1 + d) * LtC + P - d * A.T * P + N1 - N2.T,
+                    (1 + d) * PG - N3.T,
+                    d * A.T * P,
+                ],
                 [STAR, -d * (LtC + C.T * Lt.T) - P + N2 + N2.T, -d * PG + N3.T, d * C.T * Lt.T],
                 [STAR, STAR, -I(m), d * G.T * P],
                 [STAR, STAR, STAR, -d * P],

@@ -74,20 +74,8 @@ def _nine(P, Q, K, L, mats, scalars, c):
     n = A.shape[0]
     Acl = A - B * K
     Aob = A - L * C
-    om11 = (
-        P * Acl
-        + Acl.T * P
-        + (1 / epsc1) * P * D * D.T * P
-        + (1 / epsc2) * P * E * E.T * P
-        + c * I(n)
-    )
-    om22 = (
-        Q * Aob
-        + Aob.T * Q
-        + (1 / epso1) * Q * D * D.T * Q
-        + epso1 * gamma**2 * I(n)
-        + (1 / epso2) * Q * E * E.T * Q
-    )
+    om11 = P * Acl + Acl.T * P + (1 / epsc1) * P * D * D.T * P + (1 / epsc2) * P * E * E.T * P + c * I(n)
+    om22 = Q * Aob + Aob.T * Q + (1 / epso1) * Q * D * D.T * Q + epso1 * gamma**2 * I(n) + (1 / epso2) * Q * E * E.T * Q
     return block([[om11, P * B * K], [STAR, om22]])
 
 

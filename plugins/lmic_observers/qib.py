@@ -148,12 +148,23 @@ def _reduced_order(t, beta, gamma):
     C = t.data("C", p, n, doc="output matrix")
     H = t.data("H", n - p, n, doc="z = H x, [H; C] nonsingular (14)-(15)")
     where = f"theorem {tid}: "
-    N = t.data("N", n, n - p, default=lambda v, r, c: reduced_coordinates(v["H"], v["C"], where)[0],
-               doc="[N M] = [H; C]^-1 (15); computed when omitted")
-    t.data("M", n, p, default=lambda v, r, c: reduced_coordinates(v["H"], v["C"], where)[1],
-           doc="[N M] = [H; C]^-1 (15), enters the observer (18) only; computed when omitted")
-    alpha = t.param("alpha", default=1.0, domain="positive",
-                    doc="P = alpha I (Remark 2); (26) is homogeneous in (alpha, omega)")
+    N = t.data(
+        "N",
+        n,
+        n - p,
+        default=lambda v, r, c: reduced_coordinates(v["H"], v["C"], where)[0],
+        doc="[N M] = [H; C]^-1 (15); computed when omitted",
+    )
+    t.data(
+        "M",
+        n,
+        p,
+        default=lambda v, r, c: reduced_coordinates(v["H"], v["C"], where)[1],
+        doc="[N M] = [H; C]^-1 (15), enters the observer (18) only; computed when omitted",
+    )
+    alpha = t.param(
+        "alpha", default=1.0, domain="positive", doc="P = alpha I (Remark 2); (26) is homogeneous in (alpha, omega)"
+    )
     fixed = t.flag("fixed_K", doc="1: K is given as data and P is free (LMI (21) in P, omega)")
     t.const("NM_check", _check_nm(tid), doc="checks [N M] = [H; C]^-1 (15)")
     AZ = t.const("A_Z", lambda v: v["H"] @ v["A"] @ v["N"], shape=(n - p, n - p), doc="A_Z = H A N")

@@ -157,8 +157,9 @@ def sampled_euler_thm2(t):
     """
     n, p, Ad, Cd = _observer(t)
     Q = t.data("Q", n, n, positive_definite=True, doc="fixed design matrix Q > 0")
-    gamma_d = t.param("gamma_d", default=0.0, domain="nonnegative",
-                      doc="actual Lipschitz constant (Remark 2 margin; 0 if unknown)")
+    gamma_d = t.param(
+        "gamma_d", default=0.0, domain="nonnegative", doc="actual Lipschitz constant (Remark 2 margin; 0 if unknown)"
+    )
     fixed = t.flag("fixed_L", doc="1: L is given as data (audit), G = P L")
     P = t.symmetric("P", n)
     G, L_data = _gain(t, n, p, P, fixed)
@@ -206,14 +207,22 @@ def sampled_euler_thm3(t):
     t.data("A", n, n, doc="continuous-time state matrix (enters through Ad)")
     C = t.data("C", p, n, doc="output matrix (Cd = C)")
     T = t.param("T", domain="positive", doc="sampling time")
-    gamma_c = t.param("gamma_c", default=0.0, domain="nonnegative",
-                      doc="actual CT Lipschitz constant (Remark 4 margin; 0 if unknown)")
-    Q = t.data("Q", n, n, positive_definite=True, default=lambda v, r, c: v["T"] * np.eye(r),
-               doc="fixed design matrix with lambda_min(Q) = T (default T I)")
+    gamma_c = t.param(
+        "gamma_c", default=0.0, domain="nonnegative", doc="actual CT Lipschitz constant (Remark 4 margin; 0 if unknown)"
+    )
+    Q = t.data(
+        "Q",
+        n,
+        n,
+        positive_definite=True,
+        default=lambda v, r, c: v["T"] * np.eye(r),
+        doc="fixed design matrix with lambda_min(Q) = T (default T I)",
+    )
     fixed = t.flag("fixed_L", doc="1: L is given as data (audit), G = P L")
     t.const("lambda_min_Q_is_T", _theorem3_q_rule, doc="checks lambda_min(Q) = T")
-    Ad = t.const("Ad", lambda v: np.eye(v["A"].shape[0]) + v["T"] * v["A"], shape=(n, n),
-                 doc="Euler model Ad = I + T A (48)")
+    Ad = t.const(
+        "Ad", lambda v: np.eye(v["A"].shape[0]) + v["T"] * v["A"], shape=(n, n), doc="Euler model Ad = I + T A (48)"
+    )
     P = t.symmetric("P", n)
     G, L_data = _gain(t, n, p, P, fixed)
     xi = _thm2_body(t, n, Ad, C, Q, P, G, L_data)
@@ -270,8 +279,9 @@ def sampled_euler_thm4(t):
     lmax_q = t.const("lambda_max_Q", lambda v: lambda_max(v["Q"]), doc="lambda_max(Q)")
     Lambda2 = t.const(
         "Lambda2",
-        lambda v: v["H"].T @ v["H"] - v["Q"]
-        + v["gamma_d"] * (3 * v["Psi1"] + v["lambda_max_Q"]) * np.eye(v["Q"].shape[0]),
+        lambda v: (
+            v["H"].T @ v["H"] - v["Q"] + v["gamma_d"] * (3 * v["Psi1"] + v["lambda_max_Q"]) * np.eye(v["Q"].shape[0])
+        ),
         shape=(n, n),
         doc="Lambda2 = H^T H - Q + gamma_d (3 Psi1 + lmax(Q)) I",
     )

@@ -369,4 +369,3 @@ THEOREMS = [
     thesis_thm4_1_2_linear,
     thesis_thm4_1_3,
 ]
-

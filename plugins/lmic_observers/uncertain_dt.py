@@ -76,7 +76,7 @@ def uncertain_dt_lemma3(t):
         )
         < 0,
     )
-    t.lmi("(16)", block([[-mu**2 * I(nw), B.T * P, B.T * P], [STAR, -P / 2, 0], [STAR, STAR, -1]]) < 0)
+    t.lmi("(16)", block([[-(mu**2) * I(nw), B.T * P, B.T * P], [STAR, -P / 2, 0], [STAR, STAR, -1]]) < 0)
     t.minimize(alpha + eps1)
     t.derive("gamma_star", 1 / sympy.sqrt(alpha * (1 + eps1)), doc="gamma* = 1/sqrt(alpha (1 + eps1)) (22)")
 
@@ -85,7 +85,10 @@ def _filter_data(t):
     """Data, parameters and gain variables shared by Theorem 1 and Corollary 1."""
     n, p, nw, nz, r, s = t.dims("n p nw nz r s")
     d = {
-        "n": n, "p": p, "nw": nw, "r": r,
+        "n": n,
+        "p": p,
+        "nw": nw,
+        "r": r,
         "A": t.data("A", n, n, doc="state matrix"),
         "B": t.data("B", n, nw, doc="disturbance matrix (state)"),
         "C": t.data("C", p, n, doc="output matrix"),
@@ -138,7 +141,7 @@ def _filter_lmis(t, d, psi1_rows, eps1, eps2):
         "Xi1 (24)",
         block(
             [
-                [-d["mu"] ** 2 * I(d["nw"]), Lambda2, B.T * P2, Lambda2, B.T * P2],
+                [-(d["mu"] ** 2) * I(d["nw"]), Lambda2, B.T * P2, Lambda2, B.T * P2],
                 [STAR, -P1 / 2, 0, 0, 0],
                 [STAR, STAR, -P2 / 2, 0, 0],
                 [STAR, STAR, STAR, -1, 0],
@@ -197,8 +200,9 @@ def uncertain_dt_thm1(t):
     gamma = 0.3428.
     """
     d = _filter_data(t)
-    psi1 = t.option("psi1", ("printed", "corrected"), "printed",
-                    doc="printed Psi1, or alpha^-1 I on both e and x (corrected)")
+    psi1 = t.option(
+        "psi1", ("printed", "corrected"), "printed", doc="printed Psi1, or alpha^-1 I on both e and x (corrected)"
+    )
     alpha = t.scalar("alpha", sign="positive")
     eps1 = t.scalar("eps1", sign="positive")
     eps2 = t.scalar("eps2", sign="positive")
@@ -286,10 +290,16 @@ def uncertain_dt_cor1(t):
     """
     d = _filter_data(t)
     n = d["n"]
-    t.data("Cw", n, n, default=lambda v, r, c: np.ones((r, c)),
-           doc="weights c_ij > 0 of the objective (default: all ones, as in the shipped example)")
-    positivity = t.option("positivity", ("elementwise", "none"), "elementwise",
-                          doc="Acal > 0 element-wise, or no sign constraint")
+    t.data(
+        "Cw",
+        n,
+        n,
+        default=lambda v, r, c: np.ones((r, c)),
+        doc="weights c_ij > 0 of the objective (default: all ones, as in the shipped example)",
+    )
+    positivity = t.option(
+        "positivity", ("elementwise", "none"), "elementwise", doc="Acal > 0 element-wise, or no sign constraint"
+    )
     E = t.const("E", lambda v: _positive_weights(v)[0], shape=(n, n**2), doc="Acal = E W F")
     F = t.const("F", lambda v: _positive_weights(v)[1], shape=(n**2, n), doc="Acal = E W F")
     W = t.diagonal("W", n**2, doc="diag(c_ij alpha_ij), row-major")

@@ -38,8 +38,20 @@ REPO = Path(__file__).resolve().parents[2]
 SCHEMA_FILE = REPO / "schemas" / "ir.schema.json"
 SDPLIB = REPO.parent / "shared" / "sdplib"
 
-AWKWARD = [0.1, 1e-300, -0.0, 0.0, 5e-324, -2.2250738585072014e-308, 1.7976931348623157e308,
-           1 / 3, -1e300, 123456789.123456789, 2.0**-1074, 1e16 + 2]
+AWKWARD = [
+    0.1,
+    1e-300,
+    -0.0,
+    0.0,
+    5e-324,
+    -2.2250738585072014e-308,
+    1.7976931348623157e308,
+    1 / 3,
+    -1e300,
+    123456789.123456789,
+    2.0**-1074,
+    1e16 + 2,
+]
 
 
 # ---------------------------------------------------------------- strategies
@@ -52,8 +64,7 @@ names_st = st.text(min_size=1, max_size=8)
 @st.composite
 def variables_st(draw):
     out, offset = [], 0
-    specs = draw(st.lists(st.sampled_from(["scalar", "full", "symmetric", "diagonal", "blockdiag"]),
-                          max_size=4))
+    specs = draw(st.lists(st.sampled_from(["scalar", "full", "symmetric", "diagonal", "blockdiag"]), max_size=4))
     for k, kind in enumerate(specs):
         blocks: tuple[int, ...] = ()
         if kind == "scalar":
@@ -77,8 +88,13 @@ def variables_st(draw):
 def sparse_st(draw, rows, cols):
     if rows == 0 or cols == 0:
         return sp.csc_matrix((rows, cols))
-    entries = draw(st.lists(st.tuples(st.integers(0, rows - 1), st.integers(0, cols - 1), nonzero),
-                            max_size=12, unique_by=lambda t: (t[0], t[1])))
+    entries = draw(
+        st.lists(
+            st.tuples(st.integers(0, rows - 1), st.integers(0, cols - 1), nonzero),
+            max_size=12,
+            unique_by=lambda t: (t[0], t[1]),
+        )
+    )
     if not entries:
         return sp.csc_matrix((rows, cols))
     r, c, v = zip(*entries, strict=True)
@@ -96,16 +112,16 @@ def expr_st(known):
     return st.recursive(
         leaf,
         lambda kids: st.one_of(
-            st.tuples(st.sampled_from(["add", "mul", "inv", "transpose", "lambda_max"]),
-                      st.lists(kids, max_size=2)).map(lambda t: {"op": t[0], "args": t[1]}),
-            st.lists(st.lists(kids, min_size=1, max_size=2), min_size=1, max_size=2).map(
-                lambda b: {"block": b}),
+            st.tuples(
+                st.sampled_from(["add", "mul", "inv", "transpose", "lambda_max"]), st.lists(kids, max_size=2)
+            ).map(lambda t: {"op": t[0], "args": t[1]}),
+            st.lists(st.lists(kids, min_size=1, max_size=2), min_size=1, max_size=2).map(lambda b: {"block": b}),
         ),
         max_leaves=5,
     )
 
 
-json_leaf = st.none() | st.booleans() | st.integers(-10**6, 10**6) | finite | st.text(max_size=6)
+json_leaf = st.none() | st.booleans() | st.integers(-(10**6), 10**6) | finite | st.text(max_size=6)
 json_st = st.recursive(
     json_leaf,
     lambda kids: st.lists(kids, max_size=3) | st.dictionaries(st.text(max_size=5), kids, max_size=3),
@@ -122,8 +138,16 @@ def problems(draw):
         sizes = tuple(draw(st.lists(st.integers(1, 3), min_size=1, max_size=2)))
         dim = sum(sizes)
         strict = draw(st.booleans())
-        lmis.append(LMI(f"lmi {k}", dim, draw(sparse_st(tril_size(dim), 1 + n)), strict=strict,
-                        relation=draw(st.sampled_from(["<", "<=", ">", ">="])), block_sizes=sizes))
+        lmis.append(
+            LMI(
+                f"lmi {k}",
+                dim,
+                draw(sparse_st(tril_size(dim), 1 + n)),
+                strict=strict,
+                relation=draw(st.sampled_from(["<", "<=", ">", ">="])),
+                block_sizes=sizes,
+            )
+        )
     rows = draw(st.integers(0, 3))
     linear = LinearConstraints(
         sp.csr_matrix(draw(sparse_st(rows, 1 + n))),
@@ -175,11 +199,15 @@ def assert_same_problem(p: Problem, q: Problem) -> None:
     assert len(p.lmis) == len(q.lmis)
     for a, b in zip(p.lmis, q.lmis, strict=True):
         assert (a.name, a.dim, a.strict, a.relation, tuple(a.block_sizes)) == (
-            b.name, b.dim, b.strict, b.relation, tuple(b.block_sizes))
+            b.name,
+            b.dim,
+            b.strict,
+            b.relation,
+            tuple(b.block_sizes),
+        )
         assert _same_bits(a.coeffs.toarray() + 0.0, b.coeffs.toarray())  # + 0.0: -0.0 -> 0.0
     assert _same_bits(p.linear.A.toarray() + 0.0, q.linear.A.toarray())
-    assert (p.linear.kinds, p.linear.strict, p.linear.names) == (
-        q.linear.kinds, q.linear.strict, q.linear.names)
+    assert (p.linear.kinds, p.linear.strict, p.linear.names) == (q.linear.kinds, q.linear.strict, q.linear.names)
     assert p.objective.sense == q.objective.sense
     assert _same_bits(p.objective.c, q.objective.c)  # -0.0 survives
     assert p.data.keys() == q.data.keys()
@@ -190,10 +218,10 @@ def assert_same_problem(p: Problem, q: Problem) -> None:
         else:
             assert type(w) is float and _same_bits(v, w)
     # expression trees, checks and meta: compare through repr so that -0.0 != 0.0
-    assert repr([(d.name, d.expr, d.doc) for d in p.derived]) == repr(
-        [(d.name, d.expr, d.doc) for d in q.derived])
+    assert repr([(d.name, d.expr, d.doc) for d in p.derived]) == repr([(d.name, d.expr, d.doc) for d in q.derived])
     assert repr([(c.name, c.kind, c.expr, c.bound, c.doc) for c in p.checks]) == repr(
-        [(c.name, c.kind, c.expr, c.bound, c.doc) for c in q.checks])
+        [(c.name, c.kind, c.expr, c.bound, c.doc) for c in q.checks]
+    )
     assert json.dumps(p.meta, sort_keys=True) == json.dumps(q.meta, sort_keys=True)
     assert problem_hash(p) == problem_hash(q)
 
@@ -205,13 +233,14 @@ def small_problem(**overrides) -> Problem:
     args = dict(
         variables=[P, g],
         lmis=[LMI("P > 0", 2, coeffs, strict=True, relation=">")],
-        linear=LinearConstraints(sp.csr_matrix([[-1e-300, 0, 0, 0, 1.0]]), ["ge"], [True],
-                                 ["gamma > 1e-300"]),
+        linear=LinearConstraints(sp.csr_matrix([[-1e-300, 0, 0, 0, 1.0]]), ["ge"], [True], ["gamma > 1e-300"]),
         objective=Objective("min", [-0.0, 0.0, 0.0, 0.0, 1.0]),
         data={"A": np.array([[0.1, -0.0], [1e-300, 2.0]]), "beta": 0.1},
         derived=[NamedExpr("L", {"op": "inv", "args": [{"name": "P"}]}, "L = P^-1")],
-        checks=[Check("L stable", "schur_stable", {"name": "L"}),
-                Check("gamma small", "less_than", {"name": "gamma"}, 0.1)],
+        checks=[
+            Check("L stable", "schur_stable", {"name": "L"}),
+            Check("gamma small", "less_than", {"name": "gamma"}, 0.1),
+        ],
         meta={"theorem": "test.small", "params": {"beta": 0.1, "variant": "printed"}},
     )
     args.update(overrides)
@@ -235,8 +264,7 @@ def test_random_problems_round_trip_exactly(p):
 @given(problems())
 @settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 def test_random_problems_validate_against_the_schema(p):
-    jsonschema.Draft202012Validator(json.loads(SCHEMA_FILE.read_text())).validate(
-        json.loads(problem_to_json(p)))
+    jsonschema.Draft202012Validator(json.loads(SCHEMA_FILE.read_text())).validate(json.loads(problem_to_json(p)))
 
 
 def test_awkward_floats_survive_a_file_round_trip(tmp_path):
@@ -261,8 +289,15 @@ def test_every_float_repr_round_trips():
 
 
 def test_data_shapes_and_types():
-    data = {"vec": np.arange(3.0), "col": np.ones((3, 1)), "cube": np.zeros((2, 2, 2)),
-            "ints": np.array([[1, 2]]), "lst": [[1, 2], [3, 4]], "k": 3, "f": np.float64(2.5)}
+    data = {
+        "vec": np.arange(3.0),
+        "col": np.ones((3, 1)),
+        "cube": np.zeros((2, 2, 2)),
+        "ints": np.array([[1, 2]]),
+        "lst": [[1, 2], [3, 4]],
+        "k": 3,
+        "f": np.float64(2.5),
+    }
     q = problem_from_dict(problem_to_dict(small_problem(data=data)))
     assert q.data["vec"].shape == (3,) and q.data["col"].shape == (3, 1)
     assert q.data["cube"].shape == (2, 2, 2)
@@ -294,8 +329,9 @@ def test_hash_is_canonical_and_sensitive():
 def test_hash_is_pinned():
     # certificates store this hash: a change of the canonical serialisation must be deliberate
     t = Variable("t", "scalar", (1, 1))
-    p = Problem([t], [LMI("t > 0", 1, sp.csc_matrix([[0.0, 1.0]]))], LinearConstraints.empty(1),
-                Objective("min", [0.0, 1.0]))
+    p = Problem(
+        [t], [LMI("t > 0", 1, sp.csc_matrix([[0.0, 1.0]]))], LinearConstraints.empty(1), Objective("min", [0.0, 1.0])
+    )
     canonical = (
         '{"checks":[],"data":{},"derived":[],"linear":{"col":[],"kinds":[],"names":[],"row":[],'
         '"strict":[],"val":[]},"lmic_ir":1,"lmis":[{"block_sizes":[1],"coeffs":{"col":[1],'
@@ -487,10 +523,8 @@ def test_missing_file(tmp_path):
 
 
 def test_version(tmp_path):
-    assert _err(tmp_path, _text(_mutate(["lmic_ir"], 2))) == (
-        "lmic_ir: unsupported IR version 2 (this lmic reads 1)")
-    assert _err(tmp_path, _text(_mutate(["lmic_ir"], KeyError))).startswith(
-        "lmic_ir: missing format version")
+    assert _err(tmp_path, _text(_mutate(["lmic_ir"], 2))) == ("lmic_ir: unsupported IR version 2 (this lmic reads 1)")
+    assert _err(tmp_path, _text(_mutate(["lmic_ir"], KeyError))).startswith("lmic_ir: missing format version")
 
 
 @pytest.mark.parametrize(
@@ -498,37 +532,33 @@ def test_version(tmp_path):
     [
         (_mutate(["variables"], KeyError), "(top level): 'variables' is a required property"),
         (_mutate(["lmis", 0, "dim"], "2"), "lmis[0].dim: '2' is not of type 'integer'"),
-        (_mutate(["lmis", 0, "coeffs", "row"], KeyError),
-         "lmis[0].coeffs: 'row' is a required property"),
+        (_mutate(["lmis", 0, "coeffs", "row"], KeyError), "lmis[0].coeffs: 'row' is a required property"),
         (_mutate(["variables", 1, "kind"], "hermitian"), "variables[1].kind: 'hermitian' is not one of"),
-        (_mutate(["lmis", 0, "coeffs", "row", 2], 17),
-         "lmis[0].coeffs: row index 17 out of range for dimension 2"),
-        (_mutate(["lmis", 0, "coeffs", "col", 2], 9),
-         "lmis[0].coeffs: col index 9 out of range for 1 + n = 5 columns"),
-        (_mutate(["lmis", 0, "coeffs", "val"], [1.0]),
-         "lmis[0].coeffs: row, col and val have different lengths (4, 4, 1)"),
-        (_mutate(["lmis", 0, "coeffs"], {"row": [0, 0], "col": [1, 1], "val": [1.0, 2.0]}),
-         "lmis[0].coeffs: duplicate entry (row 0, col 1)"),
-        (_mutate(["lmis", 0, "block_sizes"], [1, 2]),
-         "lmis[0].block_sizes: [1, 2] do not add up to dimension 2"),
+        (_mutate(["lmis", 0, "coeffs", "row", 2], 17), "lmis[0].coeffs: row index 17 out of range for dimension 2"),
+        (_mutate(["lmis", 0, "coeffs", "col", 2], 9), "lmis[0].coeffs: col index 9 out of range for 1 + n = 5 columns"),
+        (
+            _mutate(["lmis", 0, "coeffs", "val"], [1.0]),
+            "lmis[0].coeffs: row, col and val have different lengths (4, 4, 1)",
+        ),
+        (
+            _mutate(["lmis", 0, "coeffs"], {"row": [0, 0], "col": [1, 1], "val": [1.0, 2.0]}),
+            "lmis[0].coeffs: duplicate entry (row 0, col 1)",
+        ),
+        (_mutate(["lmis", 0, "block_sizes"], [1, 2]), "lmis[0].block_sizes: [1, 2] do not add up to dimension 2"),
         (_mutate(["variables", 1, "offset"], 4), "variables[1].offset: 4, expected 3"),
         (_mutate(["variables", 1, "name"], "P"), "variables[1].name: duplicate variable name 'P'"),
-        (_mutate(["variables", 0, "shape"], [2, 3]),
-         "variables[0]: variable 'P': a symmetric variable is square"),
-        (_mutate(["variables", 0, "blocks"], [1, 1]),
-         "variables[0].blocks: only a blockdiag variable has blocks"),
-        (_mutate(["linear", "names"], []),
-         "linear: kinds, strict and names have different lengths (1, 1, 0)"),
+        (_mutate(["variables", 0, "shape"], [2, 3]), "variables[0]: variable 'P': a symmetric variable is square"),
+        (_mutate(["variables", 0, "blocks"], [1, 1]), "variables[0].blocks: only a blockdiag variable has blocks"),
+        (_mutate(["linear", "names"], []), "linear: kinds, strict and names have different lengths (1, 1, 0)"),
         (_mutate(["linear", "row", 0], 1), "linear: row index 1 out of range for 1 rows"),
-        (_mutate(["objective", "c", "idx", 0], 5),
-         "objective.c: index 5 out of range for 1 + n = 5 entries"),
-        (_mutate(["objective", "c", "idx"], [0]),
-         "objective.c: idx and val have different lengths (1, 2)"),
+        (_mutate(["objective", "c", "idx", 0], 5), "objective.c: index 5 out of range for 1 + n = 5 entries"),
+        (_mutate(["objective", "c", "idx"], [0]), "objective.c: idx and val have different lengths (1, 2)"),
         (_mutate(["data", "A"], [[1.0, 2.0], [3.0]]), "data.A: ragged or non-numeric nested list"),
-        (_mutate(["derived", 0, "expr"], {"name": "Q"}),
-         "derived[0].expr: uses 'Q', which is not data, a variable or an earlier derived quantity"),
-        (_mutate(["checks", 1, "bound"], None),
-         "checks[1].bound: a 'less_than' check needs a bound"),
+        (
+            _mutate(["derived", 0, "expr"], {"name": "Q"}),
+            "derived[0].expr: uses 'Q', which is not data, a variable or an earlier derived quantity",
+        ),
+        (_mutate(["checks", 1, "bound"], None), "checks[1].bound: a 'less_than' check needs a bound"),
         (_mutate(["checks", 0, "kind"], "stable"), "checks[0].kind: 'stable' is not one of"),
     ],
     ids=lambda v: v if isinstance(v, str) else "",
@@ -539,21 +569,29 @@ def test_field_errors(tmp_path, mutate, expected):
 
 @pytest.mark.parametrize(
     ("literal", "where"),
-    [("NaN", "lmis[0].coeffs.val[1]"), ("Infinity", "data.A[1][0]"), ("-Infinity", "meta.x"),
-     ("1e400", "objective.c.val[1]")],
+    [
+        ("NaN", "lmis[0].coeffs.val[1]"),
+        ("Infinity", "data.A[1][0]"),
+        ("-Infinity", "meta.x"),
+        ("1e400", "objective.c.val[1]"),
+    ],
 )
 def test_non_finite_numbers(tmp_path, literal, where):
     d = problem_to_dict(small_problem())
     d["meta"]["x"] = 1.0
     text = json.dumps(d)
-    target = {"lmis[0].coeffs.val[1]": '"val": [0.1, 1.0,',
-              "data.A[1][0]": "[1e-300, 2.0]",
-              "meta.x": '"x": 1.0',
-              "objective.c.val[1]": '"val": [-0.0, 1.0]'}[where]
-    replacement = {"lmis[0].coeffs.val[1]": f'"val": [0.1, {literal},',
-                   "data.A[1][0]": f"[{literal}, 2.0]",
-                   "meta.x": f'"x": {literal}',
-                   "objective.c.val[1]": f'"val": [-0.0, {literal}]'}[where]
+    target = {
+        "lmis[0].coeffs.val[1]": '"val": [0.1, 1.0,',
+        "data.A[1][0]": "[1e-300, 2.0]",
+        "meta.x": '"x": 1.0',
+        "objective.c.val[1]": '"val": [-0.0, 1.0]',
+    }[where]
+    replacement = {
+        "lmis[0].coeffs.val[1]": f'"val": [0.1, {literal},',
+        "data.A[1][0]": f"[{literal}, 2.0]",
+        "meta.x": f'"x": {literal}',
+        "objective.c.val[1]": f'"val": [-0.0, {literal}]',
+    }[where]
     assert target in text
     assert _err(tmp_path, text.replace(target, replacement)) == f"{where}: NaN or infinite number"
 
@@ -561,8 +599,12 @@ def test_non_finite_numbers(tmp_path, literal, where):
 def test_long_arrays_are_checked_beyond_the_schema_prefix(tmp_path):
     n = 50
     x = Variable("x", "full", (n, 1))
-    lin = LinearConstraints(sp.csr_matrix(np.hstack([np.zeros((n, 1)), np.eye(n)])),
-                            ["ge"] * n, [False] * n, [f"x{i} >= 0" for i in range(n)])
+    lin = LinearConstraints(
+        sp.csr_matrix(np.hstack([np.zeros((n, 1)), np.eye(n)])),
+        ["ge"] * n,
+        [False] * n,
+        [f"x{i} >= 0" for i in range(n)],
+    )
     p = Problem([x], [], lin, Objective("min", np.ones(1 + n)), data={"M": np.ones((30, 30))})
     for path, value, expected in [
         (["linear", "row", 40], 1.5, "linear.row: expected a list of integers"),

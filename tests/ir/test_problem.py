@@ -182,8 +182,7 @@ def test_problem_pack_unpack_and_environment():
     p = _problem(
         data={"A": [[2.0, 0.0], [0.0, 2.0]], "k": 3},
         derived=[
-            NamedExpr("L", {"op": "mul", "args": [{"op": "inv", "args": [{"name": "P"}]},
-                                                 {"name": "A"}]}),
+            NamedExpr("L", {"op": "mul", "args": [{"op": "inv", "args": [{"name": "P"}]}, {"name": "A"}]}),
             NamedExpr("h", {"op": "mul", "args": [{"name": "k"}, {"name": "g"}]}),
         ],
     )

@@ -197,8 +197,15 @@ def _tolerance(name: str, published: str) -> float:
 #: import's signs and sense. Clarabel stalls on the x-form of control1 (it reports "optimal" at
 #: 18.06 against 17.78) and is inaccurate on that of hinf1 (2.03267), while their duals solve
 #: cleanly; theta1's x-form is the faster one.
-SOLVE = [("control1", "dual"), ("hinf1", "dual"), ("truss1", "primal"), ("truss1", "dual"),
-         ("truss4", "primal"), ("truss4", "dual"), ("theta1", "primal")]
+SOLVE = [
+    ("control1", "dual"),
+    ("hinf1", "dual"),
+    ("truss1", "primal"),
+    ("truss1", "dual"),
+    ("truss4", "primal"),
+    ("truss4", "dual"),
+    ("theta1", "primal"),
+]
 
 
 @pytest.mark.parametrize(("name", "form"), SOLVE)
@@ -256,9 +263,9 @@ def test_separators_braces_and_multiline_vectors():
 (1 1 1 2 1.0)
 2 1 {2} 2 3.0
 """
-    q = read_sdpa(BASIC.replace("2 -2 = bLOCKsTRUCT", "2 = bLOCKsTRUCT")
-                  .replace("2 =nBLOCK", "1 =nBLOCK")
-                  .split("1 2 1 1")[0])
+    q = read_sdpa(
+        BASIC.replace("2 -2 = bLOCKsTRUCT", "2 = bLOCKsTRUCT").replace("2 =nBLOCK", "1 =nBLOCK").split("1 2 1 1")[0]
+    )
     p = read_sdpa(text)
     assert np.array_equal(p.lmis[0].coeffs.toarray(), q.lmis[0].coeffs.toarray())
     assert np.array_equal(p.objective.c, q.objective.c)
@@ -324,8 +331,7 @@ def test_the_documented_example(tmp_path):
         ("1 1 1 2 1.0", "1 1 1 2 1_000", "line 8: value '1_000' is not a number"),
         ("1 1 1 2 1.0", "1 1 1 2 0x10", "line 8: value '0x10' is not a number"),
         ("1 1 1 2 1.0", "1 1 1 2 1.0D+00", "line 8: value '1.0D+00' is not a number"),
-        ("1 1 1 2 1.0", "1 1 99999999999999999999 2 1.0",
-         "line 8: index '99999999999999999999' is out of range"),
+        ("1 1 1 2 1.0", "1 1 99999999999999999999 2 1.0", "line 8: index '99999999999999999999' is out of range"),
         ("1 1 1 2 1.0", "one 1 1 2 1.0", "line 8: index 'one' is not an integer"),
         ("1 1 1 2 1.0", "1 1 1 2 nan", "line 8: value nan is not finite"),
         ("1 1 1 2 1.0", "1 1 1 2 -inf", "line 8: value -inf is not finite"),
@@ -337,20 +343,20 @@ def test_the_documented_example(tmp_path):
         ("1 1 1 2 1.0", "1 1 1 3 1.0", "line 8: index (1, 3) out of range for block 1 of size 2"),
         ("1 1 1 2 1.0", "1 1 0 1 1.0", "line 8: index (0, 1) out of range for block 1 of size 2"),
         ("1 2 1 1 1.0", "1 2 1 2 1.0", "line 10: off-diagonal entry (1, 2) in diagonal block 2"),
-        ("1 1 1 2 1.0", "1 1 1 2 1.0\n1 1 2 1 2.0",
-         "line 9: entry (matno 1, block 1, 1, 2) given again with a different value "
-         "(first on line 8)"),
+        (
+            "1 1 1 2 1.0",
+            "1 1 1 2 1.0\n1 1 2 1 2.0",
+            "line 9: entry (matno 1, block 1, 1, 2) given again with a different value (first on line 8)",
+        ),
         ("1.0 2.0", "1.0 nan", "line 6: c[2] = nan is not finite"),
         ("1.0 2.0", "1.0 2.0 3.0", "line 6: more than 2 entries of the objective vector c"),
-        ("1.0 2.0", "1.0 two", "line 6: expected 2 entries of the objective vector c; 'two' is "
-                               "not a valid number"),
+        ("1.0 2.0", "1.0 two", "line 6: expected 2 entries of the objective vector c; 'two' is not a valid number"),
         ("2 -2 = bLOCKsTRUCT", "2 0", "line 5: a block size of 0"),
         ("2 -2 = bLOCKsTRUCT", "2 x", "line 5: expected 2 block sizes; 'x' is not a valid number"),
         ("2 =mDIM", "two", "line 3: expected m (the number of constraint matrices), got 'two'"),
         ("2 =mDIM", "-2", "line 3: m = -2 is negative"),
         ("2 =nBLOCK", "-1", "line 4: nBlocks = -1 is negative"),
-        ("* comment two", '* lmic: {"sense": "sideways"}',
-         "line 2: lmic comment: unknown sense 'sideways'"),
+        ("* comment two", '* lmic: {"sense": "sideways"}', "line 2: lmic comment: unknown sense 'sideways'"),
         ("* comment two", "* lmic: {sense", "line 2: malformed lmic comment"),
     ],
 )
@@ -374,10 +380,10 @@ def test_truncated_header(cut, expected):
 
 
 def test_truncated_vectors_spanning_lines():
-    assert _error("2\n2\n3\n").startswith(
-        "line 4: unexpected end of file, expected 2 block sizes, got 1")
+    assert _error("2\n2\n3\n").startswith("line 4: unexpected end of file, expected 2 block sizes, got 1")
     assert _error("2\n1\n3\n1.0\n").startswith(
-        "line 5: unexpected end of file, expected 2 entries of the objective vector c, got 1")
+        "line 5: unexpected end of file, expected 2 entries of the objective vector c, got 1"
+    )
 
 
 def test_truncated_in_the_middle_of_an_entry(tmp_path):
@@ -404,14 +410,25 @@ def general_problem(sense: str = "max") -> Problem:
     n = 6
     rng = np.random.default_rng(3)
     lmis = [
-        LMI("P > 0", 2, sp.csc_matrix(np.c_[np.zeros(3), np.eye(3), np.zeros((3, 3))]),
-            strict=True, relation=">"),
-        LMI("big", 3, sp.random(6, 1 + n, density=0.5, random_state=rng) * 0.1,
-            strict=False, relation="<=", block_sizes=(1, 2)),
+        LMI("P > 0", 2, sp.csc_matrix(np.c_[np.zeros(3), np.eye(3), np.zeros((3, 3))]), strict=True, relation=">"),
+        LMI(
+            "big",
+            3,
+            sp.random(6, 1 + n, density=0.5, random_state=rng) * 0.1,
+            strict=False,
+            relation="<=",
+            block_sizes=(1, 2),
+        ),
     ]
-    A = sp.csr_matrix(np.array([[-1.0, 0, 0, 0, 1.0, 0, 0],    # gamma >= 1
-                                [0.5, 0, 0, 0, 0, 1.0, -1.0],  # K1 - K2 + 0.5 == 0
-                                [0.1, 0, 0, 0, 0, 0, 1.0]]))   # K2 > -0.1
+    A = sp.csr_matrix(
+        np.array(
+            [
+                [-1.0, 0, 0, 0, 1.0, 0, 0],  # gamma >= 1
+                [0.5, 0, 0, 0, 0, 1.0, -1.0],  # K1 - K2 + 0.5 == 0
+                [0.1, 0, 0, 0, 0, 0, 1.0],
+            ]
+        )
+    )  # K2 > -0.1
     linear = LinearConstraints(A, ["ge", "eq", "ge"], [False, False, True], ["g", "k", "s"])
     c = np.array([1.5, 0.0, 0.0, 0.1, -1.0, 0.3, 1 / 3])
     return Problem([P, g, K], lmis, linear, Objective(sense, c), meta={"theorem": "t"})
@@ -454,12 +471,15 @@ def test_max_is_written_as_min_of_minus_c():
 
 
 def test_exported_numbers_are_exact():
-    vals = [0.1, 1e-300, 1 / 3, 5e-324, 1.7976931348623157e308, -2.0**-1074]
+    vals = [0.1, 1e-300, 1 / 3, 5e-324, 1.7976931348623157e308, -(2.0**-1074)]
     x = Variable("x", "full", (len(vals), 1))
-    coeffs = sp.csc_matrix((vals, ([0] * len(vals), range(1, 1 + len(vals)))),
-                           shape=(1, 1 + len(vals)))
-    p = Problem([x], [LMI("F", 1, coeffs, strict=False, relation=">=")],
-                LinearConstraints.empty(len(vals)), Objective("min", [0.0, *vals]))
+    coeffs = sp.csc_matrix((vals, ([0] * len(vals), range(1, 1 + len(vals)))), shape=(1, 1 + len(vals)))
+    p = Problem(
+        [x],
+        [LMI("F", 1, coeffs, strict=False, relation=">=")],
+        LinearConstraints.empty(len(vals)),
+        Objective("min", [0.0, *vals]),
+    )
     q = read_sdpa(sdpa_text(p))
     assert np.array_equal(q.lmis[0].coeffs.toarray(), p.lmis[0].coeffs.toarray())
     assert np.array_equal(q.objective.c, p.objective.c)
@@ -467,12 +487,10 @@ def test_exported_numbers_are_exact():
 
 def test_problem_without_variables_or_constraints():
     F0 = sp.csc_matrix(np.array([[1.0], [0.0], [2.0]]))
-    p = Problem([], [LMI("const", 2, F0, strict=False)], LinearConstraints.empty(0),
-                Objective("feasibility", [0.0]))
+    p = Problem([], [LMI("const", 2, F0, strict=False)], LinearConstraints.empty(0), Objective("feasibility", [0.0]))
     q = read_sdpa(sdpa_text(p))
     assert q.n == 0 and np.array_equal(q.lmis[0].matrix([]), [[1.0, 0.0], [0.0, 2.0]])
-    empty = Problem([Variable("t", "scalar", (1, 1))], [], LinearConstraints.empty(1),
-                    Objective("min", [0.0, 1.0]))
+    empty = Problem([Variable("t", "scalar", (1, 1))], [], LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
     q = read_sdpa(sdpa_text(empty))
     assert q.lmis == [] and len(q.linear) == 0 and np.array_equal(q.objective.c, [0.0, 1.0])
 

@@ -53,9 +53,7 @@ def test_tril_index_matches_storage_order(d):
     r, c = tril_rows_cols(d)
     assert np.array_equal(tril_index(r, c, d), np.arange(tril_size(d)))
     # scalar form agrees with the vectorised one
-    assert [tril_index(int(i), int(j), d) for i, j in zip(r, c, strict=True)] == list(
-        range(tril_size(d))
-    )
+    assert [tril_index(int(i), int(j), d) for i, j in zip(r, c, strict=True)] == list(range(tril_size(d)))
 
 
 @given(dims, st.integers(0, 2**31))

@@ -48,8 +48,14 @@ def restrict(problem: Problem, values: dict, objective: dict | None = None, lmis
     for name, weight in (objective or {}).items():
         c[1 + fixed.variable(name).offset] = weight
     return Problem(
-        fixed.variables, kept, linear, Objective("min" if objective else "feasibility", c),
-        fixed.data, fixed.derived, fixed.checks, fixed.meta,
+        fixed.variables,
+        kept,
+        linear,
+        Objective("min" if objective else "feasibility", c),
+        fixed.data,
+        fixed.derived,
+        fixed.checks,
+        fixed.meta,
     )
 
 

@@ -101,8 +101,9 @@ def sym(M):
     return (M + M.T) / 2
 
 
-def cvx_feasible(neg_strict: list, pos_strict: list = (), scalars: list = (), solver: str = "CLARABEL",
-                 box: list = ()) -> bool | None:
+def cvx_feasible(
+    neg_strict: list, pos_strict: list = (), scalars: list = (), solver: str = "CLARABEL", box: list = ()
+) -> bool | None:
     """Is there a point with every ``M < 0`` (``neg_strict``), ``M > 0`` (``pos_strict``) and
     scalar ``> 0``? Phase 1: ``max t`` with ``M + t I <= 0``, ``t <= 1``, variables in ``box``
     bounded by 1e4 (homogeneous LMIs); feasible iff ``t* > 1e-6``, infeasible iff ``t* < 1e-9``.
@@ -129,8 +130,9 @@ def cvx_feasible(neg_strict: list, pos_strict: list = (), scalars: list = (), so
     return None
 
 
-def cvx_min(objective, neg_strict: list, pos_strict: list = (), scalars: list = (), extra: list = (),
-            solver: str = "CLARABEL") -> tuple[str, float | None]:
+def cvx_min(
+    objective, neg_strict: list, pos_strict: list = (), scalars: list = (), extra: list = (), solver: str = "CLARABEL"
+) -> tuple[str, float | None]:
     """``min objective`` with every strict ``M < 0`` as ``M <= -1e-7 I`` (``M > 0``: ``>= 1e-7 I``)
     and every strictly positive scalar ``>= 1e-7`` (lmic's fixed-margin convention)."""
     cons = list(extra)

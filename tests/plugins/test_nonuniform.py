@@ -41,20 +41,30 @@ def lmi9(A, C, G, H, g, d, P, Lt, N1, N2, N3, bm):
     n, m = A.shape[0], G.shape[1]
     Z = np.zeros
     top = P @ A + A.T @ P + g**2 * H.T @ H - P - N1 - N1.T
-    a = _full([
-        [top + d * (P @ A + A.T @ P), (1 + d) * Lt @ C + P - d * A.T @ P + N1 - N2.T,
-         (1 + d) * P @ G - N3.T, d * A.T @ P],
-        [None, -d * (Lt @ C + C.T @ Lt.T) - P + N2 + N2.T, -d * P @ G + N3.T, d * C.T @ Lt.T],
-        [None, None, -np.eye(m), d * G.T @ P],
-        [None, None, None, -d * P],
-    ], bm)
-    b = _full([
-        [top, Lt @ C + P + N1 - N2.T, P @ G - N3.T, d * A.T @ P, d * N1],
-        [None, -P + N2 + N2.T, N3.T, d * C.T @ Lt.T, d * N2],
-        [None, None, -np.eye(m), d * G.T @ P, d * N3],
-        [None, None, None, -d * P, Z((n, n))],
-        [None, None, None, None, -d * P],
-    ], bm)
+    a = _full(
+        [
+            [
+                top + d * (P @ A + A.T @ P),
+                (1 + d) * Lt @ C + P - d * A.T @ P + N1 - N2.T,
+                (1 + d) * P @ G - N3.T,
+                d * A.T @ P,
+            ],
+            [None, -d * (Lt @ C + C.T @ Lt.T) - P + N2 + N2.T, -d * P @ G + N3.T, d * C.T @ Lt.T],
+            [None, None, -np.eye(m), d * G.T @ P],
+            [None, None, None, -d * P],
+        ],
+        bm,
+    )
+    b = _full(
+        [
+            [top, Lt @ C + P + N1 - N2.T, P @ G - N3.T, d * A.T @ P, d * N1],
+            [None, -P + N2 + N2.T, N3.T, d * C.T @ Lt.T, d * N2],
+            [None, None, -np.eye(m), d * G.T @ P, d * N3],
+            [None, None, None, -d * P, Z((n, n))],
+            [None, None, None, None, -d * P],
+        ],
+        bm,
+    )
     return a, b
 
 
@@ -65,8 +75,12 @@ def arrays(name):
 def random_system(seed, n=3, q=1, m=1):
     rng = np.random.default_rng(seed)
     A = rng.standard_normal((n, n))
-    return {"A": A, "C": rng.standard_normal((q, n)), "G": rng.standard_normal((n, m)),
-            "H": rng.standard_normal((m, n))}
+    return {
+        "A": A,
+        "C": rng.standard_normal((q, n)),
+        "G": rng.standard_normal((n, m)),
+        "H": rng.standard_normal((m, n)),
+    }
 
 
 def sysdict(D, **params):

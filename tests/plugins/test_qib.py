@@ -37,9 +37,7 @@ def lmi7(A, C, P, R, w, beta, gamma, bm):
     n = A.shape[0]
     I, Z = np.eye(n), np.zeros((n, n))
     X = A.T @ P - C.T @ R
-    return bm([[-P + 2 * w * beta * I, X + w * gamma * I, X],
-               [X.T + w * gamma * I, P - 2 * w * I, Z],
-               [X.T, Z, -P]])
+    return bm([[-P + 2 * w * beta * I, X + w * gamma * I, X], [X.T + w * gamma * I, P - 2 * w * I, Z], [X.T, Z, -P]])
 
 
 def lmi13(A, C, P, R, w, lam, bm):
@@ -62,9 +60,13 @@ def lmi21(A, C, H, K, P, w, beta, gamma, bm):
     N, _, AZ, CZ = reduced(A, C, H)
     F1 = (AZ - K @ CZ).T @ N.T @ P
     F2 = (H - K @ C).T @ N.T @ P
-    return bm([[-N.T @ P @ N + 2 * w * beta * N.T @ N, w * gamma * N.T, F1],
-               [w * gamma * N, -2 * w * np.eye(n), F2],
-               [F1.T, F2.T, -P]])
+    return bm(
+        [
+            [-N.T @ P @ N + 2 * w * beta * N.T @ N, w * gamma * N.T, F1],
+            [w * gamma * N, -2 * w * np.eye(n), F2],
+            [F1.T, F2.T, -P],
+        ]
+    )
 
 
 def lmi26(A, C, H, K, w, alpha, beta, gamma, bm):
@@ -72,9 +74,13 @@ def lmi26(A, C, H, K, w, alpha, beta, gamma, bm):
     N, _, AZ, CZ = reduced(A, C, H)
     F1 = alpha * (AZ - K @ CZ).T @ N.T
     F2 = alpha * (H - K @ C).T @ N.T
-    return bm([[(-alpha + 2 * w * beta) * N.T @ N, w * gamma * N.T, F1],
-               [w * gamma * N, -2 * w * np.eye(n), F2],
-               [F1.T, F2.T, -alpha * np.eye(n)]])
+    return bm(
+        [
+            [(-alpha + 2 * w * beta) * N.T @ N, w * gamma * N.T, F1],
+            [w * gamma * N, -2 * w * np.eye(n), F2],
+            [F1.T, F2.T, -alpha * np.eye(n)],
+        ]
+    )
 
 
 def random_plant(seed, n=3, p=1, rho=1.05):
@@ -254,8 +260,10 @@ def test_random_thm1_status_matches_cvxpy():
         for beta, gamma in ((0.01, 0.1), (0.5, 0.0)):
             n = 3
             P, R, w = cp.Variable((n, n), symmetric=True), cp.Variable((1, n)), cp.Variable()
-            ref = {s: cvx_feasible([lmi7(A, C, P, R, w, beta, gamma, cp.bmat)], [P], [w], solver=s,
-                                   box=[P, R, w]) for s in REF_SOLVERS}
+            ref = {
+                s: cvx_feasible([lmi7(A, C, P, R, w, beta, gamma, cp.bmat)], [P], [w], solver=s, box=[P, R, w])
+                for s in REF_SOLVERS
+            }
             assert ref["CLARABEL"] is not None
             assert ref["SCS"] in (None, ref["CLARABEL"])
             d = {"lmic": 1, "data": {"A": A.tolist(), "C": C.tolist()}, "params": {"beta": beta, "gamma": gamma}}
@@ -272,8 +280,10 @@ def test_random_thm2_status_matches_cvxpy():
         for beta in (0.001, 0.2):
             K = cp.Variable((2, 1))
             w = cp.Variable()
-            ref = {s: cvx_feasible([lmi26(A, C, H, K, w, 1.0, beta, 0.0, cp.bmat)], [], [w], solver=s,
-                                   box=[K, w]) for s in REF_SOLVERS}
+            ref = {
+                s: cvx_feasible([lmi26(A, C, H, K, w, 1.0, beta, 0.0, cp.bmat)], [], [w], solver=s, box=[K, w])
+                for s in REF_SOLVERS
+            }
             assert ref["CLARABEL"] is not None
             assert ref["SCS"] in (None, ref["CLARABEL"])
             d = {"lmic": 1, "data": {"A": A.tolist(), "C": C.tolist(), "H": H.tolist()}, "params": {"beta": beta}}

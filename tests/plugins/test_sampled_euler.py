@@ -139,8 +139,9 @@ def test_thm1_example_and_published_gain():
     for gd in (0.06109, 0.067):
         r = solve("sampled_euler.thm1", system("sampled_euler.thm1.example"), {"gamma_d": gd})
         assert r.verdict == "certified"
-        r = solve("sampled_euler.thm1", system("sampled_euler.thm1.example", data={"L": L_PUB}),
-                  {"gamma_d": gd, "fixed_L": 1})
+        r = solve(
+            "sampled_euler.thm1", system("sampled_euler.thm1.example", data={"L": L_PUB}), {"gamma_d": gd, "fixed_L": 1}
+        )
         assert r.verdict == "certified"
 
 
@@ -215,8 +216,11 @@ def test_random_thm1_status_matches_cvxpy():
             s = psi1(Q, gd)
             ref = {
                 solver: cvx_feasible(
-                    [], [P, cvx_lmi6(P, G, eps, Q, A, C), cp.bmat([[s * np.eye(n), P], [P, s * np.eye(n)]])],
-                    [eps], solver=solver)
+                    [],
+                    [P, cvx_lmi6(P, G, eps, Q, A, C), cp.bmat([[s * np.eye(n), P], [P, s * np.eye(n)]])],
+                    [eps],
+                    solver=solver,
+                )
                 for solver in REF_SOLVERS
             }
             assert ref["CLARABEL"] is not None
@@ -255,8 +259,11 @@ def test_random_thm4_infeasible_like_cvxpy():
         rng = np.random.default_rng(30 + seed)
         A, C, Q = random_system(rng)
         Bd, H, gd = rng.standard_normal((2, 1)), rng.standard_normal((2, 2)), 0.05
-        d = {"lmic": 1, "data": {"Ad": A.tolist(), "Cd": C.tolist(), "Q": Q.tolist(), "Bd": Bd.tolist(),
-                                 "H": H.tolist()}, "params": {"gamma_d": gd}}
+        d = {
+            "lmic": 1,
+            "data": {"Ad": A.tolist(), "Cd": C.tolist(), "Q": Q.tolist(), "Bd": Bd.tolist(), "H": H.tolist()},
+            "params": {"gamma_d": gd},
+        }
         P, zeta = cp.Variable((2, 2), symmetric=True), cp.Variable()
         s, lmax = psi1(Q, gd), np.linalg.eigvalsh(Q)[-1]
         lam2 = H.T @ H - Q + gd * (3 * s + lmax) * np.eye(2)

@@ -41,18 +41,24 @@ def lemma3_lmis(D, P, alpha, e1, e2, mu, bm):
     A, B, H, M1, N = D["A"], D["B"], D["H"], D["M1"], D["N"]
     n, nw, r = A.shape[0], B.shape[1], M1.shape[1]
     Z, I = np.zeros, np.eye
-    l15 = _full([
-        [H.T @ H - P + e2 * N.T @ N, I(n), A.T @ P, Z((n, n)), Z((n, r))],
-        [None, -alpha * I(n), Z((n, n)), Z((n, n)), Z((n, r))],
-        [None, None, -0.5 * P, P, P @ M1],
-        [None, None, None, P - 2 * e1 * I(n), Z((n, r))],
-        [None, None, None, None, -e2 * I(r)],
-    ], bm)
-    l16 = _full([
-        [-mu**2 * I(nw), B.T @ P, B.T @ P],
-        [None, -0.5 * P, Z((n, n))],
-        [None, None, -I(n)],
-    ], bm)
+    l15 = _full(
+        [
+            [H.T @ H - P + e2 * N.T @ N, I(n), A.T @ P, Z((n, n)), Z((n, r))],
+            [None, -alpha * I(n), Z((n, n)), Z((n, n)), Z((n, r))],
+            [None, None, -0.5 * P, P, P @ M1],
+            [None, None, None, P - 2 * e1 * I(n), Z((n, r))],
+            [None, None, None, None, -e2 * I(r)],
+        ],
+        bm,
+    )
+    l16 = _full(
+        [
+            [-(mu**2) * I(nw), B.T @ P, B.T @ P],
+            [None, -0.5 * P, Z((n, n))],
+            [None, None, -I(n)],
+        ],
+        bm,
+    )
     return l15, l16
 
 
@@ -65,34 +71,41 @@ def thm1_lmis(D, P1, P2, G, alpha, e1, e2, mu, beta, bm, psi1="printed", Acal=No
     Lam3 = P1 @ M1 - G @ M2
     dec = np.exp(-2 * beta)
     if Acal is not None:
-        psi = [[H.T @ H - dec * P1, Z((n, n)), Acal], [None, e2 * N.T @ N - P2, Z((n, n))],
-               [None, None, -I(n)]]
+        psi = [[H.T @ H - dec * P1, Z((n, n)), Acal], [None, e2 * N.T @ N - P2, Z((n, n))], [None, None, -I(n)]]
     elif psi1 == "printed":
-        psi = [[H.T @ H - dec * P1, Z((n, n)), I(n)], [None, e2 * N.T @ N - P2, Z((n, n))],
-               [None, None, -alpha * I(n)]]
+        psi = [[H.T @ H - dec * P1, Z((n, n)), I(n)], [None, e2 * N.T @ N - P2, Z((n, n))], [None, None, -alpha * I(n)]]
     else:
-        psi = [[H.T @ H - dec * P1, Z((n, n)), I(n), Z((n, n))],
-               [None, e2 * N.T @ N - P2, Z((n, n)), I(n)],
-               [None, None, -alpha * I(n), Z((n, n))],
-               [None, None, None, -alpha * I(n)]]
+        psi = [
+            [H.T @ H - dec * P1, Z((n, n)), I(n), Z((n, n))],
+            [None, e2 * N.T @ N - P2, Z((n, n)), I(n)],
+            [None, None, -alpha * I(n), Z((n, n))],
+            [None, None, None, -alpha * I(n)],
+        ]
     k = len(psi)
-    omega = [[A.T @ P1 - C.T @ G.T, Z((n, n)), Z((n, n)), Z((n, n)), Z((n, r))],
-             [Z((n, n)), A.T @ P2, Z((n, n)), Z((n, n)), Z((n, r))]]
+    omega = [
+        [A.T @ P1 - C.T @ G.T, Z((n, n)), Z((n, n)), Z((n, n)), Z((n, r))],
+        [Z((n, n)), A.T @ P2, Z((n, n)), Z((n, n)), Z((n, r))],
+    ]
     omega += [[Z((n, n)), Z((n, n)), Z((n, n)), Z((n, n)), Z((n, r))] for _ in range(k - 2)]
-    psi2 = [[-0.5 * P1, Z((n, n)), P1, Z((n, n)), Lam3],
-            [None, -0.5 * P2, Z((n, n)), P2, P2 @ M1],
-            [None, None, P1 - 2 * e1 * I(n), Z((n, n)), Z((n, r))],
-            [None, None, None, P2 - 2 * e1 * I(n), Z((n, r))],
-            [None, None, None, None, -e2 * I(r)]]
+    psi2 = [
+        [-0.5 * P1, Z((n, n)), P1, Z((n, n)), Lam3],
+        [None, -0.5 * P2, Z((n, n)), P2, P2 @ M1],
+        [None, None, P1 - 2 * e1 * I(n), Z((n, n)), Z((n, r))],
+        [None, None, None, P2 - 2 * e1 * I(n), Z((n, r))],
+        [None, None, None, None, -e2 * I(r)],
+    ]
     upper = [psi[i] + omega[i] for i in range(k)] + [[None] * k + psi2[i] for i in range(5)]
     big = _full(upper, bm)
-    xi1 = _full([
-        [-mu**2 * I(nw), Lam2, B.T @ P2, Lam2, B.T @ P2],
-        [None, -0.5 * P1, Z((n, n)), Z((n, n)), Z((n, n))],
-        [None, None, -0.5 * P2, Z((n, n)), Z((n, n))],
-        [None, None, None, -I(n), Z((n, n))],
-        [None, None, None, None, -I(n)],
-    ], bm)
+    xi1 = _full(
+        [
+            [-(mu**2) * I(nw), Lam2, B.T @ P2, Lam2, B.T @ P2],
+            [None, -0.5 * P1, Z((n, n)), Z((n, n)), Z((n, n))],
+            [None, None, -0.5 * P2, Z((n, n)), Z((n, n))],
+            [None, None, None, -I(n), Z((n, n))],
+            [None, None, None, None, -I(n)],
+        ],
+        bm,
+    )
     return big, xi1
 
 
@@ -105,10 +118,15 @@ def random_data(seed, n=2, p=1, nw=1, r=1, s=1):
     A = rng.standard_normal((n, n))
     A *= 0.4 / max(abs(np.linalg.eigvals(A)))
     return {
-        "A": A, "B": rng.standard_normal((n, nw)), "C": rng.standard_normal((p, n)),
-        "D": 0.2 * rng.standard_normal((p, nw)), "H": 0.25 * np.eye(n),
-        "M1": 0.1 * rng.standard_normal((n, r)), "M2": 0.1 * rng.standard_normal((p, r)),
-        "N": 0.2 * rng.standard_normal((s, n)), "Cw": 1 + rng.random((n, n)),
+        "A": A,
+        "B": rng.standard_normal((n, nw)),
+        "C": rng.standard_normal((p, n)),
+        "D": 0.2 * rng.standard_normal((p, nw)),
+        "H": 0.25 * np.eye(n),
+        "M1": 0.1 * rng.standard_normal((n, r)),
+        "M2": 0.1 * rng.standard_normal((p, r)),
+        "N": 0.2 * rng.standard_normal((s, n)),
+        "Cw": 1 + rng.random((n, n)),
     }
 
 
@@ -199,8 +217,7 @@ def test_random_lmis_match_catalogue():
     for psi1 in ("printed", "corrected"):
         prob = compile_theorem("uncertain_dt.thm1", sysdict(D, keys, mu=1.3, beta=0.07, psi1=psi1))
         x, v = random_point(prob, rng)
-        big, xi1 = thm1_lmis(D, v["P1"], v["P2"], v["G"], v["alpha"], v["eps1"], v["eps2"], 1.3, 0.07,
-                             np.block, psi1)
+        big, xi1 = thm1_lmis(D, v["P1"], v["P2"], v["G"], v["alpha"], v["eps1"], v["eps2"], 1.3, 0.07, np.block, psi1)
         compare_lmi(prob, "[Psi1 Omega; * Psi2]", x, big)
         compare_lmi(prob, "Xi1 (24)", x, xi1)
     prob = compile_theorem("uncertain_dt.cor1", sysdict(D, keys + ("Cw",), mu=1.3, beta=0.07))

@@ -14,6 +14,7 @@ def hinf_norm(A, B, C, D, tol=1e-9):
     """H-infinity norm by bisection on the imaginary-axis eigenvalues of the Hamiltonian."""
     lo = max(np.linalg.svd(D, compute_uv=False).max(initial=0.0), 1e-12)
     hi = 1.0
+
     def has_imag_eig(g):
         R = g * g * np.eye(D.shape[1]) - D.T @ D
         Ri = np.linalg.inv(R)
@@ -25,6 +26,7 @@ def hinf_norm(A, B, C, D, tol=1e-9):
         )
         ev = np.linalg.eigvals(H)
         return np.any(np.abs(ev.real) < 1e-7 * max(1.0, np.abs(ev).max()))
+
     while has_imag_eig(hi):
         hi *= 2
     while hi - lo > tol * hi:
