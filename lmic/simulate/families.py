@@ -48,6 +48,7 @@ Examples
 
 from __future__ import annotations
 
+from abc import abstractmethod
 from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
@@ -126,6 +127,7 @@ class Custom(Observer):
             return _zeros(self.w_dim)
         return lambda t: np.array([float(e.evaluate({"t": t})) for e in exprs])
 
+    @abstractmethod
     def custom_run(self, spec: Any, fn: Any, *, w: Signal | None = None, linear: bool = False,
                    zero: bool = False, nominal: bool = False) -> dict[str, Any]:  # fmt: skip
         """The trajectory: ``{"t", "x", "xhat", "signals", "info"}``.
@@ -133,7 +135,6 @@ class Custom(Observer):
         ``w`` replaces the disturbance, ``linear`` drops the nonlinearity, ``zero`` starts every
         state (and the delay history) at 0, ``nominal`` drops the uncertainty.
         """
-        raise NotImplementedError  # pragma: no cover - every registered model overrides it
 
     def gain_system(self) -> tuple[Callable[[float], np.ndarray], str] | None:
         """``(G(omega), time)``: the linear nominal map ``w -> z`` at a frequency, or None."""

@@ -27,9 +27,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import sympy
 
 from lmic.errors import DataError
+from lmic.template.convert import as_expr
 
 __all__ = ["random_plants", "data_shapes"]
 
@@ -58,7 +58,7 @@ def data_shapes(template: Any, dims: dict[str, int], fixed: set[str], where: str
             continue
         shape = []
         for d in decl.shape:
-            v = sympy.sympify(sympy.sympify(d).xreplace(subs))
+            v = as_expr(as_expr(d).xreplace(subs))
             if not v.is_Integer:
                 missing = sorted(str(s) for s in v.free_symbols)
                 raise DataError(
