@@ -22,8 +22,8 @@ def to_jsonable(obj: Any) -> Any:
 
     Examples
     --------
-    >>> to_jsonable((np.float32(0.5), [np.nan]))
-    [0.5, [None]]
+    >>> to_jsonable((np.float32(0.5), [np.nan], np.bool_(True)))
+    [0.5, [None], True]
     """
     if isinstance(obj, dict):
         return {str(k): to_jsonable(v) for k, v in obj.items()}
@@ -31,6 +31,8 @@ def to_jsonable(obj: Any) -> Any:
         return [to_jsonable(v) for v in obj]
     if isinstance(obj, np.ndarray):
         return to_jsonable(obj.tolist())
+    if isinstance(obj, np.bool_):
+        return bool(obj)
     if isinstance(obj, np.integer):
         return int(obj)
     if isinstance(obj, float | np.floating):

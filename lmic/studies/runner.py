@@ -30,6 +30,8 @@ import threading
 import time
 from typing import Any
 
+from lmic.jsonable import to_jsonable
+
 __all__ = ["Runner", "local_runner", "run_in_runner", "run_many_in_runner", "TIME_LIMIT_GRACE"]
 
 #: seconds a job may overrun its limit (the solver's own limit comes first) before it is killed
@@ -214,26 +216,8 @@ def _main() -> None:
             continue
         msg = json.loads(line)
         rec = run_job(msg["job"], msg.get("time_limit"))
-        proto.write(json.dumps(_clean(rec), allow_nan=False) + "\n")
+        proto.write(json.dumps(to_jsonable(rec), allow_nan=False) + "\n")
         proto.flush()
-
-
-def _clean(obj: Any) -> Any:
-    import math
-
-    import numpy as np
-
-    if isinstance(obj, dict):
-        return {str(k): _clean(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_clean(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _clean(obj.tolist())
-    if isinstance(obj, np.generic):
-        return _clean(obj.item())
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj
 
 
 if __name__ == "__main__":
