@@ -114,6 +114,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from lmic.certify.multipliers import parse_multipliers
 from lmic.errors import CertificateError
 from lmic.ir.problem import Problem
 from lmic.ir.svec import tril_rows_cols, tril_unvec
@@ -235,29 +236,8 @@ def _unpack(problem: Problem, u: np.ndarray, ranges: list[tuple[int, int]]) -> t
     return mats, u[off:].copy()
 
 
-def _parse(problem: Problem, duals: dict[str, Any]) -> tuple[list[np.ndarray], np.ndarray]:
-    if not isinstance(duals, dict):
-        raise CertificateError("a dual point is a dict {'lmis': [Z_i], 'linear': y}")
-    mats_in = duals.get("lmis")
-    if mats_in is None or len(mats_in) != len(problem.lmis):
-        raise CertificateError(
-            f"the dual point has {0 if mats_in is None else len(mats_in)} LMI multipliers, "
-            f"the problem {len(problem.lmis)} LMIs"
-        )
-    mats = []
-    for lmi, Z in zip(problem.lmis, mats_in, strict=True):
-        Z = np.atleast_2d(np.asarray(Z, dtype=float)) if lmi.dim else np.zeros((0, 0))
-        if Z.shape != (lmi.dim, lmi.dim):
-            raise CertificateError(f"multiplier of LMI '{lmi.name}' has shape {Z.shape}, expected {(lmi.dim,) * 2}")
-        mats.append(0.5 * (Z + Z.T))
-    m = len(problem.linear)
-    y_in = duals.get("linear")
-    y = np.zeros(m) if y_in is None or len(y_in) == 0 else np.asarray(y_in, dtype=float).ravel()
-    if y.shape != (m,):
-        raise CertificateError(f"the dual point has {y.size} row multipliers, the problem {m} rows")
-    if not (all(np.all(np.isfinite(Z)) for Z in mats) and np.all(np.isfinite(y))):
-        raise CertificateError("the dual point has non-finite entries")
-    return mats, y
+def _parse(problem: Problem, record: dict[str, Any]) -> tuple[list[np.ndarray], np.ndarray]:
+    return parse_multipliers(problem, record, "dual point", missing_is_zero=False)
 
 
 def _target(problem: Problem) -> tuple[float, np.ndarray]:

@@ -136,7 +136,7 @@ from typing import Any
 
 import numpy as np
 
-from lmic.errors import CertificateError
+from lmic.certify.multipliers import parse_multipliers
 from lmic.ir.problem import Problem
 from lmic.ir.svec import tril_rows_cols
 
@@ -167,34 +167,8 @@ def _weights(d: int) -> np.ndarray:
     return np.where(i == j, 1.0, 2.0)
 
 
-def _parse(problem: Problem, farkas: dict[str, Any]) -> tuple[list[np.ndarray], np.ndarray]:
-    if not isinstance(farkas, dict):
-        raise CertificateError("a Farkas certificate is a dict {'lmis': [Z_i], 'linear': y}")
-    mats_in = farkas.get("lmis") or []
-    if len(mats_in) > len(problem.lmis):
-        raise CertificateError(
-            f"the Farkas certificate has {len(mats_in)} LMI multipliers, the problem {len(problem.lmis)} LMIs"
-        )
-    mats = []
-    for i, lmi in enumerate(problem.lmis):
-        Z = mats_in[i] if i < len(mats_in) else None
-        if Z is None:
-            mats.append(np.zeros((lmi.dim, lmi.dim)))
-            continue
-        Z = np.atleast_2d(np.asarray(Z, dtype=float))
-        if Z.shape != (lmi.dim, lmi.dim):
-            raise CertificateError(
-                f"Farkas multiplier of LMI '{lmi.name}' has shape {Z.shape}, expected {(lmi.dim, lmi.dim)}"
-            )
-        mats.append(0.5 * (Z + Z.T))
-    m = len(problem.linear)
-    y_in = farkas.get("linear")
-    y = np.zeros(m) if y_in is None or len(y_in) == 0 else np.asarray(y_in, dtype=float).ravel()
-    if y.shape != (m,):
-        raise CertificateError(f"Farkas multiplier y has {y.size} entries, the problem {m} rows")
-    if not (all(np.all(np.isfinite(Z)) for Z in mats) and np.all(np.isfinite(y))):
-        raise CertificateError("the Farkas certificate has non-finite entries")
-    return mats, y
+def _parse(problem: Problem, record: dict[str, Any]) -> tuple[list[np.ndarray], np.ndarray]:
+    return parse_multipliers(problem, record, "Farkas certificate", missing_is_zero=True)
 
 
 def _evaluate(problem: Problem, mats: list[np.ndarray], y: np.ndarray, tol: float) -> dict:
