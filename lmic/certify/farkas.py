@@ -142,6 +142,7 @@ from lmic.ir.svec import tril_rows_cols
 
 __all__ = [
     "verify_farkas",
+    "ray_report",
     "scope",
     "is_homogeneous",
     "repair_farkas",
@@ -284,6 +285,23 @@ def _variable_of(problem: Problem, k: int) -> str:
         if v.offset <= k < v.offset + v.size:
             return f" ({v.name})"
     return ""
+
+
+def ray_report(problem: Problem, ray: dict[str, Any] | None) -> dict:
+    """:func:`verify_farkas` for a ray a solver offered: a missing or malformed ray is "not verified".
+
+    The backends' status maps and the strict reductions use it to decide whether an inexact
+    infeasibility claim stands; a malformed ray is never an error there, just not a proof.
+
+    >>> ray_report(None, None)["verified"]
+    False
+    """
+    if ray is None or ray.get("lmis") is None:
+        return {"verified": False, "reason": "the solver returned no ray"}
+    try:
+        return verify_farkas(problem, ray)
+    except Exception as err:  # noqa: BLE001 - a malformed ray is just not a certificate
+        return {"verified": False, "reason": f"{type(err).__name__}: {err}"}
 
 
 def verify_farkas(problem: Problem, farkas: dict[str, Any], *, tol: float = 1e-6, repair: bool = True) -> dict:

@@ -106,7 +106,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from lmic.certify.check import Tolerances, lmi_report
-from lmic.certify.farkas import verify_farkas
+from lmic.certify.farkas import ray_report, verify_farkas
 from lmic.ir.problem import LinearConstraints, Objective, Problem, Variable
 from lmic.ir.svec import tril_size
 from lmic.options import SolveOptions
@@ -567,10 +567,7 @@ def _inaccurate_max_margin(solution: Solution, t: float, duals: dict, problem: P
         return
     report: dict[str, Any] = {"verified": False, "reason": "the solver returned no dual"}
     if duals.get("lmis") is not None and len(duals["lmis"]) == len(problem.lmis):
-        try:
-            report = verify_farkas(problem, duals)
-        except Exception as err:  # noqa: BLE001 - a malformed dual is just not a certificate
-            report = {"verified": False, "reason": f"{type(err).__name__}: {err}"}
+        report = ray_report(problem, duals)
     if report.get("verified"):
         solution.status = "infeasible"
         solution.farkas = dict(duals, strict=True)
