@@ -26,6 +26,8 @@ __all__ = [
     "write_atomic",
     "add_param_option",
     "solve_options",
+    "add_executor_options",
+    "check_executor_args",
 ]
 
 
@@ -94,3 +96,30 @@ def solve_options(args: argparse.Namespace) -> Any:
     if getattr(args, "strict", None) is not None:
         opts.strict = args.strict
     return opts
+
+
+def add_executor_options(parser: Any, runs: str, default: str | None = None) -> None:
+    """``--executor`` and ``--workers`` (:mod:`lmic.studies.executors`), shared by batch,
+    crosscheck and reproduce; ``runs`` says what runs in parallel."""
+    parser.add_argument(
+        "--executor",
+        default=default,
+        help=f"run {runs} in parallel: local (worker processes), dask (a LocalCluster) or "
+        "tcp://HOST:PORT (a Dask scheduler)" + ("" if default else "; default: one after the other in this process"),
+    )
+    parser.add_argument("--workers", type=int, default=None, help="workers for --executor (default: cores)")
+
+
+def check_executor_args(args: argparse.Namespace) -> None:
+    """Bad ``--executor`` / ``--workers`` values are bad input (one line, exit 2), before any work.
+
+    >>> check_executor_args(argparse.Namespace(executor="ssh://h", workers=None))
+    Traceback (most recent call last):
+    ...
+    lmic.errors.DataError: --executor ssh://h: use local, dask or tcp://HOST:PORT
+    """
+    if args.workers is not None and args.workers < 1:
+        raise DataError(f"--workers {args.workers}: give at least 1")
+    spec = args.executor
+    if spec is not None and not (spec in ("local", "dask") or spec.startswith("tcp://")):
+        raise DataError(f"--executor {spec}: use local, dask or tcp://HOST:PORT")

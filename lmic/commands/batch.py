@@ -37,6 +37,8 @@ __all__ = ["register", "run"]
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``batch`` sub-command."""
+    from lmic.commands._common import add_executor_options
+
     p = sub.add_parser(
         "batch",
         help="run a study (many theorems x systems x parameters x backends) on local cores or a Dask cluster",
@@ -44,13 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("study", nargs="?", default=None, help="study file (YAML or JSON, schemas/study.schema.json)")
     p.add_argument("-o", "--output", default=None, metavar="DIR", help="output folder (results.jsonl, certificates/)")
-    p.add_argument(
-        "--executor",
-        default="local",
-        help="local (default: a pool of worker processes on this machine), dask (a LocalCluster) or "
-        "tcp://HOST:PORT (an existing Dask scheduler)",
-    )
-    p.add_argument("--workers", type=int, default=None, help="local workers / LocalCluster processes (default: cores)")
+    add_executor_options(p, "the jobs", default="local")
     p.add_argument("--export", default=None, metavar="FILE", help="also write the results as .csv or .parquet")
     p.add_argument("--map", default=None, metavar="PNG", help="region map file (default DIR/map.png when it applies)")
     p.add_argument("--status", default=None, metavar="DIR", help="summarise a running or finished study folder")
@@ -105,13 +101,11 @@ def run(args: argparse.Namespace) -> int:
         raise DataError("give a study file: lmic batch STUDY.yaml -o DIR (or lmic batch --status DIR)")
     if not args.output:
         raise DataError("give the output folder: lmic batch STUDY.yaml -o DIR")
-    if args.workers is not None and args.workers < 1:
-        raise DataError(f"--workers {args.workers}: give at least 1")
+    from lmic.commands._common import check_executor_args, print_json
+
+    check_executor_args(args)
     if args.export and os.path.splitext(args.export)[1].lower() not in (".csv", ".parquet", ".pq"):
         raise DataError(f"--export {args.export}: use a .csv or .parquet file name")
-    if not (args.executor in ("local", "dask") or args.executor.startswith("tcp://")):
-        raise DataError(f"--executor {args.executor}: use local, dask or tcp://HOST:PORT")
-    from lmic.commands._common import print_json
     from lmic.studies.driver import run_study
     from lmic.studies.report import export, print_table
     from lmic.studies.spec import load_study

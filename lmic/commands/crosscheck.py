@@ -22,7 +22,7 @@ __all__ = ["register", "run"]
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``crosscheck`` sub-command."""
-    from lmic.commands._common import add_param_option
+    from lmic.commands._common import add_executor_options, add_param_option
     from lmic.commands.solve import add_solver_options
 
     p = sub.add_parser("crosscheck", help="solve one problem on several backends and compare")
@@ -32,13 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--backends", default=None, help="comma-separated backends (default: every available one)")
     p.add_argument("--rtol", type=float, default=None, help="objective agreement tolerance")
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument(
-        "--executor",
-        default=None,
-        help="run the backends in parallel: local (worker processes), dask (a LocalCluster) or "
-        "tcp://HOST:PORT (a Dask scheduler); default: one after the other in this process",
-    )
-    p.add_argument("--workers", type=int, default=None, help="workers for --executor (default: cores)")
+    add_executor_options(p, "the backends")
     add_solver_options(p)
     p.set_defaults(func=run)
 
@@ -94,18 +88,14 @@ def _progress_bar(enabled: bool) -> Iterator[Any]:
 def run(args: argparse.Namespace) -> int:
     """Cross-check and print the table (or JSON)."""
     from lmic.backends.registry import get_backend
-    from lmic.commands._common import parse_params, print_json, solve_options
+    from lmic.commands._common import check_executor_args, parse_params, print_json, solve_options
     from lmic.crosscheck import DEFAULT_RTOL, crosscheck
-    from lmic.errors import DataError
 
     names = [b.strip() for b in args.backends.split(",") if b.strip()] if args.backends else None
     for name in names or []:
         get_backend(name)  # an unknown or missing backend is bad input (exit 2)
     params = parse_params(args.param)
-    if args.workers is not None and args.workers < 1:
-        raise DataError(f"--workers {args.workers}: give at least 1")
-    if args.executor is not None and not (args.executor in ("local", "dask") or args.executor.startswith("tcp://")):
-        raise DataError(f"--executor {args.executor}: use local, dask or tcp://HOST:PORT")
+    check_executor_args(args)
     with _progress_bar(enabled=not args.json) as progress:
         if args.executor:  # one job per backend (lmic.studies.parallel)
             from lmic.studies.parallel import crosscheck_parallel

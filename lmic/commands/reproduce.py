@@ -27,6 +27,7 @@ __all__ = ["register", "run"]
 
 def register(sub: argparse._SubParsersAction) -> None:
     """Add the ``reproduce`` sub-command."""
+    from lmic.commands._common import add_executor_options
     from lmic.commands.solve import add_solver_options
 
     p = sub.add_parser(
@@ -47,13 +48,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", default=None, help="write the Markdown table here")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.add_argument(
-        "--executor",
-        default=None,
-        help="run the example files in parallel: local (worker processes), dask (a LocalCluster) or "
-        "tcp://HOST:PORT (a Dask scheduler); default: one after the other in this process",
-    )
-    p.add_argument("--workers", type=int, default=None, help="workers for --executor (default: cores)")
+    add_executor_options(p, "the example files")
     add_solver_options(p)
     p.set_defaults(func=run)
 
@@ -64,7 +59,9 @@ def run(args: argparse.Namespace) -> int:
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
     from rich.table import Table
 
-    from lmic.commands._common import print_json, solve_options, write_atomic
+    from lmic.commands._common import check_executor_args, print_json, solve_options, write_atomic
+
+    check_executor_args(args)
     from lmic.reproduce import render_markdown, reproduce
 
     if args.output:

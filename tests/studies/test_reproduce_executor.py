@@ -36,3 +36,19 @@ def test_parallel_reproduce_matches_the_sequential_run(tmp_path):
     assert [(r["file"], r["quantity"]) for r in par["rows"]] == [(r.row.file, r.row.quantity) for r in seq.results]
     assert [(r["finding"], r["ok"]) for r in par["rows"]] == [(r.finding, r.ok) for r in seq.results]
     assert len({r["file"] for r in par["rows"]}) == 3
+
+
+def test_bad_executor_or_workers_is_one_line_and_exit_2(tmp_path):
+    out = tmp_path / "r.md"
+    for extra, named in ((["--executor", "ssh://host"], "--executor ssh://host"), (["--workers", "0"], "--workers 0")):
+        proc = subprocess.run(
+            [sys.executable, "-m", "lmic.cli", "reproduce", "--only", "qib.thm1.*", "-o", str(out), *extra],
+            cwd=REPO,
+            env=env(),
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        assert proc.returncode == 2 and proc.stdout == ""
+        assert proc.stderr.count("\n") == 1 and named in proc.stderr
+        assert not out.exists()
