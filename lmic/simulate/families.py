@@ -71,6 +71,21 @@ def _zeros(size: int) -> Signal:
     return lambda t: z
 
 
+def _time_signal(exprs: list[Expression], size: int) -> Signal:
+    """``t -> [e(t) for e in exprs]`` (zero of ``size`` when there are none)."""
+    if not exprs:
+        return _zeros(size)
+    return lambda t: np.array([float(e.evaluate({"t": t})) for e in exprs])
+
+
+def _read_time_vector(sec: Mapping[str, Any], key: str, size: int, what: str, where: str) -> list[Expression]:
+    """The ``key:`` entry of a ``simulation:`` section: ``size`` expressions of ``t``."""
+    texts = sec[key] if isinstance(sec[key], list) else [sec[key]]
+    if len(texts) != size:
+        raise DataError(f"{where}.{key}: has {len(texts)} entries, {what}")
+    return parse_vector(texts, {"t"}, f"{where}.{key}")
+
+
 def _scalar(obs: Observer, role: str) -> float | None:
     m = obs.mats.get(role)
     return None if m is None else float(np.asarray(m).ravel()[0])
@@ -112,20 +127,13 @@ class Custom(Observer):
                     f"{where}: '{key}' does not apply to the '{self.name}' observer (its extra keys: {allowed})"
                 )
         if "disturbance" in sec:
-            texts = sec["disturbance"] if isinstance(sec["disturbance"], list) else [sec["disturbance"]]
-            if len(texts) != self.w_dim:
-                raise DataError(
-                    f"{where}.disturbance: has {len(texts)} entries, the model has {self.w_dim} disturbance(s)"
-                )
-            out["w"] = parse_vector(texts, {"t"}, f"{where}.disturbance")
+            what = f"the model has {self.w_dim} disturbance(s)"
+            out["w"] = _read_time_vector(sec, "disturbance", self.w_dim, what, where)
         return out
 
     def disturbance(self, spec: Any) -> Signal:
         """``w(t)`` from the ``disturbance:`` key (zero when absent)."""
-        exprs: list[Expression] = spec.extra.get("w", [])
-        if not exprs:
-            return _zeros(self.w_dim)
-        return lambda t: np.array([float(e.evaluate({"t": t})) for e in exprs])
+        return _time_signal(spec.extra.get("w", []), self.w_dim)
 
     @abstractmethod
     def custom_run(self, spec: Any, fn: Any, *, w: Signal | None = None, linear: bool = False,
@@ -538,22 +546,15 @@ class UIFilter(Custom):
     def read_extra(self, sec: Mapping[str, Any], where: str) -> dict[str, Any]:
         out = super().read_extra(sec, where)
         if "unknown_input" in sec:
-            texts = sec["unknown_input"] if isinstance(sec["unknown_input"], list) else [sec["unknown_input"]]
-            if len(texts) != self.h:
-                raise DataError(
-                    f"{where}.unknown_input: has {len(texts)} entries, the plant has {self.h} unknown input(s)"
-                )
-            out["nu"] = parse_vector(texts, {"t"}, f"{where}.unknown_input")
+            what = f"the plant has {self.h} unknown input(s)"
+            out["nu"] = _read_time_vector(sec, "unknown_input", self.h, what, where)
         return out
 
     def custom_run(self, spec: Any, fn: Any, *, w: Signal | None = None, linear: bool = False,
                    zero: bool = False, nominal: bool = False) -> dict[str, Any]:  # fmt: skip
         n, q1 = self.n, self.q1
         wf = w if w is not None else self.disturbance(spec)
-        nu_ex: list[Expression] = spec.extra.get("nu", [])
-
-        def nu(t: float) -> np.ndarray:
-            return np.array([float(e.evaluate({"t": t})) for e in nu_ex]) if nu_ex else np.zeros(self.h)
+        nu = _time_signal(spec.extra.get("nu", []), self.h)
 
         f = (lambda x, u, tt: np.zeros(n)) if linear else fn.f
         x0 = np.zeros(n) if zero else spec.x0
@@ -565,15 +566,12 @@ class UIFilter(Custom):
         else:
             z0 = np.zeros(q1)
 
-        def y_of(x: np.ndarray, t: float) -> np.ndarray:
-            return self.C @ x + self.D2w @ wf(t) + self.G @ nu(t)
-
         def rhs(t: float, s: np.ndarray) -> np.ndarray:
             x, z = s[:n], s[n:]
-            u = fn.u(t)
-            y = y_of(x, t)
+            u, w_t, nu_t = fn.u(t), wf(t), nu(t)  # each signal evaluated once per step
+            y = self.C @ x + self.D2w @ w_t + self.G @ nu_t
             zeta = self.J @ z + self.E @ y
-            dx = self.A @ x + f(x, u, t) + self.D1w @ wf(t) + self.F @ nu(t)
+            dx = self.A @ x + f(x, u, t) + self.D1w @ w_t + self.F @ nu_t
             dz = self.N @ z + self.L @ y + self.M @ f(zeta[:n], u, t)
             if self.B is not None:
                 dx = dx + self.B @ u
