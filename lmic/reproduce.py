@@ -422,7 +422,7 @@ def _compute(runner: _Runner, row: Row) -> tuple[str, Any, str, str]:
         from lmic.sweep import parse_grid, sweep
 
         name, values = parse_grid(str(c["sweep"]))
-        res = sweep(
+        swept = sweep(
             row.theorem,
             runner.path(row.file),
             name,
@@ -431,11 +431,11 @@ def _compute(runner: _Runner, row: Row) -> tuple[str, Any, str, str]:
             backend=runner.backend,
             options=runner.options,
         )
-        ok = [p.value for p in res.points if p.outcome == "feasible"]
+        ok = [p.value for p in swept.points if p.outcome == "feasible"]
         if ok:
             text = f"certified at {name} = {', '.join(f'{v:g}' for v in ok)}"
-            return "certified", (res.best.value if res.best else None), text, f"{len(values)} points"
-        finding = "infeasible" if res.exit_code() == 3 else "not reproducible"
+            return "certified", (swept.best.value if swept.best else None), text, f"{len(values)} points"
+        finding = "infeasible" if swept.exit_code() == 3 else "not reproducible"
         return finding, None, f"no certified point in {len(values)}", ""
     if "gain" in c:
         from lmic.compile import compile_theorem

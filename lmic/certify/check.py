@@ -630,6 +630,7 @@ def _objective_report(problem: Problem, solution: Solution, x: np.ndarray, tol: 
     if obj.sense == "feasibility":
         return None
     val = obj.value(x)
+    assert val is not None  # None only for a feasibility problem, returned above
     claimed = solution.objective
     entry: dict[str, Any] = {
         "sense": obj.sense,
@@ -763,7 +764,7 @@ def certify(
                 cert.reason = cert.farkas["reason"]
                 if cert.exact is not None:
                     cert.reason += "; exact proof: " + cert.exact["reason"]
-            elif kind == "global":
+            elif kind == "global" and cert.exact is not None:
                 # the float tolerances failed but an exact certificate exists: a theorem
                 cert.verdict = "infeasible-certified"
                 cert.reason = cert.exact["reason"] + " (the float verification failed: " + cert.farkas["reason"] + ")"

@@ -476,7 +476,9 @@ def repair_farkas(
     it = 0
     for it in range(1, max_iter + 1):
         g = _g_vector(problem, Cs, A, cur, yc)[1:]
-        blocks, factors, ranks = [], [], []
+        blocks: list[np.ndarray] = []
+        factors: list[np.ndarray | None] = []
+        ranks = []
         for lmi, C, Z in zip(problem.lmis, Cs, cur, strict=True):
             if not Z.size:
                 factors.append(None)
@@ -498,6 +500,7 @@ def repair_farkas(
             blocks.append(np.asarray(C[:, 1:].T @ (_weights(lmi.dim)[:, None] * T)))
         s_rows = np.array([max(abs(yc[r]), top * 1e-3) if not ge[r] else yc[r] for r in rows])
         if rows:
+            assert A is not None  # rows index y0, so y0 is not empty and A was built
             blocks.append(np.asarray(A[:, 1:][rows].T.toarray()) * s_rows[None, :])
         if not blocks:
             out["reason"] = (
@@ -508,7 +511,8 @@ def repair_farkas(
             return out
         G = np.hstack(blocks)
         e = np.linalg.lstsq(G, -g, rcond=None)[0]
-        k, norms, Es = 0, [0.0], []
+        k, norms = 0, [0.0]
+        Es: list[np.ndarray | None] = []
         for U in factors:
             if U is None:
                 Es.append(None)
@@ -525,7 +529,7 @@ def repair_farkas(
         norms += [abs(float(v)) for r, v in zip(rows, ey, strict=True) if ge[r]]
         alpha = 1.0 if max(norms) <= step else step / max(norms)
         cur = [
-            Z if U is None else U @ (np.eye(U.shape[1]) + alpha * E) @ U.T
+            Z if U is None or E is None else U @ (np.eye(U.shape[1]) + alpha * E) @ U.T
             for Z, U, E in zip(cur, factors, Es, strict=True)
         ]
         for r, v, sr in zip(rows, ey, s_rows, strict=True):

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import io
 import math
+from typing import Any
 
 import numpy as np
 
@@ -58,7 +59,7 @@ def figure(traj: Trajectory, title: str = "") -> object:
         left=0.08, right=0.985, top=1 - 0.75 / height, bottom=(0.5 + foot) / height, hspace=0.32, wspace=0.2
     )
     discrete = traj.time == "discrete"
-    style = {"marker": ".", "markersize": 3} if discrete and traj.t.size <= 200 else {}
+    style: dict[str, Any] = {"marker": ".", "markersize": 3} if discrete and traj.t.size <= 200 else {}
     dt = float(traj.t[1] - traj.t[0]) if traj.t.size > 1 else 1.0
     xlabel = ("sample k" if abs(dt - 1.0) < 1e-12 else f"t = k T (s), T = {dt:g} s") if discrete else "t (s)"
     first = None

@@ -378,7 +378,7 @@ def read_spec(section: Any, observer: Observer, where: str = "simulation") -> Si
     n, p = observer.n, observer.p
     time = observer.time
     custom = isinstance(observer, Custom)
-    extra = observer.read_extra(sec, where) if custom else {}
+    extra = observer.read_extra(sec, where) if isinstance(observer, Custom) else {}
     if not custom:
         for key in EXTRA_KEYS:
             if key in sec:
