@@ -33,7 +33,7 @@ from __future__ import annotations
 import sympy
 
 from lmic.errors import DataError
-from lmic.template import STAR, I, block, schur_stable
+from lmic.template import STAR, I, Template, block, schur_stable
 
 __all__ = ["build_delay_hinf", "declare_tau0"]
 
@@ -42,7 +42,7 @@ def _is_integer(x: float) -> bool:
     return float(x).is_integer()
 
 
-def declare_tau0(t):
+def declare_tau0(t: Template):
     """Parameters ``tau1``, ``tau2`` and ``tau0`` and the constant ``tau0_eff`` used by the LMIs.
 
     A system gives the delay bounds ``tau1 <= tau(k) <= tau2`` (then ``tau0 = tau2 - tau1 + 1``)
@@ -78,7 +78,7 @@ def declare_tau0(t):
     return t.const("tau0_eff", tau0_fn, doc="tau0 = tau2 - tau1 + 1 (or tau0 as given)")
 
 
-def build_delay_hinf(t, *, paper: str, pareto: bool) -> None:
+def build_delay_hinf(t: Template, *, paper: str, pareto: bool) -> None:
     """Declare the Paper A / Paper B delay H-infinity observer theorem on template ``t``.
 
     Parameters

@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from lmic.template import STAR, I, block, hurwitz, negative_definite, theorem
+from lmic.template import STAR, I, Template, block, hurwitz, negative_definite, theorem
 from lmic.template.numeric import null_projector, pinv, rank
 
 CITATION = (
@@ -120,7 +120,7 @@ def _beta2(values: Mapping[str, Any]) -> np.ndarray:
     return null_projector(values["T"])[:, q1:]
 
 
-def reduced_order_constants(t, n, h, p, q1, with_D: bool = True):
+def reduced_order_constants(t: Template, n, h, p, q1, with_D: bool = True):
     """Declare the data of the R -> M construction and its constants; return them by name.
 
     Declares the dimensions' data ``A, B, C, F, G, D1, D2, R`` (and ``D`` when ``with_D``) and
@@ -169,7 +169,7 @@ def reduced_order_blocks(s, P, Ybar1, Y2, nonlinear_gain):
     return a11, a12, a13, a14, a34
 
 
-def reduced_order_gains(t, s, P, Ybar1, Y2):
+def reduced_order_gains(t: Template, s, P, Ybar1, Y2):
     """Back-substitution (39)/(37): Y1, N, L, Gf (= M B), J, E; returns N, L, J, E."""
     M, Ab, a1, a2, b1, b2 = (s[k] for k in ("M", "Abar", "alpha1", "alpha2", "beta1", "beta2"))
     Y1 = t.derive("Y1", P.inv() * Ybar1, doc="Y1 = P^-1 Ybar1")
@@ -204,7 +204,7 @@ def hinf_block(P, Gamma, N, L, J, E, nonlinear_gain, MD1, D2, c, mu_sq):
     system_class=SYSTEM_CLASS,
     notes="Bilinear in (P, N); an LMI in (P, Gamma) for given gains.",
 )
-def descriptor_thm3_1(t):
+def descriptor_thm3_1(t: Template) -> None:
     """Theorem 3.1 (Section 3), inequalities (14).
 
     ``Gamma - I < 0``, ``[N^T P + P N + gamma^2 J^T J, P M D; *, -Gamma] < 0``, ``P > 0``: the
@@ -234,7 +234,7 @@ def descriptor_thm3_1(t):
     notes="Nonlinear in the gains; an LMI in (P, Gamma) for fixed N, L, M, J, E. The proof's eq "
     "(25) prints the cross term as a product; it is a sum (no effect on (20)).",
 )
-def descriptor_thm3_2(t):
+def descriptor_thm3_2(t: Template) -> None:
     """Theorem 3.2 (Section 3), inequalities (20)-(21).
 
     ``Gamma - I < 0``, ``P > 0``, ``Phi = [a11, a12, a13; *, -Gamma, 0; *, 0, a33] < 0`` with
@@ -275,7 +275,7 @@ def descriptor_thm3_2(t):
     "(printed with a stray D: 'P M D Abar alpha2 D2'), a34 with beta2 (printed 'beta'); the rank "
     "conditions (31)-(32) read n + h (printed n). The filter gain G = M B is the derived 'Gf'.",
 )
-def descriptor_thm3_3(t):
+def descriptor_thm3_3(t: Template) -> None:
     """Theorem 3.3 (Section 3), LMI (40)-(41), gains (39).
 
     ``Gamma - I < 0``, ``P > 0`` and (block sizes q1, q, nw, n + h)

@@ -32,7 +32,7 @@ margin -1.6e-5, SCS's "optimal" must be rejected) and feasible at alpha = 0.06 w
 
 from __future__ import annotations
 
-from lmic.template import STAR, I, block, hurwitz, negative_definite, theorem
+from lmic.template import STAR, I, Template, block, hurwitz, negative_definite, theorem
 
 CITATION = (
     "Delshad, Gustafsson, Karimi & Zemouche, 'Observer-based control design for a class of "
@@ -45,7 +45,7 @@ SYSTEM_CLASS = (
 )
 
 
-def _plant(t):
+def _plant(t: Template):
     n, m, p, q, qE = t.dims("n m p q qE")
     A = t.data("A", n, n, doc="state matrix")
     B = t.data("B", n, m, doc="control input matrix")
@@ -55,7 +55,7 @@ def _plant(t):
     return (n, m, p, q, qE), (A, B, C, D, E)
 
 
-def _scalars(t):
+def _scalars(t: Template):
     doc = "positive Young-inequality weight"
     epsc1 = t.param("epsc1", domain="positive", doc=doc + " (controller, f)")
     epsc2 = t.param("epsc2", domain="positive", doc=doc + " (controller, mu)")
@@ -91,7 +91,7 @@ def _nine(P, Q, K, L, mats, scalars, c):
     "gives eps_o2 + eps_c2 (option c_variant = corrected, default, or printed). (10)-(11) "
     "(Omega11 < 0, Omega22 < 0) are implied by (9).",
 )
-def obs_control_thm3_1(t):
+def obs_control_thm3_1(t: Template) -> None:
     """Theorem 3.1 (Section 3), inequalities (9)-(11), in Schur form.
 
     ``[He(P(A - B K)) + c I, P B K, P D, P E, 0, 0; *, He(Q(A - L C)) + epso1 gamma^2 I, 0, 0,
@@ -153,7 +153,7 @@ def obs_control_thm3_1(t):
     "Lbar. The certificate evaluates the BMI (9) of Theorem 3.1 at P = Gamma^-1 and the "
     "recovered K, L.",
 )
-def obs_control_thm3_2(t):
+def obs_control_thm3_2(t: Template) -> None:
     """Theorem 3.2 (Section 3), LMI (21)-(22).
 
     Block sizes n, n, n, q, qE, n, n:
