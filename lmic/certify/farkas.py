@@ -69,7 +69,7 @@ remains is the float residual ``g_k != 0`` (``k >= 1``), and that is what decide
   ``||x||_inf < R = -g_0 / ||g_{1:}||_1`` are excluded: a **bounded** proof, "no solution with
   ``||x||_inf <= R``", never called infeasible. This is not a formality: the problem
   ``[[x, 1], [1, 1e-5]] > 0`` is feasible exactly for ``x > 1e5``, and SDPA and SCS return
-  certificates that verify to ``1e-6`` with ``R ~ 4e4`` (``tests/test_engine.py``). To go
+  certificates that verify to ``1e-6`` with ``R ~ 4e4`` (``tests/engine/test_engine.py``). To go
   further: an exact proof (``--exact``), another backend (another ray), or a larger ``R``
   (a more accurate ray).
 

@@ -13,7 +13,7 @@ from lmic.errors import BackendUnavailable, LmicError
 from lmic.ir.problem import Problem
 from lmic.testing.conformance import CASES, lyapunov_problem
 
-QIB = Path(__file__).resolve().parents[1] / "examples" / "qib.thm1.flexible-joint.yaml"
+QIB = Path(__file__).resolve().parents[2] / "examples" / "qib.thm1.flexible-joint.yaml"
 
 
 def test_problem_target_certified():

@@ -15,7 +15,7 @@ QIB_FILE = "examples/qib.thm1.flexible-joint.yaml"
 def test_solve_from_a_file_gives_numpy_gains_and_a_certificate(monkeypatch):
     from pathlib import Path
 
-    monkeypatch.chdir(Path(__file__).resolve().parents[1])
+    monkeypatch.chdir(Path(__file__).resolve().parents[2])
     r = lmic.solve("qib.thm1", QIB_FILE)
     assert r.verdict == "certified" and r.status == "feasible"
     L = r.gains["L"]

@@ -12,7 +12,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 LYAP = ROOT / "examples" / "thesis.lyapunov.ex2_3_2.yaml"
 QIB = ROOT / "examples" / "qib.thm1.flexible-joint.yaml"
 

@@ -30,7 +30,7 @@ from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 from lmic.outcome import EXIT_CODES, exit_code, verdict_of
 from lmic.solution import Solution
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EPS = 1e-5
 
 

@@ -63,7 +63,7 @@ def test_crosscheck_accepts_a_loaded_system_object():
     from lmic.crosscheck import crosscheck
     from lmic.system import load_system
 
-    path = Path(__file__).resolve().parents[1] / "examples" / "qib.thm1.flexible-joint.yaml"
+    path = Path(__file__).resolve().parents[2] / "examples" / "qib.thm1.flexible-joint.yaml"
     report = crosscheck("qib.thm1", load_system(path), backends=["clarabel", "cvxopt"])
     assert report.agree
     assert report.target.endswith("qib.thm1.flexible-joint.yaml")
