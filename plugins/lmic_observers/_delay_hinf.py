@@ -30,6 +30,9 @@ Typo resolutions:
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import sympy
 
 from lmic.errors import DataError
@@ -42,7 +45,7 @@ def _is_integer(x: float) -> bool:
     return float(x).is_integer()
 
 
-def declare_tau0(t: Template):
+def declare_tau0(t: Template) -> sympy.Expr:
     """Parameters ``tau1``, ``tau2`` and ``tau0`` and the constant ``tau0_eff`` used by the LMIs.
 
     A system gives the delay bounds ``tau1 <= tau(k) <= tau2`` (then ``tau0 = tau2 - tau1 + 1``)
@@ -59,7 +62,7 @@ def declare_tau0(t: Template):
         doc="tau0 = tau2 - tau1 + 1 given directly (0: computed from tau1, tau2)",
     )
 
-    def tau0_fn(v):
+    def tau0_fn(v: Mapping[str, Any]) -> float:
         tau1, tau2, tau0 = v["tau1"], v["tau2"], v["tau0"]
         for key, val in (("tau1", tau1), ("tau2", tau2), ("tau0", tau0)):
             if not _is_integer(val):

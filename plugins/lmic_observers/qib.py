@@ -17,7 +17,11 @@ Fixed gains (audits): ``fixed_L: 1`` (full order, ``R = L^T P`` substituted) and
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
+from typing import Any
+
 import numpy as np
+import sympy
 
 from lmic.errors import DataError
 from lmic.template import STAR, I, Template, block, schur_stable, theorem
@@ -27,7 +31,7 @@ __all__ = ["THEOREMS", "reduced_coordinates"]
 CITATION = "Wang, Song & Zhang (2015), Adv. Difference Equ. 2015:307"
 
 
-def _full_order(t: Template):
+def _full_order(t: Template) -> tuple[Any, ...]:
     """Data, ``P > 0``, ``R``, ``omega`` and ``X = A^T P - C^T R`` of LMIs (7) and (13)."""
     n, p = t.dims("n p")
     A = t.data("A", n, n, doc="state matrix")
@@ -121,8 +125,8 @@ def reduced_coordinates(H: np.ndarray, C: np.ndarray, where: str = "") -> tuple[
     return Tinv[:, :k], Tinv[:, k:]
 
 
-def _check_nm(tid):
-    def rule(v):
+def _check_nm(tid: str) -> Callable[[Mapping[str, Any]], float]:
+    def rule(v: Mapping[str, Any]) -> float:
         reduced_coordinates(v["H"], v["C"], f"theorem {tid}: ")  # [H; C] nonsingular
         T = np.vstack([v["H"], v["C"]])
         NM = np.hstack([v["N"], v["M"]])
@@ -137,7 +141,7 @@ def _check_nm(tid):
     return rule
 
 
-def _reduced_order(t: Template, beta, gamma):
+def _reduced_order(t: Template, beta: sympy.Symbol, gamma: sympy.Symbol | None) -> None:
     """Theorem 2 / Corollary 2: (26) with P = alpha I, or (21) with K fixed (``fixed_K: 1``).
 
     ``gamma`` is ``None`` for Corollary 2 (the (1,2) block is 0).

@@ -14,6 +14,9 @@ change of variables ``G = P L`` is substituted, so the LMIs are in ``P`` (and th
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 import sympy
 
@@ -48,7 +51,9 @@ def psi1_value(Q: np.ndarray, gamma_d: float) -> float:
     return float((-lmax + np.sqrt(lmax**2 + lmin**2 / gamma_d**2)) / (gamma_d + 2.0))
 
 
-def _gain(t: Template, n, p, P, fixed: bool):
+def _gain(
+    t: Template, n: sympy.Symbol, p: sympy.Symbol, P: sympy.MatrixExpr, fixed: bool
+) -> tuple[sympy.MatrixExpr, sympy.MatrixExpr | None]:
     """``G`` as a decision variable, or ``P L`` with ``L`` given (``fixed_L = 1``)."""
     if fixed:
         L = t.data("L", n, p, doc="the observer gain to audit (fixed_L = 1)")
@@ -56,7 +61,7 @@ def _gain(t: Template, n, p, P, fixed: bool):
     return t.full("G", n, p, doc="G = P L"), None
 
 
-def _observer(t: Template):
+def _observer(t: Template) -> tuple[sympy.Symbol, sympy.Symbol, sympy.MatrixExpr, sympy.MatrixExpr]:
     """Dimensions and the discrete-time data ``Ad``, ``Cd`` of Theorems 1, 2 and 4."""
     n, p = t.dims("n p")
     Ad = t.data("Ad", n, n, doc="discrete-time state matrix")
@@ -64,12 +69,29 @@ def _observer(t: Template):
     return n, p, Ad, Cd
 
 
-def _lmi6(t: Template, n, P, Q, Ad, Cd, G, eps, name):
+def _lmi6(
+    t: Template,
+    n: sympy.Symbol,
+    P: sympy.MatrixExpr,
+    Q: sympy.MatrixExpr,
+    Ad: sympy.MatrixExpr,
+    Cd: sympy.MatrixExpr,
+    G: sympy.MatrixExpr,
+    eps: sympy.Expr,
+    name: str,
+) -> None:
     """LMI (6) = (32) = (71): ``[P - Q - eps I, Ad^T P - Cd^T G^T; *, P] > 0``."""
     t.lmi(name, block([[P - Q - eps * I(n), Ad.T * P - Cd.T * G.T], [STAR, P]]) > 0)
 
 
-def _finish_gain(t: Template, P, G, L_data, Ad, Cd):
+def _finish_gain(
+    t: Template,
+    P: sympy.MatrixExpr,
+    G: sympy.MatrixExpr,
+    L_data: sympy.MatrixExpr | None,
+    Ad: sympy.MatrixExpr,
+    Cd: sympy.MatrixExpr,
+) -> sympy.MatrixExpr:
     """``L = P^-1 G`` (or the given L) and the check ``Ad - L Cd`` Schur stable."""
     L = L_data if L_data is not None else t.derive("L", P.inv() * G, doc="observer gain L = P^-1 G (9)")
     t.check("Ad - L Cd Schur stable", schur_stable(Ad - L * Cd))
@@ -117,7 +139,16 @@ def sampled_euler_thm1(t: Template) -> None:
     _finish_gain(t, P, G, L_data, Ad, Cd)
 
 
-def _thm2_body(t: Template, n, Ad, Cd, Q, P, G, L_data):
+def _thm2_body(
+    t: Template,
+    n: sympy.Symbol,
+    Ad: sympy.MatrixExpr,
+    Cd: sympy.MatrixExpr,
+    Q: sympy.MatrixExpr,
+    P: sympy.MatrixExpr,
+    G: sympy.MatrixExpr,
+    L_data: sympy.MatrixExpr | None,
+) -> sympy.Symbol:
     """LMIs (32)-(34) and ``min xi``; returns xi."""
     lmin_q = t.const("lambda_min_Q", lambda v: lambda_min(v["Q"]), doc="lambda_min(Q)")
     lmax_q = t.const("lambda_max_Q", lambda v: lambda_max(v["Q"]), doc="lambda_max(Q)")
@@ -169,7 +200,7 @@ def sampled_euler_thm2(t: Template) -> None:
     t.check("gamma_d < gamma_d* (Remark 2)", greater_than(delta, 0.0))
 
 
-def _theorem3_q_rule(v):
+def _theorem3_q_rule(v: Mapping[str, Any]) -> float:
     """``lambda_min(Q) = T`` is part of Theorem 3's statement."""
     lmin_q, T = lambda_min(v["Q"]), v["T"]
     if abs(lmin_q - T) > 1e-9 * max(1.0, T):

@@ -14,6 +14,12 @@ Families of results here:
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import sympy
+
 from lmic.errors import DataError
 from lmic.template import STAR, I, Template, block, hurwitz, negative_definite, schur_stable, theorem
 from lmic.template.checks import less_than
@@ -61,7 +67,7 @@ def thesis_lyapunov(t: Template) -> None:
 # -- chapter 3: Luenberger observers, L = P^-1 Lbar ----------------------------------------
 
 
-def _luenberger_data(t: Template):
+def _luenberger_data(t: Template) -> tuple[sympy.Symbol, sympy.Symbol, sympy.MatrixExpr, sympy.MatrixExpr]:
     """Dimensions and data shared by Theorem 3.2.1, Theorem 3.2.2 and Corollary (3.19)."""
     n, m, p = t.dims("n m p")
     A = t.data("A", n, n, doc="state matrix")
@@ -170,7 +176,9 @@ def thesis_cor3_19(t: Template) -> None:
 # -- chapter 4: unknown-input observers, E = U + Y V ----------------------------------------
 
 
-def _uio_constants(t: Template, n, p, C, Dui, key):
+def _uio_constants(
+    t: Template, n: sympy.Symbol, p: sympy.Symbol, C: sympy.MatrixExpr, Dui: sympy.MatrixExpr, key: str
+) -> tuple[sympy.MatrixExpr, sympy.MatrixExpr]:
     """``U = -Dui (C Dui)^+`` and the exact projector ``V = I - (C Dui)(C Dui)^+`` (4.23).
 
     ``Dui`` is the unknown-input matrix (``key`` its data name). ``C Dui`` must have full column
@@ -178,7 +186,7 @@ def _uio_constants(t: Template, n, p, C, Dui, key):
     """
     tid = t.theorem_id
 
-    def u_fn(v):
+    def u_fn(v: Mapping[str, Any]) -> np.ndarray:
         CD = v["C"] @ v[key]
         h = CD.shape[1]
         if rank(CD) < h:
@@ -198,7 +206,19 @@ def _uio_constants(t: Template, n, p, C, Dui, key):
     return U, V
 
 
-def _uio_gains(t: Template, n, p, A, B, C, P, Ybar, Kbar, U, V):
+def _uio_gains(
+    t: Template,
+    n: sympy.Symbol,
+    p: sympy.Symbol,
+    A: sympy.MatrixExpr,
+    B: sympy.MatrixExpr,
+    C: sympy.MatrixExpr,
+    P: sympy.MatrixExpr,
+    Ybar: sympy.MatrixExpr,
+    Kbar: sympy.MatrixExpr,
+    U: sympy.MatrixExpr,
+    V: sympy.MatrixExpr,
+) -> tuple[sympy.MatrixExpr, sympy.MatrixExpr]:
     """Back-substitution (4.26)/(4.36): ``Y, K, E, M, N, L, G``."""
     # fixes=: the audit variants fixed_Y / fixed_K take printed Y, K as data (Ybar = P Y, Kbar = P K)
     Y = t.derive("Y", P.inv() * Ybar, doc="Y = P^-1 Ybar", fixes=Ybar)
@@ -211,7 +231,7 @@ def _uio_gains(t: Template, n, p, A, B, C, P, Ybar, Kbar, U, V):
     return M, N
 
 
-def _decoupling_check(t: Template, M, Dui, key):
+def _decoupling_check(t: Template, M: sympy.MatrixExpr, Dui: sympy.MatrixExpr, key: str) -> None:
     """``M Dui = 0`` (structural: holds exactly when ``C Dui`` has full column rank)."""
     t.check(
         f"M {key} = 0",
@@ -220,7 +240,7 @@ def _decoupling_check(t: Template, M, Dui, key):
     )
 
 
-def _ct_uio(t: Template, nonlinear):
+def _ct_uio(t: Template, nonlinear: bool) -> None:
     n, m, p, h = t.dims("n m p h")
     A = t.data("A", n, n, doc="state matrix")
     B = t.data("B", n, m, doc="known-input matrix (G = M B)")

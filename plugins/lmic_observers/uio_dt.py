@@ -33,6 +33,7 @@ import sympy
 
 from lmic.template import (
     STAR,
+    Block,
     I,
     Template,
     block,
@@ -74,7 +75,7 @@ def _V(values: Mapping[str, Any]) -> np.ndarray:
     return null_projector(_cd1(values))
 
 
-def _uio_data(t: Template):
+def _uio_data(t: Template) -> tuple[tuple[sympy.Symbol, ...], tuple[sympy.MatrixExpr, ...], tuple[Any, Any]]:
     """Dimensions, data and the constants U, V shared by Theorems 3.2 and 4.1."""
     n, m, p, q, h = t.dims("n m p q h")
     A = t.data("A", n, n, doc="state matrix")
@@ -87,14 +88,25 @@ def _uio_data(t: Template):
     return (n, p, q), (A, B, C, D, D1), (U, V)
 
 
-def _deltas(A, C, D, U, V, P, Ybar, Kbar):
+def _deltas(
+    A: Any, C: Any, D: Any, U: Any, V: Any, P: Any, Ybar: Any, Kbar: Any
+) -> tuple[sympy.MatrixExpr, sympy.MatrixExpr]:
     """``delta13 = N^T P`` and ``delta23 = (M D)^T P`` in the new variables (21)/(26)."""
     d13 = A.T * P + (U * C * A).T * P + (V * C * A).T * Ybar.T - C.T * Kbar.T
     d23 = D.T * P + (U * C * D).T * P + (V * C * D).T * Ybar.T
     return d13, d23
 
 
-def _gains(t: Template, n, p, mats, consts, P, Ybar, Kbar):
+def _gains(
+    t: Template,
+    n: sympy.Symbol,
+    p: sympy.Symbol,
+    mats: tuple[Any, ...],
+    consts: tuple[Any, Any],
+    P: sympy.MatrixExpr,
+    Ybar: sympy.MatrixExpr,
+    Kbar: sympy.MatrixExpr,
+) -> tuple[sympy.MatrixExpr, sympy.MatrixExpr]:
     """Back-substitution (22)/(27); returns the symbols of N and M."""
     A, B, C, D, D1 = mats
     U, V = consts
@@ -113,7 +125,7 @@ def _gains(t: Template, n, p, mats, consts, P, Ybar, Kbar):
     return N, M
 
 
-def _nine(n, q, P, N, M, D, gamma_sq):
+def _nine(n: Any, q: Any, P: Any, N: Any, M: Any, D: Any, gamma_sq: Any) -> Block:
     """Inequality (9) written with N, M, P: ``[-P + g^2 I, 0, N^T P; *, -I, D^T M^T P; *, *, -P]``."""
     return block(
         [

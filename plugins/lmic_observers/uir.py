@@ -117,7 +117,7 @@ def uir_thm3_2(t: Template) -> None:
     t.observer("filter_error", "continuous", N=N, J=J, L=L, M=M, E=E, D1=D1, D2=D2, gamma=mu)
 
 
-def _robust(t: Template, multiobjective: bool):
+def _robust(t: Template, multiobjective: bool) -> None:
     """Theorems 4.1 (``multiobjective=False``) and 5.1: the LMI (38)/(41), objective, checks."""
     n, h, p, q1 = t.dims("n h p q1")
     s = reduced_order_constants(t, n, h, p, q1, with_D=False)

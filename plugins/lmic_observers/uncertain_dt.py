@@ -15,6 +15,9 @@ substituted, so the LMIs are in ``(P1, P2, alpha, eps1, eps2)`` only.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 import sympy
 
@@ -81,7 +84,7 @@ def uncertain_dt_lemma3(t: Template) -> None:
     t.derive("gamma_star", 1 / sympy.sqrt(alpha * (1 + eps1)), doc="gamma* = 1/sqrt(alpha (1 + eps1)) (22)")
 
 
-def _filter_data(t: Template):
+def _filter_data(t: Template) -> dict[str, Any]:
     """Data, parameters and gain variables shared by Theorem 1 and Corollary 1."""
     n, p, nw, nz, r, s = t.dims("n p nw nz r s")
     d = {
@@ -113,7 +116,7 @@ def _filter_data(t: Template):
     return d
 
 
-def _filter_lmis(t: Template, d, psi1_rows, eps1, eps2):
+def _filter_lmis(t: Template, d: dict[str, Any], psi1_rows: list[Any], eps1: sympy.Expr, eps2: sympy.Expr) -> None:
     """``[Psi1 Omega; * Psi2] < 0`` and Xi1 (24) of Theorem 1, given Psi1's block rows.
 
     ``psi1_rows`` is the k x k upper triangle of Psi1 (k = 3 printed, 4 corrected) with the
@@ -152,7 +155,7 @@ def _filter_lmis(t: Template, d, psi1_rows, eps1, eps2):
     )
 
 
-def _gain_and_check(t: Template, d):
+def _gain_and_check(t: Template, d: dict[str, Any]) -> None:
     L = d["L"] if d["L"] is not None else t.derive("L", d["P1"].inv() * d["G"], doc="L = P1^-1 G (26)")
     t.check("A - L C Schur stable", schur_stable(d["A"] - L * d["C"]))
     t.observer(
@@ -250,7 +253,7 @@ def vec_embedding(Cw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return E, F
 
 
-def _positive_weights(v):
+def _positive_weights(v: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     Cw = v["Cw"]
     if not np.all(Cw > 0):
         raise DataError("theorem uncertain_dt.cor1: data 'Cw' (the weights c_ij) must be element-wise > 0")
