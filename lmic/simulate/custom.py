@@ -18,6 +18,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from lmic.errors import DataError
+from lmic.simulate.lti import TimeSignal, constant_signal, expression_signal, propagate
 from lmic.simulate.models import Observer, SimulationDiverged, Vector
 from lmic.simulate.parser import Expression, parse_vector
 
@@ -29,16 +30,13 @@ EXTRA_KEYS = ("disturbance", "uncertainty", "delay", "history")
 Signal = Callable[[float], Vector]
 
 
-def _zeros(size: int) -> Signal:
-    z = np.zeros(size)
-    return lambda t: z
+def _zeros(size: int) -> TimeSignal:
+    return constant_signal(np.zeros(size))
 
 
-def _time_signal(exprs: list[Expression], size: int) -> Signal:
-    """``t -> [e(t) for e in exprs]`` (zero of ``size`` when there are none)."""
-    if not exprs:
-        return _zeros(size)
-    return lambda t: np.array([float(e.evaluate({"t": t})) for e in exprs])
+def _time_signal(exprs: list[Expression], size: int) -> TimeSignal:
+    """``t -> [e(t) for e in exprs]`` (zero of ``size`` when there are none), vectorised on a grid."""
+    return expression_signal(exprs, size)
 
 
 def _read_time_vector(sec: Mapping[str, Any], key: str, size: int, what: str, where: str) -> list[Expression]:
@@ -115,8 +113,7 @@ class Custom(Observer):
 def _ct_run(rhs: Callable[[float, np.ndarray], np.ndarray], s0: np.ndarray, spec: Any, max_step: float) -> Any:
     from scipy.integrate import solve_ivp
 
-    count = max(1, int(round(spec.horizon / spec.dt)))
-    grid = np.linspace(0.0, spec.horizon, count + 1)
+    grid = _output_grid(spec)
 
     def blowup(t: float, s: np.ndarray) -> float:
         return 1e12 - float(np.max(np.abs(s)))
@@ -129,3 +126,30 @@ def _ct_run(rhs: Callable[[float, np.ndarray], np.ndarray], s0: np.ndarray, spec
         tf = float(sol.t[-1]) if sol.t.size else 0.0
         raise SimulationDiverged(f"{spec.where}: the state blew up at t = {tf:.6g} (not finite or |x| > 1e12)", tf)
     return sol
+
+
+def _output_grid(spec: Any) -> np.ndarray:
+    count = max(1, int(round(spec.horizon / spec.dt)))
+    return np.linspace(0.0, spec.horizon, count + 1)
+
+
+def _state_is_linear(fn: Any, linear: bool) -> bool:
+    """True when the plant's nonlinearity is absent (dropped by ``linear``, or none in the section)."""
+    return linear or not getattr(getattr(fn, "spec", None), "f", True)
+
+
+def _lti_run(
+    A: np.ndarray, B: np.ndarray, s0: np.ndarray, signal: TimeSignal, spec: Any
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(t, s)`` on the output grid for ``s' = A s + B v(t)`` (:func:`lmic.simulate.lti.propagate`).
+
+    The same grid, and the same blow-up rule and message, as :func:`_ct_run`.
+    """
+    grid = _output_grid(spec)
+    S = propagate(A, B, np.asarray(s0, dtype=float), grid, signal)
+    with np.errstate(all="ignore"):
+        bad = ~np.all(np.isfinite(S), axis=1) | (np.max(np.abs(S), axis=1, initial=0.0) > 1e12)
+    if bad.any():
+        tf = float(grid[int(np.argmax(bad))])
+        raise SimulationDiverged(f"{spec.where}: the state blew up at t = {tf:.6g} (not finite or |x| > 1e12)", tf)
+    return grid, S

@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 
 from lmic.errors import DataError
-from lmic.simulate.custom import Custom, Signal, _ct_run
+from lmic.simulate.custom import Custom, Signal, _lti_run
+from lmic.simulate.lti import as_signal
 from lmic.simulate.models import SimulationDiverged
 
 __all__ = ["FilterError"]
@@ -78,14 +79,11 @@ class FilterError(Custom):
                 EPS[k + 1] = self.A @ EPS[k] + self.Bw @ wf(float(times[k]))
             if not np.all(np.isfinite(EPS)):
                 raise SimulationDiverged(f"{spec.where}: the error state blew up", float(times[-1]))
-        else:
-
-            def rhs(t: float, s: np.ndarray) -> np.ndarray:
-                return self.A @ s + self.Bw @ wf(t)
-
-            sol = _ct_run(rhs, e0, spec, spec.dt)
-            times, EPS = sol.t, sol.y.T
-        W = np.array([wf(tk) for tk in times]).reshape(times.size, -1)
+            W = np.array([wf(tk) for tk in times]).reshape(times.size, -1)
+        else:  # linear: integrated exactly (lmic.simulate.lti)
+            ws = as_signal(wf, self.w_dim)
+            times, EPS = _lti_run(self.A, self.Bw, e0, ws, spec)
+            W = ws.on(times)
         E = EPS @ self.C.T + W @ self.Dw.T
         # the "state" is the filter error eps; the estimate is 0 so that x - xhat = eps
         return {"t": times, "x": EPS, "xhat": np.zeros_like(EPS), "signals": {"w": W, "z": E}, "info": {}}
