@@ -51,7 +51,7 @@ class Robust(Custom):
         self.NF = g("NF")
         r = 0 if self.NF is None else None
         if self.NF is not None:
-            r = next((g(k).shape[1] for k in ("MA", "MAd", "MC", "MCd") if g(k) is not None), 0)
+            r = next((int(m.shape[1]) for m in (g(k) for k in ("MA", "MAd", "MC", "MCd")) if m is not None), 0)
         self.r = int(r or 0)
         self.s = 0 if self.NF is None else int(self.NF.shape[0])
         self.MA = g("MA", np.zeros((n, self.r)))

@@ -80,6 +80,7 @@ class UIFilter(Custom):
             cols = [np.vstack([self.D1w, self.L @ self.D2w]), np.vstack([self.F, self.L @ self.G])]
             sigs = [ws, nus]
             if self.B is not None:
+                assert self.Gf is not None  # set from B when not given
                 cols.append(np.vstack([self.B, self.Gf]))
                 sigs.append(expression_signal(fn.spec.u, len(fn.spec.u)))
             t, S = _lti_run(A, np.hstack(cols), s0, stack(sigs), spec)
