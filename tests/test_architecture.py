@@ -100,16 +100,12 @@ KNOWN_OVERSIZE: dict[str, str] = {
     # issue #10: claim types, IR transforms, formatting, one function per audit route
     "lmic.published": "issue #10",
     "lmic.reproduce": "issue #10",
-    # issue #10: one JSON converter (ir/jsonio, certify/check, api and commands each have one)
+    # issue #10: one JSON converter (ir/jsonio, api and commands each have one)
     "lmic.ir.jsonio": "issue #10",
-    "lmic.certify.check": "issue #10",
-    "lmic.certify.farkas": "issue #10",
     "lmic.certify.certificate": "issue #10",
     "lmic.certify.enclosure": "issue #10 (split: dual repair, rigorous bounds, exact mode)",
     "lmic.reductions.strict": "issue #10 (fixed-margin and max-margin passes apart)",
     "lmic.template.builder": "issue #10 (authoring sugar apart from the declaration core)",
-    "lmic.simulate.run": "issue #10",
-    "lmic.simulate.families": "issue #10 (one module per observer family)",
 }
 
 

@@ -10,7 +10,7 @@ violation in red.
 Examples
 --------
 >>> import numpy as np
->>> from lmic.simulate.run import Trajectory
+>>> from lmic.simulate.trajectory import Trajectory
 >>> t = np.linspace(0, 1, 11)
 >>> traj = Trajectory(t, np.c_[np.cos(t), np.sin(t)], np.c_[np.cos(t), np.sin(t) * (1 - np.exp(-t))],
 ...                   "luenberger", "continuous")
@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from lmic.simulate.run import Trajectory
+from lmic.simulate.trajectory import Trajectory
 
 __all__ = ["figure", "plot_png"]
 
