@@ -46,6 +46,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "lmic.output",
             "lmic.options",
             "lmic.jsonable",
+            "lmic.formatting",
             "lmic.schemas",
             "lmic.solution",
             "lmic.system",
@@ -71,17 +72,9 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
 
 # Violations present when this contract was written. Each names the issue whose work removes it;
 # the test fails when an entry goes stale, so delete it in the change that fixes it.
-KNOWN_CYCLES: dict[frozenset[str], str] = {
-    # display renders theorems (template.render) and template.theorem imports display for
-    # _repr_html_/_repr_latex_: issue #10 (present/ owns the formatters, template calls none)
-    frozenset({"lmic.display", "lmic.template.render", "lmic.template.theorem"}): "issue #10",
-}
+KNOWN_CYCLES: dict[frozenset[str], str] = {}
 
 KNOWN_UPWARD: dict[tuple[str, str], str] = {
-    # template -> present: theorem display in Jupyter; issue #10 (present/ renders theorems)
-    ("lmic.template.theorem", "lmic.display"): "issue #10",
-    # studies -> present: Result._repr_html_/_repr_latex_; issue #10 (present/ formatters)
-    ("lmic.api", "lmic.display"): "issue #10",
     # backends -> engine: Backend.solve still runs the strict reduction and the elimination of
     # unused entries itself; issue #10 item 2 (the policy composes reductions and backends, a
     # backend only lowers, calls and maps)
