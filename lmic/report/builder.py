@@ -66,7 +66,7 @@ class Report:
         """Write the page atomically (nothing half-written)."""
         from lmic.output import write_output
 
-        write_output(path, lambda fh: fh.write(self.html))
+        write_output(path, self.html)
 
     def exit_code(self) -> int:
         """The solve's exit code (0 certified, 3 infeasible, 1 otherwise)."""
