@@ -62,10 +62,10 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("engine", ("lmic.outcome", "lmic.reductions.*", "lmic.policy", "lmic.backoff", "lmic.testing.*")),
     (
         "studies",
-        ("lmic.api", "lmic.sweep", "lmic.crosscheck", "lmic.published", "lmic.reproduce", "lmic.studies.*"),
+        ("lmic.api", "lmic.sweep", "lmic.crosscheck", "lmic.published", "lmic.studies.*"),
     ),
     ("facade", ("lmic",)),
-    ("present", ("lmic.present.*", "lmic.display", "lmic.report.*", "lmic.simulate.*")),
+    ("present", ("lmic.present.*", "lmic.display", "lmic.reproduce", "lmic.report.*", "lmic.simulate.*")),
     ("commands", ("lmic.commands.*",)),
     ("cli", ("lmic.cli",)),
 )
@@ -91,7 +91,6 @@ KNOWN_OVERSIZE: dict[str, str] = {
     # issue #10: split by job (result types, bisection, grids)
     "lmic.sweep": "issue #10",
     # issue #10: claim types, IR transforms, formatting, one function per audit route
-    "lmic.reproduce": "issue #10",
     # issue #10: one JSON converter (certify/check, api and commands each have one)
     "lmic.certify.check": "issue #10",
     "lmic.certify.farkas": "issue #10",

@@ -3,7 +3,7 @@
 - :mod:`lmic.present.text`: terminal output (rich tables of a result, numbers and matrices);
 - :mod:`lmic.present.latex`: numbers, matrices, theorems and results as LaTeX;
 - :mod:`lmic.present.html`: theorems and results as HTML (Jupyter ``_repr_html_``, the report);
-- :mod:`lmic.present.published`: the text of a published-claims audit.
+- :mod:`lmic.present.reproduction`: the Markdown of ``lmic reproduce`` (``docs/reproduction.md``).
 
 The primitives shared with lower layers (a number, a matrix) live in :mod:`lmic.formatting`; a
 theorem renders itself in :mod:`lmic.template.render`. This package builds on both; lower layers

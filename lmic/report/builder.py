@@ -504,7 +504,7 @@ def build_report(
 
     xreport, xnote = None, ""
     if run_crosscheck:
-        from lmic.crosscheck import crosscheck
+        from lmic.studies.crosscheck import crosscheck
 
         # the system as given (a path or a mapping): crosscheck labels its report with it
         source = sysobj.path if sysobj.path else sysobj.raw
