@@ -302,28 +302,8 @@ class Template:
     def _fixed_variant(self, name: str, expr: Any, var: Any) -> Any:
         return _sugar.fixed_variant(self, name, expr, var)
 
-    def luenberger(
-        self,
-        A: Any,
-        C: Any,
-        L: Any,
-        time: str = "discrete",
-        *,
-        name: str = "L",
-        fixes: Any = None,
-        doc: str = "",
-        **roles: Any,
-    ) -> Any:
-        """The observer ``x^+ = A x^ + f + L (y - C x^)`` in one call (:func:`lmic.template.sugar.luenberger`).
-
-        >>> t = Template("x"); n, p = t.dims("n p")
-        >>> A, C = t.data("A", n, n), t.data("C", p, n)
-        >>> P = t.symmetric("P", n, pd=True); R = t.full("R", p, n)
-        >>> L = t.luenberger(A, C, L=P.inv() * R.T, fixes=R)
-        >>> t.derived[0].name, t.checks[0].name, t.observer_decl.model, t.options[0].name
-        ('L', 'A - L C Schur stable', 'luenberger', 'fixed_L')
-        """
-        return _sugar.luenberger(self, A, C, L, time, name=name, fixes=fixes, doc=doc, **roles)
+    #: ``t.luenberger(A, C, L, ...)``: the observer in one call (:func:`lmic.template.sugar.luenberger`)
+    luenberger = _sugar.luenberger
 
     def check(self, name: str, spec: CheckSpec, doc: str = "") -> None:
         """A check of the derived quantities (see :mod:`lmic.template.checks`)."""
