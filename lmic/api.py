@@ -129,12 +129,12 @@ class Result:
         )
 
     def _repr_html_(self) -> str:
-        from lmic.display import result_html
+        from lmic.formatting import result_html
 
         return result_html(self)
 
     def _repr_latex_(self) -> str:
-        from lmic.display import result_latex
+        from lmic.formatting import result_latex
 
         return result_latex(self)
 
