@@ -82,16 +82,6 @@ KNOWN_UPWARD: dict[tuple[str, str], str] = {
     ("lmic.template.theorem", "lmic.display"): "issue #10",
     # studies -> present: Result._repr_html_/_repr_latex_; issue #10 (present/ formatters)
     ("lmic.api", "lmic.display"): "issue #10",
-    # backends -> engine: Backend.solve still runs the strict reduction and the elimination of
-    # unused entries itself; issue #10 item 2 (the policy composes reductions and backends, a
-    # backend only lowers, calls and maps)
-    ("lmic.backends.base", "lmic.reductions.eliminate"): "issue #10",
-    ("lmic.backends.base", "lmic.reductions.strict"): "issue #10",
-    ("lmic.backends.auto", "lmic.reductions.strict"): "issue #10",
-    ("lmic.backends.strict", "lmic.reductions.strict"): "issue #10 (deprecated alias module)",
-    # backends -> certify: an inexact infeasibility claim is kept only when its ray verifies;
-    # issue #10 (the policy, not the status map, should ask the certifier)
-    ("lmic.backends.outcomes", "lmic.certify.farkas"): "issue #10",
 }
 
 KNOWN_OVERSIZE: dict[str, str] = {
