@@ -30,8 +30,8 @@ from __future__ import annotations
 from typing import ClassVar
 
 from lmic.backends.base import Backend, SolveOptions
-from lmic.ir.problem import Problem
 from lmic.backends.lowering import has_strict
+from lmic.ir.problem import Problem
 from lmic.solution import Solution
 
 __all__ = ["AutoBackend", "route", "choose", "step_options", "SMALL", "SMALL_N", "FIRST_ORDER_TOL"]

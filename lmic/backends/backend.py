@@ -47,7 +47,7 @@ from lmic.solution import Solution
 __all__ = ["Backend"]
 
 
-class Backend(ABC):
+class Backend(ABC):  # noqa: B024 - a subclass implements call() or _solve(), either one
     """Base class of every backend plugin.
 
     Subclasses set the class attributes and implement :meth:`settings` and :meth:`call` (or,

@@ -44,9 +44,6 @@ __all__ = [
     "full_vec_map",
     "full_vec_coo",
     "quiet_native",
-    "eliminate_unused",
-    "independent_columns",
-    "restore_eliminated",
 ]
 
 _MOVED_UP = {"eliminate_unused", "independent_columns", "restore_eliminated"}
