@@ -16,6 +16,7 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import os
 import time
 from typing import Any, ClassVar
@@ -88,6 +89,7 @@ def _physical_memory() -> int:
         return 8 << 30
 
 
+@functools.lru_cache(maxsize=64)
 def clarabel_vec(d: int) -> tuple[np.ndarray, np.ndarray]:
     """Clarabel's PSD vectorisation as ``(perm, scale)``: ``native = scale * storage[perm]``.
 
@@ -95,7 +97,13 @@ def clarabel_vec(d: int) -> tuple[np.ndarray, np.ndarray]:
     array([0, 1, 2])
     """
     perm = tril_to_triu_colmajor_perm(d)
-    return perm, svec_scale(d)[perm]
+    return _frozen(perm), _frozen(svec_scale(d)[perm])
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    """``a`` made read-only (it is cached and shared)."""
+    a.setflags(write=False)
+    return a
 
 
 def clarabel_unvec(v: np.ndarray, d: int) -> np.ndarray:

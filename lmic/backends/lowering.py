@@ -34,7 +34,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from lmic.ir.problem import LinearConstraints, Problem
-from lmic.ir.svec import tril_rows_cols, tril_size, tril_unvec
+from lmic.ir.svec import tril_rows_cols, tril_size
 
 __all__ = [
     "problem_kinds",
@@ -168,44 +168,57 @@ class ConicData:
         return out
 
 
-def _stack_columns(
-    blocks: list[tuple[sp.csc_matrix, np.ndarray | None, np.ndarray | None]], n_rows: int, n_cols: int
-) -> tuple[sp.csc_matrix, np.ndarray]:
-    """Stack CSC blocks ``(M, row_of, scale)`` (``n_cols + 1`` columns) vertically, rows moved and scaled.
+#: one block's variable columns in CSC layout: ``(indptr, rows, values)`` (``indptr`` from 0)
+_Part = tuple[np.ndarray, np.ndarray, np.ndarray]
 
-    ``M``'s column 0 (the constant) goes to the returned vector, columns ``1:`` to the matrix
-    (negated: ``A = -vec(F_k)``). Each output column is the concatenation of the blocks' columns,
-    placed by index arithmetic on the ``indptr`` arrays (no COO round trip, no sort of the whole
-    matrix; only rows within a column are sorted).
+
+def _split_const(
+    M: sp.spmatrix, row_of: np.ndarray | None = None, scale: np.ndarray | None = None, keep: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, _Part]:
+    """A CSC block ``[m0 | M_x]``: its constant column as ``(rows, values)`` and its variable columns.
+
+    Rows are moved to ``row_of`` and scaled by ``scale`` (both indexed by the block's own rows);
+    with ``keep`` (a mask over the block's rows), only those entries are taken.
     """
-    b = np.zeros(n_rows)
-    counts = np.zeros((len(blocks), n_cols), dtype=np.int64)
-    parts = []
-    for k, (M, row_of, scale) in enumerate(blocks):
-        M = M if M.format == "csc" else M.tocsc()
-        ip = M.indptr
-        rows = M.indices if row_of is None else row_of[M.indices]
-        vals = M.data if scale is None else M.data * scale[M.indices]
-        s0, s1 = int(ip[0]), int(ip[1])
-        np.add.at(b, rows[s0:s1], vals[s0:s1])
-        counts[k] = np.diff(ip[1:])
-        parts.append((ip[1:] - s1, rows[s1:], vals[s1:]))
+    M = M if M.format == "csc" else M.tocsc()
+    if not M.has_sorted_indices:
+        M = M.sorted_indices()
+    ip, rows, vals = M.indptr, M.indices, M.data
+    if keep is not None:
+        mask = keep[rows]
+        ip = np.concatenate([[0], np.cumsum(mask)])[ip]
+        rows, vals = rows[mask], vals[mask]
+    moved = rows if row_of is None else row_of[rows]
+    vals = vals if scale is None else vals * scale[rows]
+    s0, s1 = int(ip[0]), int(ip[1])
+    return moved[s0:s1], vals[s0:s1], (ip[1:] - s1, moved[s1:], vals[s1:])
+
+
+def _assemble(parts: list[_Part], n_rows: int, n_cols: int, sign: float = 1.0, order: str = "sort") -> sp.csc_matrix:
+    """The CSC matrix whose column ``j`` is the concatenation of every part's column ``j``.
+
+    Placed by index arithmetic on the ``indptr`` arrays (no COO round trip). ``order``: ``"sort"``
+    sorts the rows within each column (Clarabel requires it); ``"sorted"`` when the caller knows
+    they already are (parts in increasing disjoint row ranges, each sorted); ``"any"`` leaves
+    them unsorted (marked so) where it does not matter.
+    """
+    counts = np.array([np.diff(ip) for ip, _, _ in parts], dtype=np.int64).reshape(len(parts), n_cols)
     indptr = np.concatenate([[0], np.cumsum(counts.sum(axis=0))]).astype(np.int64)
-    nnz = int(indptr[-1])
-    indices = np.empty(nnz, dtype=np.int64)
-    data = np.empty(nnz)
-    before = np.cumsum(counts, axis=0) - counts  # entries of earlier blocks in each column
+    indices = np.empty(int(indptr[-1]), dtype=np.int64)
+    data = np.empty(int(indptr[-1]))
+    before = np.cumsum(counts, axis=0) - counts  # entries of earlier parts in each column
     for k, (ip, rows, vals) in enumerate(parts):
         if not len(rows):
             continue
         start = indptr[:-1] + before[k] - ip[:-1]  # destination minus source position, per column
         dest = np.repeat(start, counts[k]) + np.arange(len(rows))
         indices[dest] = rows
-        data[dest] = -vals
+        data[dest] = sign * vals
     A = sp.csc_matrix((data, indices, indptr), shape=(n_rows, n_cols))
-    A.has_sorted_indices = False
-    A.sort_indices()
-    return A, b
+    A.has_sorted_indices = order == "sorted"
+    if order == "sort":
+        A.sort_indices()
+    return A
 
 
 def conic_data(problem: Problem, psd_vec: PsdVec) -> ConicData:
@@ -233,20 +246,28 @@ def conic_data(problem: Problem, psd_vec: PsdVec) -> ConicData:
     """
     lin = problem.linear
     eq_rows, ge_rows = split_rows(lin)
-    blocks: list[tuple[sp.csc_matrix, np.ndarray | None, np.ndarray | None]] = []
+    b_rows, b_vals, parts = [], [], []
     offset = 0
-    if len(eq_rows) or len(ge_rows):
-        rows = np.concatenate([eq_rows, ge_rows])
-        blocks.append((lin.A[rows].tocsc(), None, None))
-        offset = len(rows)
+    ordered_rows = True  # each part's rows increase within a column, parts in increasing row ranges
+    if len(lin):
+        ordered = lin.A if not len(eq_rows) or not len(ge_rows) else lin.A[np.concatenate([eq_rows, ge_rows])]
+        r, v, part = _split_const(ordered)
+        b_rows.append(r)
+        b_vals.append(v)
+        parts.append(part)
+        offset = len(lin)
     for lmi in problem.lmis:
-        perm, scale = psd_vec(lmi.dim)
-        # storage row r goes to native row k with perm[k] = r, times scale[k]
-        native = np.empty(len(perm), dtype=np.int64)
-        native[perm] = np.arange(len(perm))
-        blocks.append((lmi.coeffs, native + offset, scale[native]))
-        offset += len(perm)
-    A, b = _stack_columns(blocks, offset, problem.n)
+        native, scale = _native_rows(psd_vec, lmi.dim)
+        ordered_rows &= _increasing(native)
+        r, v, part = _split_const(lmi.coeffs, native + offset, scale)
+        b_rows.append(r)
+        b_vals.append(v)
+        parts.append(part)
+        offset += len(native)
+    b = np.zeros(offset)
+    if b_rows:
+        np.add.at(b, np.concatenate(b_rows), np.concatenate(b_vals))
+    A = _assemble(parts, offset, problem.n, sign=-1.0, order="sorted" if ordered_rows else "sort")
     c, c0, sign = objective_vector(problem)
     return ConicData(
         A=A,
@@ -262,6 +283,18 @@ def conic_data(problem: Problem, psd_vec: PsdVec) -> ConicData:
     )
 
 
+def _increasing(a: np.ndarray) -> bool:
+    return bool(np.all(a[1:] > a[:-1]))
+
+
+def _native_rows(psd_vec: PsdVec, d: int) -> tuple[np.ndarray, np.ndarray]:
+    """Native row of each storage row (``perm``'s inverse) and its scale, for one ``d x d`` block."""
+    perm, scale = psd_vec(d)
+    native = np.empty(len(perm), dtype=np.int64)
+    native[perm] = np.arange(len(perm))
+    return native, np.asarray(scale)[native]
+
+
 def psd_unvec(psd_vec: PsdVec, v: np.ndarray, d: int) -> np.ndarray:
     """Dense symmetric matrix from one native PSD block (the inverse of ``psd_vec``).
 
@@ -272,7 +305,11 @@ def psd_unvec(psd_vec: PsdVec, v: np.ndarray, d: int) -> np.ndarray:
     perm, scale = psd_vec(d)
     storage = np.empty(len(perm))
     storage[perm] = np.asarray(v, dtype=float) / scale
-    return tril_unvec(storage, d)
+    i, j = _tril_rows_cols(d)
+    M = np.empty((d, d))
+    M[i, j] = storage
+    M[j, i] = storage
+    return M
 
 
 @dataclass(frozen=True)
@@ -345,10 +382,29 @@ def full_vec_coo(lmi: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return row, col, val
 
 
-def _full_vec_csc(lmi: Any) -> sp.csc_matrix:
-    """``full_vec_map(d) @ lmi.coeffs`` (``d*d x n+1``) as CSC, built from :func:`full_vec_coo`."""
-    row, col, val = full_vec_coo(lmi)
-    return sp.csc_matrix((val, (row, col)), shape=(lmi.dim * lmi.dim, lmi.coeffs.shape[1]))
+@functools.lru_cache(maxsize=64)
+def _full_vec_rows(d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per storage entry ``(i, j)``: its rows ``i + j d`` and ``j + i d``, and whether it is off the diagonal."""
+    i, j = _tril_rows_cols(d)
+    out = (i + j * d, j + i * d, i != j)
+    for a in out:
+        a.setflags(write=False)
+    return out
+
+
+def _full_vec_csc(lmi: Any, sort: bool = False) -> tuple[np.ndarray, sp.csc_matrix]:
+    """``full_vec_map(d) @ lmi.coeffs`` split: the dense constant ``d*d`` vector and the ``d*d x n`` block.
+
+    Built from the CSC coefficients by index arithmetic (each off-diagonal entry twice), no
+    sparse product and no COO round trip.
+    """
+    d = lmi.dim
+    lower, upper, off = _full_vec_rows(d)
+    r1, v1, p1 = _split_const(lmi.coeffs, lower)
+    r2, v2, p2 = _split_const(lmi.coeffs, upper, keep=off)
+    F0 = np.zeros(d * d)
+    np.add.at(F0, np.concatenate([r1, r2]), np.concatenate([v1, v2]))
+    return F0, _assemble([p1, p2], d * d, lmi.coeffs.shape[1] - 1, order="sort" if sort else "any")
 
 
 @dataclass
@@ -397,20 +453,22 @@ class LMIForm:
         """The blocks ``F0``, ``G`` of every LMI and the split linear rows."""
         F0, G = [], []
         for lmi in problem.lmis:
-            M = _full_vec_csc(lmi)
-            F0.append(M[:, 0].toarray().reshape(lmi.dim, lmi.dim, order="F"))
-            G.append(M[:, 1:])
+            f0, g = _full_vec_csc(lmi)
+            F0.append(f0.reshape(lmi.dim, lmi.dim, order="F"))
+            G.append(g)
         lin = problem.linear
         eq, ge = split_rows(lin)
         A = lin.A.tocsr()
+        A_eq = A if len(eq) == len(lin) else A[eq]
+        A_ge = A if len(ge) == len(lin) else A[ge]
         c, c0, sign = objective_vector(problem)
         return LMIData(
             F0=F0,
             G=G,
             eq=eq,
             ge=ge,
-            A_eq=A[eq].tocsc(),
-            A_ge=A[ge].tocsc(),
+            A_eq=A_eq.tocsc(),
+            A_ge=A_ge.tocsc(),
             c=c,
             c0=c0,
             sign=sign,

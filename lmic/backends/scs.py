@@ -18,6 +18,7 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import time
 from typing import Any, ClassVar
 
@@ -47,13 +48,17 @@ _STATUS_NAMES = {
 }
 
 
+@functools.lru_cache(maxsize=64)
 def scs_vec(d: int) -> tuple[np.ndarray, np.ndarray]:
     """SCS's PSD vectorisation as ``(perm, scale)`` (storage order, ``sqrt(2)`` off-diagonal).
 
     >>> scs_vec(2)[1]
     array([1.        , 1.41421356, 1.        ])
     """
-    return np.arange(tril_size(d)), svec_scale(d)
+    perm, scale = np.arange(tril_size(d)), svec_scale(d)
+    perm.setflags(write=False)
+    scale.setflags(write=False)
+    return perm, scale
 
 
 def scs_unvec(v: np.ndarray, d: int) -> np.ndarray:
