@@ -21,6 +21,7 @@ Examples
 --------
 >>> SolveOptions(tol=1e-9).tol
 1e-09
+>>> from lmic.backends.base import eliminate_unused
 >>> eliminate_unused.__module__
 'lmic.reductions.eliminate'
 """
