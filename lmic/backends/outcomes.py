@@ -7,7 +7,7 @@ follow are stated here once:
 * an inexact claim (Clarabel's ``Almost*``, SCS's and CVXPY's ``*_inaccurate``, SDPA's
   ``pdFEAS``/``pFEAS``/``dFEAS``, CVXOPT's ``unknown`` with an iterate) is ``inaccurate``;
 * a status the table does not list is ``error``, never success
-  (:meth:`lmic.backends.base.Backend.map_status`).
+  (:meth:`lmic.backends.backend.Backend.map_status`).
 
 An *inexact infeasibility* claim (``AlmostPrimalInfeasible``, ``infeasible_inaccurate``) is
 ``inaccurate`` without a point, but its ray is kept (``info["inexact_farkas"]``, a backend's
