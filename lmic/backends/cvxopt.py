@@ -22,7 +22,7 @@ from typing import Any, ClassVar
 import numpy as np
 import scipy.sparse as sp
 
-from lmic.backends.backend import Backend
+from lmic.backends.backend import KKT_ORDER, Backend, in_turn
 from lmic.backends.lowering import LMIForm
 from lmic.backends.results import NativeResult
 from lmic.ir.problem import Problem
@@ -101,26 +101,18 @@ class CVXOPTBackend(Backend):
         if data.G:
             kwargs["Gs"] = [to_cvxopt_sparse(-G) for G in data.G]
             kwargs["hs"] = [cvxopt.matrix(F0) for F0 in data.F0]
-        # conelp's default KKT solver for SDP cones is 'qr'; 'chol' (CVXPY's choice) is 2.5x faster
-        # on qib.thm1 (n = 20: 0.53 s against 1.33 s) and needs rank [G; A] = n, which the
-        # elimination of dependent entries of x (Backend.full_rank) provides, but it is less
-        # robust: it stops 'unknown' on SDPLIB control1-3 and qap5, where 'qr' solves. So 'chol'
-        # first, 'qr' when 'chol' fails (unless extra={"kktsolver": ...} chooses one).
+        # conelp's default KKT solver for SDP cones is 'qr'; 'chol' is 2.5x faster but stops
+        # 'unknown' where 'qr' solves (KKT_ORDER): 'chol' first, 'qr' when 'chol' fails (unless
+        # extra={"kktsolver": ...} chooses one)
         opts = dict(settings)
         chosen = opts.pop("kktsolver", None)
-        kkt_order = [chosen] if chosen else ["chol", "qr"]
         c = cvxopt.matrix(data.c)
         t0 = time.perf_counter()
-        for k, kktsolver in enumerate(kkt_order):
-            last = k == len(kkt_order) - 1
-            try:
-                result = solvers.sdp(c, kktsolver=kktsolver, options=dict(opts), **kwargs)
-            except (ValueError, ArithmeticError):
-                if last:
-                    raise
-                continue
-            if str(result["status"]) != "unknown" or last:
-                break
+        result, _ = in_turn(
+            [chosen] if chosen else KKT_ORDER,
+            lambda kkt: solvers.sdp(c, kktsolver=kkt, options=dict(opts), **kwargs),
+            lambda r: str(r["status"]) == "unknown",
+        )
         solve_s = time.perf_counter() - t0
         native = str(result["status"])
         duals = None

@@ -21,7 +21,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from lmic.backends.backend import Backend
+from lmic.backends.backend import KKT_ORDER, Backend, in_turn
 from lmic.backends.lowering import LMIForm
 from lmic.backends.quiet import quiet_native
 from lmic.backends.results import NativeResult
@@ -168,20 +168,20 @@ class CVXPYBackend(Backend):
         # factory), which solves SDPLIB control1 and the bounded-real lemma where 'chol' fails
         attempts: list[Any] = [None]
         if self.solver == "CVXOPT" and "kktsolver" not in kwargs:
-            attempts = ["chol", _cvxopt_qr]
-        t0 = time.perf_counter()
-        for kkt in attempts:
-            if kkt is not None:
-                kwargs["kktsolver"] = kkt
+            attempts = [KKT_ORDER[0], _cvxopt_qr]
+
+        def run(kkt: Any) -> tuple[str, str]:
+            extra = {} if kkt is None else {"kktsolver": kkt}
             try:
                 with quiet_native(not verbose), warnings.catch_warnings():
                     warnings.simplefilter("ignore", UserWarning)  # "may be inaccurate": a status
-                    prob.solve(solver=self.solver, verbose=verbose, **kwargs)
-                native, message = str(prob.status), ""
+                    prob.solve(solver=self.solver, verbose=verbose, **kwargs, **extra)
+                return str(prob.status), ""
             except cp.error.SolverError as err:
-                native, message = "solver_error", " ".join(str(err).split())
-            if native != "solver_error":
-                break
+                return "solver_error", " ".join(str(err).split())
+
+        t0 = time.perf_counter()
+        (native, message), _ = in_turn(attempts, run, lambda r: r[0] == "solver_error", errors=())
         wall = time.perf_counter() - t0
         stats = prob.solver_stats
         duals = None

@@ -32,7 +32,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from lmic.backends.backend import Backend
+from lmic.backends.backend import KKT_ORDER, Backend, in_turn
 from lmic.backends.cvxopt import to_cvxopt_sparse
 from lmic.backends.lowering import LMIForm
 from lmic.backends.results import NativeResult
@@ -123,18 +123,12 @@ class PICOSBackend(Backend):
             P.set_objective("min", picos.Constant("c", cvxopt.matrix(data.c), (1, problem.n)) * x)
         opts = dict(settings)
         chosen = opts.pop("cvxopt_kktsolver", None)
-        kkt_order = [chosen] if chosen else ["chol", "qr"]
         t0 = time.perf_counter()
-        for k, kktsolver in enumerate(kkt_order):
-            last = k == len(kkt_order) - 1
-            try:
-                solution = P.solve(cvxopt_kktsolver=kktsolver, **opts)
-            except (ValueError, ArithmeticError):
-                if last:
-                    raise
-                continue
-            if solution.problemStatus != "unknown" or last:
-                break
+        solution, kktsolver = in_turn(
+            [chosen] if chosen else KKT_ORDER,
+            lambda kkt: P.solve(cvxopt_kktsolver=kkt, **opts),
+            lambda s: s.problemStatus == "unknown",
+        )
         wall = time.perf_counter() - t0
         native = f"{solution.problemStatus}/{solution.primalStatus}"
         found = solution.duals or {}
