@@ -81,6 +81,7 @@ def run_in_child(
             return sol
         return None
     except EOFError:
+        proc.join(1.0)  # reap it, so that its exit code is known
         return Solution(status="error", backend=label, message=f"solver process died (exit code {proc.exitcode})")
     finally:
         if proc.is_alive():
