@@ -202,18 +202,28 @@ def _assemble(parts: list[_Part], n_rows: int, n_cols: int, sign: float = 1.0, o
     they already are (parts in increasing disjoint row ranges, each sorted); ``"any"`` leaves
     them unsorted (marked so) where it does not matter.
     """
-    counts = np.array([np.diff(ip) for ip, _, _ in parts], dtype=np.int64).reshape(len(parts), n_cols)
-    indptr = np.concatenate([[0], np.cumsum(counts.sum(axis=0))]).astype(np.int64)
-    indices = np.empty(int(indptr[-1]), dtype=np.int64)
-    data = np.empty(int(indptr[-1]))
-    before = np.cumsum(counts, axis=0) - counts  # entries of earlier parts in each column
-    for k, (ip, rows, vals) in enumerate(parts):
-        if not len(rows):
-            continue
-        start = indptr[:-1] + before[k] - ip[:-1]  # destination minus source position, per column
-        dest = np.repeat(start, counts[k]) + np.arange(len(rows))
-        indices[dest] = rows
-        data[dest] = sign * vals
+    nnz = sum(len(rows) for _, rows, _ in parts)
+    # scipy's own index type (int32 where it fits): no conversion copy in the constructor
+    idx = np.int32 if max(n_rows, nnz) < np.iinfo(np.int32).max else np.int64
+    filled = [part for part in parts if len(part[1])]
+    if len(filled) == 1:  # one block holds every entry: it is the matrix
+        ip, rows, vals = filled[0]
+        indptr, indices, data = ip.astype(idx), rows.astype(idx), sign * vals
+    else:
+        counts = np.array([np.diff(ip) for ip, _, _ in parts], dtype=idx).reshape(len(parts), n_cols)
+        indptr = np.concatenate([[0], np.cumsum(counts.sum(axis=0))]).astype(idx)
+        indices = np.empty(nnz, dtype=idx)
+        data = np.empty(nnz)
+        before = np.cumsum(counts, axis=0, dtype=idx) - counts  # entries of earlier parts in each column
+        for k, (ip, rows, vals) in enumerate(parts):
+            if not len(rows):
+                continue
+            start = indptr[:-1] + before[k] - ip[:-1].astype(idx)  # destination minus source, per column
+            dest = np.repeat(start, counts[k]) + np.arange(len(rows), dtype=idx)
+            indices[dest] = rows
+            data[dest] = sign * vals
+    if not filled:
+        indptr, indices, data = np.zeros(n_cols + 1, dtype=idx), np.zeros(0, dtype=idx), np.zeros(0)
     A = sp.csc_matrix((data, indices, indptr), shape=(n_rows, n_cols))
     A.has_sorted_indices = order == "sorted"
     if order == "sort":
@@ -259,7 +269,8 @@ def conic_data(problem: Problem, psd_vec: PsdVec) -> ConicData:
     for lmi in problem.lmis:
         native, scale = _native_rows(psd_vec, lmi.dim)
         ordered_rows &= _increasing(native)
-        r, v, part = _split_const(lmi.coeffs, native + offset, scale)
+        big = offset + len(native) >= np.iinfo(np.int32).max
+        r, v, part = _split_const(lmi.coeffs, (native.astype(np.int64) if big else native) + offset, scale)
         b_rows.append(r)
         b_vals.append(v)
         parts.append(part)
@@ -290,7 +301,7 @@ def _increasing(a: np.ndarray) -> bool:
 def _native_rows(psd_vec: PsdVec, d: int) -> tuple[np.ndarray, np.ndarray]:
     """Native row of each storage row (``perm``'s inverse) and its scale, for one ``d x d`` block."""
     perm, scale = psd_vec(d)
-    native = np.empty(len(perm), dtype=np.int64)
+    native = np.empty(len(perm), dtype=np.int32 if len(perm) < np.iinfo(np.int32).max else np.int64)
     native[perm] = np.arange(len(perm))
     return native, np.asarray(scale)[native]
 
