@@ -204,17 +204,17 @@ def _assemble(parts: list[_Part], n_rows: int, n_cols: int, sign: float = 1.0, o
     """
     nnz = sum(len(rows) for _, rows, _ in parts)
     # scipy's own index type (int32 where it fits): no conversion copy in the constructor
-    idx = np.int32 if max(n_rows, nnz) < np.iinfo(np.int32).max else np.int64
+    idx: type[np.signedinteger[Any]] = np.int32 if max(n_rows, nnz) < np.iinfo(np.int32).max else np.int64
     filled = [part for part in parts if len(part[1])]
     if len(filled) == 1:  # one block holds every entry: it is the matrix
         ip, rows, vals = filled[0]
         indptr, indices, data = ip.astype(idx), rows.astype(idx), sign * vals
     else:
-        counts = np.array([np.diff(ip) for ip, _, _ in parts], dtype=idx).reshape(len(parts), n_cols)
+        counts: np.ndarray = np.array([np.diff(ip) for ip, _, _ in parts], dtype=idx).reshape(len(parts), n_cols)
         indptr = np.concatenate([[0], np.cumsum(counts.sum(axis=0))]).astype(idx)
         indices = np.empty(nnz, dtype=idx)
         data = np.empty(nnz)
-        before = np.cumsum(counts, axis=0, dtype=idx) - counts  # entries of earlier parts in each column
+        before: np.ndarray = np.cumsum(counts, axis=0, dtype=idx) - counts  # entries of earlier parts in each column
         for k, (ip, rows, vals) in enumerate(parts):
             if not len(rows):
                 continue
