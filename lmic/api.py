@@ -34,6 +34,7 @@ from lmic._version import __version__
 from lmic.backends.base import Backend, SolveOptions
 from lmic.errors import BackendError, LmicError
 from lmic.ir.problem import Problem
+from lmic.reductions.pipeline import solve as solve_with_reductions
 from lmic.solution import Solution
 
 if TYPE_CHECKING:
@@ -256,7 +257,7 @@ def solve_problem(problem: Problem, backend: str | Backend, options: SolveOption
     ok, why = be.supports(problem, explain=True)  # type: ignore[misc]
     if not ok:
         raise BackendError(f"backend '{be.label}' cannot take this problem: {why}")
-    return be.solve(problem, options)
+    return solve_with_reductions(be, problem, options)
 
 
 def certify_solution(problem: Problem, solution: Solution, exact: bool = False) -> Any:

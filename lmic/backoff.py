@@ -42,6 +42,7 @@ import scipy.sparse as sp
 from lmic.errors import LmicError
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 from lmic.ir.svec import tril_rows_cols
+from lmic.reductions.pipeline import solve as solve_with_reductions
 
 __all__ = [
     "DEFAULT_BACKOFF",
@@ -170,7 +171,7 @@ def backoff(
     bp = backoff_problem(problem, value, rel, all_margins, margin)
     be = backend if not isinstance(backend, str) else get_backend(backend)
     try:
-        sol = be.solve(bp, options)
+        sol = solve_with_reductions(be, bp, options)
     except LmicError as exc:
         out.update(status="error", verdict="undecided", reason=f"backoff solve failed: {exc}")
         out["time_s"] = time.perf_counter() - t0
@@ -276,7 +277,7 @@ def restore(
     t0 = time.perf_counter()
     be = backend if not isinstance(backend, str) else get_backend(backend)
     try:
-        sol = be.solve(restore_problem(problem, x, rel), options)
+        sol = solve_with_reductions(be, restore_problem(problem, x, rel), options)
     except LmicError as exc:
         return {"x": None, "status": "error", "reason": str(exc), "time_s": time.perf_counter() - t0}
     xr = None if sol.x is None else np.asarray(sol.x, dtype=float)

@@ -27,9 +27,10 @@ class SolveOptions:
         Relative accuracy (gap and feasibility) asked of the solver.
     max_iter : int or None
     time_limit : float or None
-        Seconds for the whole :meth:`Backend.solve` call (every strict-reduction attempt
-        included). Solvers with a native limit (Clarabel, SCS, CVXPY with either) are given the
-        time left; the others solve in a forked child process that is stopped at the limit.
+        Seconds for the whole solve of one backend (:func:`lmic.reductions.pipeline.solve`,
+        every strict-reduction attempt included). Solvers with a native limit (Clarabel, SCS,
+        CVXPY with either) are given the time left; the others solve in a forked child process
+        that is stopped at the limit.
         A stopped solve is status ``error`` with ``info["time_limit"] = True`` and a message
         ``time limit of ... s exceeded`` (:mod:`lmic.backends.outcomes`): report it as
         ``undecided (time limit)``.

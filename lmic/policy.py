@@ -149,9 +149,10 @@ def step_options(backend: Any, options: Any) -> Any:
 
 
 def _solve_one(be: Any, target: Problem, options: Any, scales: list[np.ndarray] | None, judge: Problem) -> Solution:
+    from lmic.reductions.pipeline import solve
     from lmic.reductions.precondition import unscale_duals
 
-    sol = be.solve(target, options)
+    sol = solve(be, target, options)
     if scales is not None:
         unscale_duals(sol, scales)
     if sol.x is not None and judge.objective.sense != "feasibility" and len(sol.x) == judge.n:

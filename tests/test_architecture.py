@@ -74,18 +74,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
 # the test fails when an entry goes stale, so delete it in the change that fixes it.
 KNOWN_CYCLES: dict[frozenset[str], str] = {}
 
-KNOWN_UPWARD: dict[tuple[str, str], str] = {
-    # backends -> engine: Backend.solve still runs the strict reduction and the elimination of
-    # unused entries itself; issue #10 item 2 (the policy composes reductions and backends, a
-    # backend only lowers, calls and maps)
-    ("lmic.backends.base", "lmic.reductions.eliminate"): "issue #10",
-    ("lmic.backends.base", "lmic.reductions.strict"): "issue #10",
-    ("lmic.backends.auto", "lmic.reductions.strict"): "issue #10",
-    ("lmic.backends.strict", "lmic.reductions.strict"): "issue #10 (deprecated alias module)",
-    # backends -> certify: an inexact infeasibility claim is kept only when its ray verifies;
-    # issue #10 (the policy, not the status map, should ask the certifier)
-    ("lmic.backends.outcomes", "lmic.certify.farkas"): "issue #10",
-}
+KNOWN_UPWARD: dict[tuple[str, str], str] = {}
 
 KNOWN_OVERSIZE: dict[str, str] = {
     # issue #10: split by job (result types, bisection, grids)

@@ -4,7 +4,7 @@ The rule (measured numbers in ``docs/backends.md``):
 
 * Strict feasibility problems that are not small: **SCS first** at tolerance
   :data:`FIRST_ORDER_TOL`, certified, then **CVXOPT** only if the certificate fails. SCS takes
-  the fixed-margin route of :mod:`lmic.backends.strict` (a point with relative margin
+  the fixed-margin route of :mod:`lmic.reductions.strict` (a point with relative margin
   ``10 tol = 1e-2`` under the trace normalisation, verified, max-margin only if it is not): on
   ``qib.thm1`` at n = 40 it is certified in ~0.3 s, 25 iterations, where hand-written CVXPY +
   Clarabel takes ~22 s (``benchmarks/backends.py``, docs/backends.md); CVXOPT is the faster
@@ -30,8 +30,8 @@ from __future__ import annotations
 from typing import ClassVar
 
 from lmic.backends.base import Backend, SolveOptions
+from lmic.backends.lowering import has_strict
 from lmic.ir.problem import Problem
-from lmic.reductions.strict import has_strict
 from lmic.solution import Solution
 
 __all__ = ["AutoBackend", "route", "choose", "step_options", "SMALL", "SMALL_N", "FIRST_ORDER_TOL"]

@@ -16,18 +16,20 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import os
 import time
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 import scipy.sparse as sp
 
-from lmic.backends.base import Backend, SolveOptions, conic_data
-from lmic.backends.outcomes import mark_time_limit, settle_inexact_infeasible
+from lmic.backends.backend import Backend
+from lmic.backends.lowering import SForm, psd_unvec
+from lmic.backends.results import NativeResult
 from lmic.ir.problem import Problem
-from lmic.ir.svec import svec_scale, tril_to_triu_colmajor_perm, tril_unvec
-from lmic.solution import Solution
+from lmic.ir.svec import svec_scale, tril_to_triu_colmajor_perm
+from lmic.options import SolveOptions
 
 __all__ = [
     "ClarabelBackend",
@@ -87,6 +89,7 @@ def _physical_memory() -> int:
         return 8 << 30
 
 
+@functools.lru_cache(maxsize=64)
 def clarabel_vec(d: int) -> tuple[np.ndarray, np.ndarray]:
     """Clarabel's PSD vectorisation as ``(perm, scale)``: ``native = scale * storage[perm]``.
 
@@ -94,7 +97,13 @@ def clarabel_vec(d: int) -> tuple[np.ndarray, np.ndarray]:
     array([0, 1, 2])
     """
     perm = tril_to_triu_colmajor_perm(d)
-    return perm, svec_scale(d)[perm]
+    return _frozen(perm), _frozen(svec_scale(d)[perm])
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    """``a`` made read-only (it is cached and shared)."""
+    a.setflags(write=False)
+    return a
 
 
 def clarabel_unvec(v: np.ndarray, d: int) -> np.ndarray:
@@ -104,17 +113,39 @@ def clarabel_unvec(v: np.ndarray, d: int) -> np.ndarray:
     array([[1., 2.],
            [2., 3.]])
     """
-    perm, scale = clarabel_vec(d)
-    storage = np.empty(len(perm))
-    storage[perm] = np.asarray(v, dtype=float) / scale
-    return tril_unvec(storage, d)
+    return psd_unvec(clarabel_vec, v, d)
+
+
+#: Clarabel's s-form lowering (apply: ConicData; invert: IR multipliers)
+FORM = SForm(clarabel_vec)
 
 
 class ClarabelBackend(Backend):
     """Clarabel interior-point solver through its native API."""
 
     name: ClassVar[str] = "clarabel"
+    title: ClassVar[str] = "Clarabel"
     requires: ClassVar[dict[str, str]] = {"clarabel": "clarabel"}
+    native_time_limit: ClassVar[bool] = True
+    description: ClassVar[str] = "Clarabel interior point, native API (default)"
+    STATUS_MAP: ClassVar[dict[str, str]] = {
+        "Solved": "optimal",
+        "AlmostSolved": "inaccurate",
+        "PrimalInfeasible": "infeasible",
+        # an inexact infeasibility claim: kept only if its ray verifies (INEXACT_INFEASIBLE)
+        "AlmostPrimalInfeasible": "inaccurate",
+        "DualInfeasible": "unbounded",
+        "AlmostDualInfeasible": "inaccurate",
+        "MaxIterations": "inaccurate",
+        "MaxTime": "error",
+        "NumericalError": "error",
+        "InsufficientProgress": "inaccurate",
+        "CallbackTerminated": "error",
+        "Unsolved": "error",
+    }
+    INEXACT_INFEASIBLE: ClassVar[frozenset[str]] = frozenset({"AlmostPrimalInfeasible"})
+    INEXACT_UNBOUNDED: ClassVar[frozenset[str]] = frozenset({"AlmostDualInfeasible"})
+    TIME_LIMIT: ClassVar[frozenset[str]] = frozenset({"MaxTime"})
 
     def supports(self, problem: Problem, explain: bool = False) -> bool | tuple[bool, str]:
         """Refuses problems whose dense PSD scaling blocks would not fit in memory."""
@@ -129,101 +160,66 @@ class ClarabelBackend(Backend):
             return (False, why) if explain else False
         return super().supports(problem, explain)
 
-    native_time_limit: ClassVar[bool] = True
-    description: ClassVar[str] = "Clarabel interior point, native API (default)"
-    STATUS_MAP: ClassVar[dict[str, str]] = {
-        "Solved": "optimal",
-        "AlmostSolved": "inaccurate",
-        "PrimalInfeasible": "infeasible",
-        # an inexact infeasibility claim: kept only if its ray verifies (settle_inexact_infeasible)
-        "AlmostPrimalInfeasible": "inaccurate",
-        "DualInfeasible": "unbounded",
-        "AlmostDualInfeasible": "inaccurate",
-        "MaxIterations": "inaccurate",
-        "MaxTime": "error",
-        "NumericalError": "error",
-        "InsufficientProgress": "inaccurate",
-        "CallbackTerminated": "error",
-        "Unsolved": "error",
-    }
-
-    def _settings(self, options: SolveOptions):
+    def settings(self, options: SolveOptions) -> dict[str, Any]:
+        """Clarabel's ``DefaultSettings`` fields from the options (``extra`` verbatim, last)."""
         import clarabel
 
-        s = clarabel.DefaultSettings()
-        s.verbose = bool(options.verbose)
-        # Clarabel 0.11's chordal decomposition reports "Solved" at a suboptimal point on
-        # SDPLIB control1 (18.0568 instead of 17.7846; its dual has eigenvalue -3e-3): off by
-        # default, re-enable with extra={"chordal_decomposition_enable": True}
-        s.chordal_decomposition_enable = False
-        s.tol_gap_abs = s.tol_gap_rel = s.tol_feas = options.tol
-        s.tol_infeas_abs = s.tol_infeas_rel = options.tol
-        s.tol_ktratio = min(s.tol_ktratio, max(options.tol, 1e-12) * 1e2)
+        tol = options.tol
+        s: dict[str, Any] = {
+            "verbose": bool(options.verbose),
+            # Clarabel 0.11's chordal decomposition reports "Solved" at a suboptimal point on
+            # SDPLIB control1 (18.0568 instead of 17.7846; its dual has eigenvalue -3e-3): off by
+            # default, re-enable with extra={"chordal_decomposition_enable": True}. Without an
+            # objective there is no optimum to get wrong, and the point is verified and certified:
+            # on for feasibility problems (call), 1.45x faster on qib.thm1 (n = 30, 6.0-6.9 s
+            # against 8.8-10.3 s; its zero blocks make cliques)
+            "chordal_decomposition_enable": None,
+            "tol_gap_abs": tol,
+            "tol_gap_rel": tol,
+            "tol_feas": tol,
+            "tol_infeas_abs": tol,
+            "tol_infeas_rel": tol,
+            "tol_ktratio": min(clarabel.DefaultSettings().tol_ktratio, max(tol, 1e-12) * 1e2),
+        }
         if options.max_iter is not None:
-            s.max_iter = int(options.max_iter)
+            s["max_iter"] = int(options.max_iter)
         if options.time_limit is not None:
-            s.time_limit = float(options.time_limit)
-        for key, value in options.extra.items():
-            setattr(s, key, value)
+            s["time_limit"] = float(options.time_limit)
+        s.update(options.extra)
         return s
 
-    def _solve(self, problem: Problem, options: SolveOptions) -> Solution:
+    def call(self, problem: Problem, settings: dict[str, Any]) -> NativeResult:
+        """Lower to ``A x + s = b``, run ``DefaultSolver``, invert ``z`` (the dual or the ray)."""
         import clarabel
 
-        data = conic_data(problem, clarabel_vec)
-        cones = []
+        data = FORM.apply(problem)
+        cones: list[Any] = []
         if data.n_eq:
             cones.append(clarabel.ZeroConeT(data.n_eq))
         if data.n_ge:
             cones.append(clarabel.NonnegativeConeT(data.n_ge))
         cones += [clarabel.PSDTriangleConeT(d) for d in data.psd]
-        n = problem.n
-        P = sp.csc_matrix((n, n))
-        settings = self._settings(options)
-        if problem.objective.sense == "feasibility" and "chordal_decomposition_enable" not in options.extra:
-            # without an objective there is no optimum to get wrong (the control1 failure), and the
-            # point is verified (strict fixed-margin) and certified: decomposition is 1.45x faster on
-            # qib.thm1 (n = 30, 6.0-6.9 s against 8.8-10.3 s; its zero blocks make cliques)
-            settings.chordal_decomposition_enable = True
+        s = clarabel.DefaultSettings()
+        settings = dict(settings)
+        if settings.get("chordal_decomposition_enable") is None:
+            settings["chordal_decomposition_enable"] = problem.objective.sense == "feasibility"
+        for key, value in settings.items():
+            setattr(s, key, value)
         t0 = time.perf_counter()
-        solver = clarabel.DefaultSolver(P, data.c, data.A, data.b, cones, settings)
-        result = solver.solve()
+        P = sp.csc_matrix((problem.n, problem.n))
+        result = clarabel.DefaultSolver(P, data.c, data.A, data.b, cones, s).solve()
         solve_s = time.perf_counter() - t0
         native = str(result.status).split(".")[-1]
-        status = self.map_status(native)
-        sol = Solution(
-            status=status,
-            backend=self.label,
-            native_status=native,
+        z = np.asarray(result.z, dtype=float)
+        duals = FORM.invert(data, z, len(problem.linear))
+        scale = -float(data.b @ z)
+        if native in ("PrimalInfeasible", "AlmostPrimalInfeasible") and scale > 0:
+            duals = {"lmis": [Z / scale for Z in duals["lmis"]], "linear": duals["linear"] / scale}
+        return NativeResult(
+            native,
+            x=np.asarray(result.x, dtype=float),
+            duals=duals,
             solve_s=solve_s,
             iterations=int(result.iterations),
             info={"solver_time_s": float(result.solve_time)},
         )
-        z = np.asarray(result.z, dtype=float)
-
-        def ray() -> dict:
-            farkas = self.split_duals(data, z, clarabel_unvec, len(problem.linear))
-            scale = -float(data.b @ z)
-            if scale > 0:
-                farkas["lmis"] = [Z / scale for Z in farkas["lmis"]]
-                farkas["linear"] = farkas["linear"] / scale
-            return farkas
-
-        if native == "AlmostPrimalInfeasible":
-            settle_inexact_infeasible(problem, sol, ray())
-        elif native == "AlmostDualInfeasible":
-            sol.info["inexact_ray"] = np.asarray(result.x, dtype=float)
-            sol.message = "Clarabel stopped with status AlmostDualInfeasible (inexact unboundedness claim)"
-        elif status in ("optimal", "inaccurate"):
-            sol.x = np.asarray(result.x, dtype=float)
-            sol.objective = data.sign * (float(data.c @ sol.x) + data.c0)
-            sol.duals = self.split_duals(data, z, clarabel_unvec, len(problem.linear))
-        elif status == "infeasible":
-            sol.farkas = ray()
-        elif status == "unbounded":
-            sol.info["ray"] = np.asarray(result.x, dtype=float)
-        if native == "MaxTime":
-            mark_time_limit(sol, options.time_limit, solve_s)
-        elif status in ("error", "inaccurate") and not sol.message:
-            sol.message = f"Clarabel stopped with status {native}"
-        return sol

@@ -3,7 +3,7 @@
 ``cvxopt.solvers.sdp`` minimises ``c'x`` subject to ``Gl x + sl = hl`` (``sl >= 0``),
 ``Gs[k] x + ss[k] = hs[k]`` (``ss[k]`` PSD) and ``A x = b``: exactly the IR's LMI form, with
 ``hs[k] = F0`` and the columns of ``Gs[k]`` equal to ``-vec(F_j)`` as dense column-major
-``d*d`` vectors (:func:`lmic.backends.base.full_vec_coo`, the one conversion place). Inequality
+``d*d`` vectors (:class:`lmic.backends.lowering.LMIForm`, the one conversion place). Inequality
 rows go to ``Gl``/``hl``, equalities to ``A x = b`` (``A = a``, ``b = -a0``; their multipliers
 change sign to reach the IR's convention). CVXOPT has no time limit of its own: with
 ``SolveOptions.time_limit`` the solve runs in a child process.
@@ -17,14 +17,16 @@ Examples
 from __future__ import annotations
 
 import time
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 import scipy.sparse as sp
 
-from lmic.backends.base import Backend, SolveOptions, full_vec_coo
+from lmic.backends.backend import KKT_ORDER, Backend, in_turn
+from lmic.backends.lowering import LMIForm
+from lmic.backends.results import NativeResult
 from lmic.ir.problem import Problem
-from lmic.solution import Solution
+from lmic.options import SolveOptions
 
 __all__ = ["CVXOPTBackend", "to_cvxopt_sparse"]
 
@@ -58,6 +60,7 @@ class CVXOPTBackend(Backend):
     """CVXOPT's primal-dual interior-point SDP solver (``solvers.sdp``), LMI form."""
 
     name: ClassVar[str] = "cvxopt"
+    title: ClassVar[str] = "CVXOPT"
     requires: ClassVar[dict[str, str]] = {"cvxopt": "cvxopt"}
     full_rank: ClassVar[bool] = True
     description: ClassVar[str] = "CVXOPT interior point, native solvers.sdp (LMI form)"
@@ -65,11 +68,13 @@ class CVXOPTBackend(Backend):
         "optimal": "optimal",
         "primal infeasible": "infeasible",
         "dual infeasible": "unbounded",
+        # the iteration limit or numerical trouble, with the last iterate: the certifier decides
         "unknown": "inaccurate",
     }
 
-    def _options(self, options: SolveOptions) -> dict:
-        opts = {
+    def settings(self, options: SolveOptions) -> dict[str, Any]:
+        """``solvers.sdp`` options from the uniform ones (``extra`` verbatim, last)."""
+        opts: dict[str, Any] = {
             "show_progress": bool(options.verbose),
             "abstol": options.tol,
             "reltol": options.tol,
@@ -80,97 +85,50 @@ class CVXOPTBackend(Backend):
         opts.update(options.extra)
         return opts
 
-    def _solve(self, problem: Problem, options: SolveOptions) -> Solution:
+    def call(self, problem: Problem, settings: dict[str, Any]) -> NativeResult:
+        """Lower to the LMI form, run ``solvers.sdp`` (``chol``, then ``qr``), invert its multipliers."""
         import cvxopt
         from cvxopt import solvers
 
-        n = problem.n
-        lin = problem.linear
-        kinds = np.asarray(lin.kinds, dtype=object)
-        eq = np.flatnonzero(kinds == "eq") if len(lin) else np.zeros(0, dtype=int)
-        ge = np.flatnonzero(kinds == "ge") if len(lin) else np.zeros(0, dtype=int)
-        sign = -1.0 if problem.objective.sense == "max" else 1.0
-        c = np.zeros(n) if problem.objective.sense == "feasibility" else sign * problem.objective.c[1:]
-        Gs, hs = [], []
-        for lmi in problem.lmis:
-            row, col, val = full_vec_coo(lmi)
-            const = col == 0
-            h = np.zeros(lmi.dim * lmi.dim)
-            h[row[const]] = val[const]
-            hs.append(cvxopt.matrix(h.reshape(lmi.dim, lmi.dim, order="F")))
-            var = ~const
-            Gs.append(
-                cvxopt.spmatrix(
-                    cvxopt.matrix(-val[var]),
-                    cvxopt.matrix(row[var].astype(np.int64)),
-                    cvxopt.matrix(col[var].astype(np.int64) - 1),
-                    (lmi.dim * lmi.dim, n),
-                )
-                if var.any()
-                else cvxopt.spmatrix([], [], [], (lmi.dim * lmi.dim, n))
-            )
-        kwargs: dict = {}
-        if len(ge):
-            Age = lin.A[ge]
-            kwargs["Gl"] = to_cvxopt_sparse(-Age[:, 1:])
-            kwargs["hl"] = cvxopt.matrix(Age[:, 0].toarray().ravel())
-        if len(eq):
-            Aeq = lin.A[eq]
-            kwargs["A"] = to_cvxopt_sparse(Aeq[:, 1:])
-            kwargs["b"] = cvxopt.matrix(-Aeq[:, 0].toarray().ravel())
-        if Gs:
-            kwargs["Gs"], kwargs["hs"] = Gs, hs
-        t0 = time.perf_counter()
-        opts = self._options(options)
-        # conelp's default KKT solver for SDP cones is 'qr'; 'chol' (CVXPY's choice) is 2.5x faster
-        # on qib.thm1 (n = 20: 0.53 s against 1.33 s) and needs rank [G; A] = n, which the
-        # elimination of dependent entries of x (Backend.full_rank) provides, but it is less
-        # robust: it stops 'unknown' on SDPLIB control1-3 and qap5, where 'qr' solves. So 'chol'
-        # first, 'qr' when 'chol' fails (unless extra={"kktsolver": ...} chooses one).
+        data = LMIForm.apply(problem)
+        kwargs: dict[str, Any] = {}
+        if len(data.ge):
+            kwargs["Gl"] = to_cvxopt_sparse(-data.A_ge[:, 1:])
+            kwargs["hl"] = cvxopt.matrix(data.A_ge[:, 0].toarray().ravel())
+        if len(data.eq):
+            kwargs["A"] = to_cvxopt_sparse(data.A_eq[:, 1:])
+            kwargs["b"] = cvxopt.matrix(-data.A_eq[:, 0].toarray().ravel())
+        if data.G:
+            kwargs["Gs"] = [to_cvxopt_sparse(-G) for G in data.G]
+            kwargs["hs"] = [cvxopt.matrix(F0) for F0 in data.F0]
+        # conelp's default KKT solver for SDP cones is 'qr'; 'chol' is 2.5x faster but stops
+        # 'unknown' where 'qr' solves (KKT_ORDER): 'chol' first, 'qr' when 'chol' fails (unless
+        # extra={"kktsolver": ...} chooses one)
+        opts = dict(settings)
         chosen = opts.pop("kktsolver", None)
-        kkt_order = [chosen] if chosen else ["chol", "qr"]
-        c_mat = cvxopt.matrix(np.asarray(c, dtype=float))
-        for k, kktsolver in enumerate(kkt_order):
-            last = k == len(kkt_order) - 1
-            try:
-                result = solvers.sdp(c_mat, kktsolver=kktsolver, options=dict(opts), **kwargs)
-            except (ValueError, ArithmeticError):
-                if last:
-                    raise
-                continue
-            if str(result["status"]) != "unknown" or last:
-                break
+        c = cvxopt.matrix(data.c)
+        t0 = time.perf_counter()
+        result, _ = in_turn(
+            [chosen] if chosen else KKT_ORDER,
+            lambda kkt: solvers.sdp(c, kktsolver=kkt, options=dict(opts), **kwargs),
+            lambda r: str(r["status"]) == "unknown",
+        )
         solve_s = time.perf_counter() - t0
         native = str(result["status"])
-        status = self.map_status(native)
-        sol = Solution(
-            status=status,
-            backend=self.label,
-            native_status=native,
+        duals = None
+        if result.get("zs") is not None or result.get("zl") is not None:
+            y_eq = None if result.get("y") is None else -np.array(result["y"]).ravel()
+            blocks = [_lower_sym(Z) for Z in (result.get("zs") or [])]
+            duals = LMIForm.invert(data, blocks, y_eq, result.get("zl"))
+        x = result.get("x")
+        message = ""
+        if native == "unknown" and x is not None:
+            message = "CVXOPT stopped with status 'unknown' (iteration limit or numerical trouble)"
+        return NativeResult(
+            native,
+            x=None if x is None else np.array(x).ravel(),
+            duals=duals,
             solve_s=solve_s,
             iterations=result.get("iterations"),
+            message=message,
         )
-
-        def duals() -> dict:
-            y = np.zeros(len(lin))
-            if len(ge) and result.get("zl") is not None:
-                y[ge] = np.array(result["zl"]).ravel()
-            if len(eq) and result.get("y") is not None:
-                y[eq] = -np.array(result["y"]).ravel()
-            return {"lmis": [_lower_sym(Z) for Z in (result.get("zs") or [])], "linear": y}
-
-        if status in ("optimal", "inaccurate") and result.get("x") is not None:
-            sol.x = np.array(result["x"]).ravel()
-            sol.objective = problem.objective.value(sol.x) if problem.objective.sense != "feasibility" else None
-            if result.get("zs") is not None or result.get("zl") is not None:
-                sol.duals = duals()
-            if status == "inaccurate":
-                sol.message = "CVXOPT stopped with status 'unknown' (iteration limit or numerical trouble)"
-        elif status == "infeasible":
-            sol.farkas = duals()
-        elif status == "unbounded" and result.get("x") is not None:
-            sol.info["ray"] = np.array(result["x"]).ravel()
-        elif status == "inaccurate":
-            sol.status = "error"
-            sol.message = "CVXOPT stopped with status 'unknown' and no point"
-        return sol

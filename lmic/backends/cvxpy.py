@@ -3,8 +3,8 @@
 The IR is rebuilt as one vector variable ``x`` and, per LMI, one affine matrix expression
 ``reshape(M_k x + m_0, (d, d))`` constrained ``>> 0`` (CVXPY's PSD constraint, which its
 conic interfaces vectorise straight into the solver's PSD cone: no variable copies). ``M`` is
-the full column-major vectorisation :func:`lmic.backends.base.full_vec_map` of the IR's
-coefficients. Linear rows are ``A x + a0 >= 0`` and ``== 0``. Default sub-solver: CLARABEL;
+the full column-major vectorisation of the IR's coefficients
+(:class:`lmic.backends.lowering.LMIForm`). Linear rows are ``A x + a0 >= 0`` and ``== 0``. Default sub-solver: CLARABEL;
 ``cvxpy:SCS``, ``cvxpy:CVXOPT``, ``cvxpy:SDPA`` select another.
 
 Examples
@@ -21,11 +21,13 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from lmic.backends.base import Backend, SolveOptions, full_vec_map, quiet_native
-from lmic.backends.outcomes import settle_inexact_infeasible
+from lmic.backends.backend import KKT_ORDER, Backend, in_turn
+from lmic.backends.lowering import LMIForm
+from lmic.backends.quiet import quiet_native
+from lmic.backends.results import NativeResult
 from lmic.errors import BackendUnavailable
 from lmic.ir.problem import Problem
-from lmic.solution import Solution
+from lmic.options import SolveOptions
 
 __all__ = ["CVXPYBackend", "SUBSOLVER_OPTIONS"]
 
@@ -91,7 +93,7 @@ class CVXPYBackend(Backend):
         "optimal": "optimal",
         "optimal_inaccurate": "inaccurate",
         "infeasible": "infeasible",
-        # an inexact infeasibility claim: kept only if its ray verifies (settle_inexact_infeasible)
+        # an inexact infeasibility claim: kept only if its ray verifies (INEXACT_INFEASIBLE)
         "infeasible_inaccurate": "inaccurate",
         "unbounded": "unbounded",
         "unbounded_inaccurate": "inaccurate",
@@ -100,6 +102,8 @@ class CVXPYBackend(Backend):
         "user_limit": "inaccurate",
         "solver_error": "error",
     }
+    INEXACT_INFEASIBLE: ClassVar[frozenset[str]] = frozenset({"infeasible_inaccurate"})
+    INEXACT_UNBOUNDED: ClassVar[frozenset[str]] = frozenset({"unbounded_inaccurate"})
 
     def __init__(self, variant: str | None = None) -> None:
         solver = (variant or "CLARABEL").upper()
@@ -110,6 +114,7 @@ class CVXPYBackend(Backend):
             )
         self.variant = solver
         self.solver = solver
+        self.title = f"CVXPY/{solver}"  # type: ignore[misc]
         self.native_time_limit = solver in _NATIVE_LIMIT  # type: ignore[misc]
         self.interior_point = solver != "SCS"  # type: ignore[misc]
         self.full_rank = solver in ("CVXOPT", "SDPA")  # type: ignore[misc]
@@ -130,99 +135,71 @@ class CVXPYBackend(Backend):
             return [pkg[self.solver]]
         return []
 
-    def _solve(self, problem: Problem, options: SolveOptions) -> Solution:
+    def settings(self, options: SolveOptions) -> dict[str, Any]:
+        """Keyword arguments of ``Problem.solve`` for the sub-solver (``extra`` verbatim, last)."""
+        kwargs = SUBSOLVER_OPTIONS[self.solver](options)
+        kwargs["verbose"] = bool(options.verbose)
+        kwargs.update(options.extra)
+        return kwargs
+
+    def call(self, problem: Problem, settings: dict[str, Any]) -> NativeResult:
+        """Build the CVXPY problem from the LMI form, solve it, read its multipliers."""
         import cvxpy as cp
 
         t_build = time.perf_counter()
-        n = problem.n
-        x = cp.Variable(n, name="x")
-        lmi_cons = []
-        for lmi in problem.lmis:
-            M = (full_vec_map(lmi.dim) @ lmi.coeffs).tocsc()
-            vec = M[:, 1:] @ x + M[:, 0].toarray().ravel()
-            lmi_cons.append(cp.reshape(vec, (lmi.dim, lmi.dim), order="F") >> 0)
-        lin = problem.linear
-        kinds = np.asarray(lin.kinds, dtype=object)
-        eq = np.flatnonzero(kinds == "eq") if len(lin) else np.zeros(0, dtype=int)
-        ge = np.flatnonzero(kinds == "ge") if len(lin) else np.zeros(0, dtype=int)
+        data = LMIForm.apply(problem)
+        x = cp.Variable(problem.n, name="x")
+        lmi_cons = [
+            cp.reshape(G @ x + F0.ravel(order="F"), (F0.shape[0], F0.shape[0]), order="F") >> 0
+            for F0, G in zip(data.F0, data.G, strict=True)
+        ]
         row_cons = []
-        if len(eq):
-            Aeq = lin.A[eq].tocsc()
-            row_cons.append(Aeq[:, 1:] @ x + Aeq[:, 0].toarray().ravel() == 0)
-        if len(ge):
-            Age = lin.A[ge].tocsc()
-            row_cons.append(Age[:, 1:] @ x + Age[:, 0].toarray().ravel() >= 0)
-        sign = -1.0 if problem.objective.sense == "max" else 1.0
-        if problem.objective.sense == "feasibility":
-            objective = cp.Minimize(0)
-        else:
-            objective = cp.Minimize(sign * problem.objective.c[1:] @ x)
+        if len(data.eq):
+            row_cons.append(data.A_eq[:, 1:] @ x + data.A_eq[:, 0].toarray().ravel() == 0)
+        if len(data.ge):
+            row_cons.append(data.A_ge[:, 1:] @ x + data.A_ge[:, 0].toarray().ravel() >= 0)
+        objective = cp.Minimize(data.c @ x) if problem.objective.sense != "feasibility" else cp.Minimize(0)
         prob = cp.Problem(objective, lmi_cons + row_cons)
-        kwargs = SUBSOLVER_OPTIONS[self.solver](options)
-        kwargs.update(options.extra)
+        kwargs = dict(settings)
+        verbose = bool(kwargs.pop("verbose", False))
         build_s = time.perf_counter() - t_build
         # CVXPY calls CVXOPT with the 'chol' KKT solver and turns CVXOPT's failures into
         # solver_error; like the cvxopt backend, 'qr' is tried next (given to CVXPY as a KKT
         # factory), which solves SDPLIB control1 and the bounded-real lemma where 'chol' fails
         attempts: list[Any] = [None]
         if self.solver == "CVXOPT" and "kktsolver" not in kwargs:
-            attempts = ["chol", _cvxopt_qr]
-        t0 = time.perf_counter()
-        for kkt in attempts:
-            if kkt is not None:
-                kwargs["kktsolver"] = kkt
+            attempts = [KKT_ORDER[0], _cvxopt_qr]
+
+        def run(kkt: Any) -> tuple[str, str]:
+            extra = {} if kkt is None else {"kktsolver": kkt}
             try:
-                with quiet_native(not options.verbose), warnings.catch_warnings():
+                with quiet_native(not verbose), warnings.catch_warnings():
                     warnings.simplefilter("ignore", UserWarning)  # "may be inaccurate": a status
-                    prob.solve(solver=self.solver, verbose=options.verbose, **kwargs)
-                native = str(prob.status)
-                message = ""
+                    prob.solve(solver=self.solver, verbose=verbose, **kwargs, **extra)
+                return str(prob.status), ""
             except cp.error.SolverError as err:
-                native, message = "solver_error", " ".join(str(err).split())
-            if native != "solver_error":
-                break
+                return "solver_error", " ".join(str(err).split())
+
+        t0 = time.perf_counter()
+        (native, message), _ = in_turn(attempts, run, lambda r: r[0] == "solver_error", errors=())
         wall = time.perf_counter() - t0
         stats = prob.solver_stats
-        solver_s = getattr(stats, "solve_time", None) if stats is not None else None
-        status = self.map_status(native)
-        sol = Solution(
-            status=status,
-            backend=self.label,
-            native_status=native,
-            message=message,
+        duals = None
+        if all(con.dual_value is not None for con in lmi_cons + row_cons):
+            values = iter(con.dual_value for con in row_cons)
+            y_eq = -np.asarray(next(values), dtype=float) if len(data.eq) else None
+            y_ge = next(values) if len(data.ge) else None
+            duals = LMIForm.invert(data, [con.dual_value for con in lmi_cons], y_eq, y_ge)
+        return NativeResult(
+            native,
+            x=None if x.value is None else np.asarray(x.value, dtype=float),
+            duals=duals,
             solve_s=wall,
             iterations=getattr(stats, "num_iters", None) if stats is not None else None,
             info={
                 "cvxpy_build_s": build_s,
-                "solver_time_s": solver_s,
+                "solver_time_s": getattr(stats, "solve_time", None) if stats is not None else None,
                 "cvxpy_compile_s": getattr(prob, "compilation_time", None),
             },
+            message=message,
         )
-
-        def multipliers() -> dict | None:
-            if any(con.dual_value is None for con in lmi_cons + row_cons):
-                return None
-            y = np.zeros(len(lin))
-            k = 0
-            if len(eq):
-                y[eq] = -np.asarray(row_cons[k].dual_value, dtype=float).ravel()
-                k += 1
-            if len(ge):
-                y[ge] = np.asarray(row_cons[k].dual_value, dtype=float).ravel()
-            mats = [np.asarray(con.dual_value, dtype=float) for con in lmi_cons]
-            return {"lmis": [0.5 * (Z + Z.T) for Z in mats], "linear": y}
-
-        if native == "infeasible_inaccurate":
-            settle_inexact_infeasible(problem, sol, multipliers())
-        elif native == "unbounded_inaccurate":
-            sol.message = f"CVXPY/{self.solver} returned status '{native}' (inexact unboundedness claim)"
-        elif status in ("optimal", "inaccurate") and x.value is not None:
-            sol.x = np.asarray(x.value, dtype=float)
-            if problem.objective.sense != "feasibility":
-                sol.objective = problem.objective.value(sol.x)
-            sol.duals = multipliers() or {}
-        elif status == "infeasible":
-            sol.farkas = multipliers()
-        if status in ("error", "inaccurate") and not sol.message:
-            sol.message = f"CVXPY/{self.solver} returned status '{native}'"
-        return sol

@@ -7,13 +7,15 @@ follow are stated here once:
 * an inexact claim (Clarabel's ``Almost*``, SCS's and CVXPY's ``*_inaccurate``, SDPA's
   ``pdFEAS``/``pFEAS``/``dFEAS``, CVXOPT's ``unknown`` with an iterate) is ``inaccurate``;
 * a status the table does not list is ``error``, never success
-  (:meth:`lmic.backends.base.Backend.map_status`).
+  (:meth:`lmic.backends.backend.Backend.map_status`).
 
 An *inexact infeasibility* claim (``AlmostPrimalInfeasible``, ``infeasible_inaccurate``) is
-``inaccurate``, but its ray is kept: :func:`settle_inexact_infeasible` promotes it to
-``infeasible`` only when the ray verifies as a Farkas certificate of the (closed) problem the
-solver was given (:func:`lmic.certify.farkas.verify_farkas`, the certifier's own check), so a
-decision is not thrown away and the solver's inexact word is never taken.
+``inaccurate`` without a point, but its ray is kept (``info["inexact_farkas"]``, a backend's
+``INEXACT_INFEASIBLE`` table, :mod:`lmic.backends.results`). The engine, not the status map,
+asks the certifier: :func:`lmic.reductions.pipeline.settle_inexact_infeasible` promotes the
+claim to ``infeasible`` only when the ray verifies as a Farkas certificate of the (closed)
+problem the solver was given, so a decision is not thrown away and the solver's inexact word is
+never taken. (``settle_inexact_infeasible`` is still importable from here: deprecated alias.)
 
 A stopped solve (time limit) is an ``error`` with ``info["time_limit"] = True``,
 ``native_status`` ``"time_limit"`` (or the solver's own word) and a message starting
@@ -29,12 +31,12 @@ Examples
 
 from __future__ import annotations
 
+import importlib
 from typing import Any
 
-from lmic.ir.problem import Problem
 from lmic.solution import Solution
 
-__all__ = ["time_limit_solution", "mark_time_limit", "is_time_limit", "settle_inexact_infeasible"]
+__all__ = ["time_limit_solution", "mark_time_limit", "is_time_limit"]
 
 
 def time_limit_solution(backend: str, limit: float, elapsed: float, native: str = "time_limit") -> Solution:
@@ -73,39 +75,8 @@ def is_time_limit(sol: Solution) -> bool:
     return bool(sol.info.get("time_limit"))
 
 
-def settle_inexact_infeasible(problem: Problem, sol: Solution, farkas: dict[str, Any] | None) -> Solution:
-    """Keep an inexact infeasibility claim ``inaccurate`` unless its ray verifies.
-
-    ``sol`` is the ``inaccurate`` solution of an inexact infeasibility status and ``farkas``
-    the solver's ray (``{"lmis": [...], "linear": y}``, normalised or not). When
-    :func:`lmic.certify.farkas.verify_farkas` verifies it for ``problem`` (the closed problem the
-    solver was given), the status becomes ``infeasible`` with the ray as ``sol.farkas`` (the
-    certifier checks it again); otherwise ``sol`` stays ``inaccurate`` with no point, the ray
-    in ``sol.info["inexact_farkas"]``.
-
-    >>> from lmic.testing.conformance import CASES
-    >>> import numpy as np
-    >>> p = CASES["infeasible"].build()
-    >>> s = settle_inexact_infeasible(p, Solution("inaccurate"), {"lmis": [np.zeros((1, 1))], "linear": np.zeros(0)})
-    >>> s.status
-    'inaccurate'
-    """
-    sol.x = None
-    sol.info["claim"] = "infeasible"
-    if farkas is None or farkas.get("lmis") is None:
-        sol.message = sol.message or f"{sol.native_status}: inexact infeasibility claim without a ray"
-        return sol
-    from lmic.certify.farkas import ray_report
-
-    report = ray_report(problem, farkas)
-    if report.get("verified"):
-        sol.status = "infeasible"
-        sol.farkas = farkas
-        sol.message = f"{sol.native_status}: inexact infeasibility claim whose Farkas ray verifies"
-    else:
-        sol.info["inexact_farkas"] = farkas
-        sol.message = (
-            f"{sol.native_status}: inexact infeasibility claim; its ray is not a verified Farkas "
-            f"certificate ({report.get('reason', 'not verified')})"
-        )
-    return sol
+def __getattr__(name: str) -> Any:
+    """``settle_inexact_infeasible`` moved to the engine (:mod:`lmic.reductions.pipeline`); deprecated here."""
+    if name == "settle_inexact_infeasible":
+        return getattr(importlib.import_module(".".join(("lmic", "reductions", "pipeline"))), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -2,7 +2,7 @@
 
 The IR becomes one PICOS real variable ``x`` and, per LMI, one affine matrix expression built
 directly from its coefficient matrix (``picos.AffineExpression(name, (d, d), {x: M, (): m0})``
-with ``M`` the full column-major vectorisation :func:`lmic.backends.base.full_vec_map`), so
+with ``M`` the full column-major vectorisation of :class:`lmic.backends.lowering.LMIForm`), so
 PICOS sees the LMI as written with no per-entry expression building. Linear rows are one
 affine vector each for ``>= 0`` and ``== 0``.
 
@@ -28,14 +28,16 @@ Examples
 from __future__ import annotations
 
 import time
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
-from lmic.backends.base import Backend, SolveOptions, full_vec_map
+from lmic.backends.backend import KKT_ORDER, Backend, in_turn
 from lmic.backends.cvxopt import to_cvxopt_sparse
+from lmic.backends.lowering import LMIForm
+from lmic.backends.results import NativeResult
 from lmic.ir.problem import Problem
-from lmic.solution import Solution
+from lmic.options import SolveOptions
 
 __all__ = ["PICOSBackend"]
 
@@ -44,6 +46,7 @@ class PICOSBackend(Backend):
     """PICOS modelling layer; the SDP solver is PICOS's choice unless ``extra={"solver": ...}``."""
 
     name: ClassVar[str] = "picos"
+    title: ClassVar[str] = "PICOS"
     requires: ClassVar[dict[str, str]] = {"picos": "picos", "cvxopt": "cvxopt"}
     full_rank: ClassVar[bool] = True
     description: ClassVar[str] = "PICOS modelling layer (solver chosen by PICOS, CVXOPT here)"
@@ -73,42 +76,9 @@ class PICOSBackend(Backend):
         "illposed/unknown": "error",
     }
 
-    def _solve(self, problem: Problem, options: SolveOptions) -> Solution:
-        import cvxopt
-        import picos
-        from picos.expressions import AffineExpression
-
-        n = problem.n
-        P = picos.Problem()
-        x = picos.RealVariable("x", n)
-        lmi_cons = []
-        for k, lmi in enumerate(problem.lmis):
-            M = (full_vec_map(lmi.dim) @ lmi.coeffs).tocsc()
-            expr = AffineExpression(
-                f"F{k}",
-                (lmi.dim, lmi.dim),
-                {x: to_cvxopt_sparse(M[:, 1:]), (): cvxopt.matrix(M[:, 0].toarray().ravel())},
-            )
-            lmi_cons.append(P.add_constraint(expr >> 0))
-        lin = problem.linear
-        kinds = np.asarray(lin.kinds, dtype=object)
-        eq = np.flatnonzero(kinds == "eq") if len(lin) else np.zeros(0, dtype=int)
-        ge = np.flatnonzero(kinds == "ge") if len(lin) else np.zeros(0, dtype=int)
-        row_cons = {}
-        for key, rows in (("eq", eq), ("ge", ge)):
-            if len(rows):
-                Ar = lin.A[rows].tocsc()
-                expr = AffineExpression(
-                    key,
-                    (len(rows), 1),
-                    {x: to_cvxopt_sparse(Ar[:, 1:]), (): cvxopt.matrix(Ar[:, 0].toarray().ravel())},
-                )
-                row_cons[key] = P.add_constraint(expr == 0 if key == "eq" else expr >= 0)
-        sign = -1.0 if problem.objective.sense == "max" else 1.0
-        if problem.objective.sense != "feasibility":
-            c = picos.Constant("c", cvxopt.matrix(sign * problem.objective.c[1:]), (1, n))
-            P.set_objective("min", c * x)
-        opts = {
+    def settings(self, options: SolveOptions) -> dict[str, Any]:
+        """PICOS solve options from the uniform ones (``extra`` verbatim, last)."""
+        opts: dict[str, Any] = {
             "verbosity": 1 if options.verbose else 0,
             "primals": None,
             "duals": None,
@@ -120,32 +90,66 @@ class PICOSBackend(Backend):
             "rel_dual_fsb_tol": options.tol,
             "abs_ipm_opt_tol": options.tol,
             "rel_ipm_opt_tol": options.tol,
+            # PICOS's default is no limit, which it passes to CVXOPT as maxiters = 1e6: on a problem
+            # whose iterates diverge CVXOPT then runs ~100 s into a ZeroDivisionError. CVXOPT's
+            # own default (100) is used unless the caller sets one.
+            "max_iterations": int(options.max_iter) if options.max_iter is not None else 100,
         }
-        # PICOS's default is no limit, which it passes to CVXOPT as maxiters = 1e6: on a problem
-        # whose iterates diverge CVXOPT then runs ~100 s into a ZeroDivisionError. CVXOPT's
-        # own default (100) is used unless the caller sets one.
-        opts["max_iterations"] = int(options.max_iter) if options.max_iter is not None else 100
         opts.update(options.extra)
+        return opts
+
+    def call(self, problem: Problem, settings: dict[str, Any]) -> NativeResult:
+        """Build the PICOS problem from the LMI form, solve it (``chol``, then ``qr``), read its multipliers."""
+        import cvxopt
+        import picos
+        from picos.expressions import AffineExpression
+
+        data = LMIForm.apply(problem)
+        P = picos.Problem()
+        x = picos.RealVariable("x", problem.n)
+        lmi_cons = []
+        for k, (F0, G) in enumerate(zip(data.F0, data.G, strict=True)):
+            d = F0.shape[0]
+            expr = AffineExpression(f"F{k}", (d, d), {x: to_cvxopt_sparse(G), (): cvxopt.matrix(F0.ravel(order="F"))})
+            lmi_cons.append(P.add_constraint(expr >> 0))
+        row_cons = {}
+        for key, A in (("eq", data.A_eq), ("ge", data.A_ge)):
+            if A.shape[0]:
+                expr = AffineExpression(
+                    key, (A.shape[0], 1), {x: to_cvxopt_sparse(A[:, 1:]), (): cvxopt.matrix(A[:, 0].toarray().ravel())}
+                )
+                row_cons[key] = P.add_constraint(expr == 0 if key == "eq" else expr >= 0)
+        if problem.objective.sense != "feasibility":
+            P.set_objective("min", picos.Constant("c", cvxopt.matrix(data.c), (1, problem.n)) * x)
+        opts = dict(settings)
         chosen = opts.pop("cvxopt_kktsolver", None)
-        kkt_order = [chosen] if chosen else ["chol", "qr"]
         t0 = time.perf_counter()
-        for k, kktsolver in enumerate(kkt_order):
-            last = k == len(kkt_order) - 1
-            try:
-                solution = P.solve(cvxopt_kktsolver=kktsolver, **opts)
-            except (ValueError, ArithmeticError):
-                if last:
-                    raise
-                continue
-            if solution.problemStatus != "unknown" or last:
-                break
+        solution, kktsolver = in_turn(
+            [chosen] if chosen else KKT_ORDER,
+            lambda kkt: P.solve(cvxopt_kktsolver=kkt, **opts),
+            lambda s: s.problemStatus == "unknown",
+        )
         wall = time.perf_counter() - t0
         native = f"{solution.problemStatus}/{solution.primalStatus}"
+        found = solution.duals or {}
+        duals = None
+        if all(found.get(con) is not None for con in lmi_cons + list(row_cons.values())):
+            y = {key: np.array(found[con]).ravel() for key, con in row_cons.items()}
+            duals = LMIForm.invert(data, [found[con] for con in lmi_cons], y.get("eq"), y.get("ge"))
+        value = solution.primals.get(x) if solution.primals else None
+        claimed = f"{native}' (claimed {solution.claimedStatus})"
         status = self.map_status(native)
-        sol = Solution(
-            status=status,
-            backend=self.label,
-            native_status=native,
+        message = ""
+        if status == "error":
+            message = f"PICOS returned '{claimed}"
+        elif status == "inaccurate" and value is not None:
+            message = f"PICOS returned '{claimed}; the point is checked"
+        elif status in ("optimal", "inaccurate"):
+            message = f"PICOS reported '{native}' without a primal point"
+        return NativeResult(
+            native,
+            x=None if value is None else np.array(value, dtype=float),
+            duals=duals,
             solve_s=wall,
             info={
                 "picos_solver": solution.solver,
@@ -153,33 +157,5 @@ class PICOSBackend(Backend):
                 "kktsolver": kktsolver,
                 "claimed": solution.claimedStatus,
             },
+            message=message,
         )
-
-        def multipliers() -> dict | None:
-            duals = solution.duals
-            if any(duals.get(con) is None for con in lmi_cons + list(row_cons.values())):
-                return None
-            y = np.zeros(len(lin))
-            if "eq" in row_cons:
-                y[eq] = np.array(duals[row_cons["eq"]]).ravel()
-            if "ge" in row_cons:
-                y[ge] = np.array(duals[row_cons["ge"]]).ravel()
-            mats = [np.array(duals[con], dtype=float) for con in lmi_cons]
-            return {"lmis": [0.5 * (Z + Z.T) for Z in mats], "linear": y}
-
-        value = solution.primals.get(x) if solution.primals else None
-        if status in ("optimal", "inaccurate") and value is not None:
-            sol.x = np.array(value, dtype=float).ravel()
-            if problem.objective.sense != "feasibility":
-                sol.objective = problem.objective.value(sol.x)
-            sol.duals = multipliers() or {}
-        elif status == "infeasible":
-            sol.farkas = multipliers()
-        elif status in ("optimal", "inaccurate"):
-            sol.status = "error"
-            sol.message = f"PICOS reported '{native}' without a primal point"
-        if sol.status == "inaccurate" and not sol.message:
-            sol.message = f"PICOS returned '{native}' (claimed {solution.claimedStatus}); the point is checked"
-        if status == "error":
-            sol.message = f"PICOS returned '{native}' (claimed {solution.claimedStatus})"
-        return sol

@@ -93,7 +93,7 @@ class BackendInfo:
 
 def _validate(name: str, obj: object, source: str) -> type[Backend]:
     if not (isinstance(obj, type) and issubclass(obj, Backend)):
-        raise TypeError(f"{source} is not a subclass of lmic.backends.base.Backend")
+        raise TypeError(f"{source} is not a subclass of lmic.backends.backend.Backend")
     if getattr(obj, "__abstractmethods__", None):
         missing = ", ".join(sorted(obj.__abstractmethods__))
         raise TypeError(f"{source} does not implement {missing}")

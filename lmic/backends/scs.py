@@ -8,7 +8,7 @@ which is the IR's storage order scaled by :func:`lmic.ir.svec.svec_scale`. The d
 
 SCS is fast on large LMIs but only accurate to its tolerance: a point on the boundary of a
 strict LMI is not certifiable, which is why strict feasibility goes through the normalised
-``max-margin`` reduction (:mod:`lmic.backends.strict`).
+``max-margin`` reduction (:mod:`lmic.reductions.strict`).
 
 Examples
 --------
@@ -18,16 +18,18 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import time
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
-from lmic.backends.base import Backend, SolveOptions, conic_data
-from lmic.backends.outcomes import mark_time_limit, settle_inexact_infeasible
+from lmic.backends.backend import Backend
+from lmic.backends.lowering import SForm, psd_unvec
+from lmic.backends.results import NativeResult
 from lmic.ir.problem import Problem
-from lmic.ir.svec import svec_scale, tril_size, tril_unvec
-from lmic.solution import Solution
+from lmic.ir.svec import svec_scale, tril_size
+from lmic.options import SolveOptions
 
 __all__ = ["SCSBackend", "scs_vec", "scs_unvec"]
 
@@ -46,13 +48,17 @@ _STATUS_NAMES = {
 }
 
 
+@functools.lru_cache(maxsize=64)
 def scs_vec(d: int) -> tuple[np.ndarray, np.ndarray]:
     """SCS's PSD vectorisation as ``(perm, scale)`` (storage order, ``sqrt(2)`` off-diagonal).
 
     >>> scs_vec(2)[1]
     array([1.        , 1.41421356, 1.        ])
     """
-    return np.arange(tril_size(d)), svec_scale(d)
+    perm, scale = np.arange(tril_size(d)), svec_scale(d)
+    perm.setflags(write=False)
+    scale.setflags(write=False)
+    return perm, scale
 
 
 def scs_unvec(v: np.ndarray, d: int) -> np.ndarray:
@@ -62,13 +68,18 @@ def scs_unvec(v: np.ndarray, d: int) -> np.ndarray:
     array([[1., 1.],
            [1., 1.]])
     """
-    return tril_unvec(np.asarray(v, dtype=float) / svec_scale(d), d)
+    return psd_unvec(scs_vec, v, d)
+
+
+#: SCS's s-form lowering (apply: ConicData; invert: IR multipliers)
+FORM = SForm(scs_vec)
 
 
 class SCSBackend(Backend):
     """SCS (splitting conic solver) through its native API."""
 
     name: ClassVar[str] = "scs"
+    title: ClassVar[str] = "SCS"
     requires: ClassVar[dict[str, str]] = {"scs": "scs"}
     native_time_limit: ClassVar[bool] = True
     interior_point: ClassVar[bool] = False
@@ -81,7 +92,7 @@ class SCSBackend(Backend):
         "solved": "optimal",
         "solved_inaccurate": "inaccurate",
         "infeasible": "infeasible",
-        # an inexact infeasibility claim: kept only if its ray verifies (settle_inexact_infeasible)
+        # an inexact infeasibility claim: kept only if its ray verifies (INEXACT_INFEASIBLE)
         "infeasible_inaccurate": "inaccurate",
         "unbounded": "unbounded",
         "unbounded_inaccurate": "inaccurate",
@@ -90,9 +101,14 @@ class SCSBackend(Backend):
         "sigint": "error",
         "unfinished": "error",
     }
+    INEXACT_INFEASIBLE: ClassVar[frozenset[str]] = frozenset({"infeasible_inaccurate"})
+    INEXACT_UNBOUNDED: ClassVar[frozenset[str]] = frozenset({"unbounded_inaccurate"})
+    #: SCS's own time limit: a status string mentioning ``time_limit`` (set by :meth:`call`)
+    TIME_LIMIT: ClassVar[frozenset[str]] = frozenset({"time_limit"})
 
-    def _settings(self, options: SolveOptions) -> dict:
-        s = {
+    def settings(self, options: SolveOptions) -> dict[str, Any]:
+        """Keyword arguments of ``scs.SCS`` from the options (``extra`` verbatim, last)."""
+        s: dict[str, Any] = {
             "verbose": bool(options.verbose),
             "eps_abs": options.tol,
             "eps_rel": options.tol,
@@ -105,50 +121,32 @@ class SCSBackend(Backend):
         s.update(options.extra)
         return s
 
-    def _solve(self, problem: Problem, options: SolveOptions) -> Solution:
+    def call(self, problem: Problem, settings: dict[str, Any]) -> NativeResult:
+        """Lower to ``A x + s = b``, run ``scs.SCS``, invert ``y`` (the dual or the ray)."""
         import scs
 
-        data = conic_data(problem, scs_vec)
-        cone: dict = {}
+        data = FORM.apply(problem)
+        cone: dict[str, Any] = {}
         if data.n_eq:
             cone["z"] = data.n_eq
         if data.n_ge:
             cone["l"] = data.n_ge
         if data.psd:
             cone["s"] = list(data.psd)
-        settings = self._settings(options)
         t0 = time.perf_counter()
-        solver = scs.SCS({"A": data.A, "b": data.b, "c": data.c}, cone, **settings)
-        result = solver.solve()
+        result = scs.SCS({"A": data.A, "b": data.b, "c": data.c}, cone, **settings).solve()
         solve_s = time.perf_counter() - t0
         info = result["info"]
-        native = _STATUS_NAMES.get(int(info["status_val"]), str(info.get("status", "")))
-        status = self.map_status(native)
-        raw_status = str(info.get("status", native))
-        sol = Solution(
-            status=status,
-            backend=self.label,
-            native_status=raw_status,
+        shown = str(info.get("status", ""))
+        native = _STATUS_NAMES.get(int(info["status_val"]), shown)
+        if "time_limit" in shown:
+            native = "time_limit"
+        return NativeResult(
+            native,
+            x=np.asarray(result["x"], dtype=float),
+            duals=FORM.invert(data, np.asarray(result["y"], dtype=float), len(problem.linear)),
             solve_s=solve_s,
             iterations=int(info.get("iter", 0)),
             info={"solver_time_s": float(info.get("solve_time", 0.0)) / 1e3},
+            shown=shown or native,
         )
-        y = np.asarray(result["y"], dtype=float)
-        if "time_limit" in raw_status:
-            mark_time_limit(sol, options.time_limit, solve_s)
-            sol.message += f" ({raw_status})"
-        elif native == "infeasible_inaccurate":
-            settle_inexact_infeasible(problem, sol, self.split_duals(data, y, scs_unvec, len(problem.linear)))
-        elif native == "unbounded_inaccurate":
-            sol.info["inexact_ray"] = np.asarray(result["x"], dtype=float)
-        elif sol.status in ("optimal", "inaccurate") and native.startswith("solved"):
-            sol.x = np.asarray(result["x"], dtype=float)
-            sol.objective = data.sign * (float(data.c @ sol.x) + data.c0)
-            sol.duals = self.split_duals(data, y, scs_unvec, len(problem.linear))
-        elif sol.status == "infeasible":
-            sol.farkas = self.split_duals(data, y, scs_unvec, len(problem.linear))
-        elif sol.status == "unbounded":
-            sol.info["ray"] = np.asarray(result["x"], dtype=float)
-        if sol.status in ("error", "inaccurate") and not sol.message:
-            sol.message = f"SCS stopped with status '{raw_status}'"
-        return sol

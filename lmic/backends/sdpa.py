@@ -8,7 +8,7 @@ With ``J = SymCone(f=n)`` (equalities) the *dual* is the IR's LMI form, so the d
 * ``b = -c_obj`` (``max -c'x``),
 * ``c = [a0_eq; a0_ge; vec F0_1; ...]`` and ``A' = -[a_eq; a_ge; vec F_k ...]`` with
   ``K = SymCone(f=#eq, l=#ge, s=(d_1, ...))``, PSD blocks as full column-major ``d*d`` vectors
-  (:func:`lmic.backends.base.full_vec_map`, the one conversion place);
+  (:class:`lmic.backends.lowering.LMIForm`, the one conversion place);
 * SDPA's primal ``xi`` are the IR's multipliers ``(y_eq, y_ge, vec Z_i)``.
 
 The phase value sdpa-python reports refers to the SeDuMi *primal* (the IR's dual):
@@ -28,14 +28,17 @@ from __future__ import annotations
 
 import time
 import warnings
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 import scipy.sparse as sp
 
-from lmic.backends.base import Backend, SolveOptions, full_vec_map, quiet_native
+from lmic.backends.backend import Backend
+from lmic.backends.lowering import LMIData, LMIForm
+from lmic.backends.quiet import quiet_native
+from lmic.backends.results import NativeResult
 from lmic.ir.problem import Problem
-from lmic.solution import Solution
+from lmic.options import SolveOptions
 
 __all__ = ["SDPABackend", "sdpa_data", "TOL_FLOOR"]
 
@@ -43,39 +46,29 @@ __all__ = ["SDPABackend", "sdpa_data", "TOL_FLOOR"]
 TOL_FLOOR = 1e-6
 
 
-def sdpa_data(problem: Problem) -> tuple[sp.csc_matrix, np.ndarray, np.ndarray, dict]:
-    """SeDuMi-form data ``(A, b, c, layout)`` whose dual is ``problem``'s LMI form.
+def sdpa_data(problem: Problem) -> tuple[sp.csc_matrix, np.ndarray, np.ndarray, LMIData]:
+    """SeDuMi-form data ``(A, b, c, lmi_data)`` whose dual is ``problem``'s LMI form.
 
     >>> import scipy.sparse as sp
     >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
     >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t>=1", 1, sp.csc_matrix([[-1., 1.]]),
     ...             strict=False)], LinearConstraints.empty(1), Objective("min", [0, 1]))
-    >>> A, b, c, layout = sdpa_data(p)
+    >>> A, b, c, _ = sdpa_data(p)
     >>> A.toarray(), b, c
     (array([[-1.]]), array([-1.]), array([-1.]))
     """
-    lin = problem.linear
-    kinds = np.asarray(lin.kinds, dtype=object)
-    eq = np.flatnonzero(kinds == "eq") if len(lin) else np.zeros(0, dtype=int)
-    ge = np.flatnonzero(kinds == "ge") if len(lin) else np.zeros(0, dtype=int)
-    blocks = [lin.A[eq], lin.A[ge]]
-    blocks += [full_vec_map(lmi.dim) @ lmi.coeffs for lmi in problem.lmis]
-    M = sp.vstack(blocks, format="csc")
-    c = M[:, 0].toarray().ravel()
-    A = (-M[:, 1:]).T.tocsc()
-    sign = -1.0 if problem.objective.sense == "max" else 1.0
-    if problem.objective.sense == "feasibility":
-        b = np.zeros(problem.n)
-    else:
-        b = -sign * problem.objective.c[1:]
-    layout = {"eq": eq, "ge": ge, "dims": [lmi.dim for lmi in problem.lmis]}
-    return A, np.asarray(b, dtype=float), c, layout
+    data = LMIForm.apply(problem)
+    M = sp.vstack([data.A_eq[:, 1:], data.A_ge[:, 1:], *data.G], format="csr")
+    parts = [data.A_eq[:, 0].toarray().ravel(), data.A_ge[:, 0].toarray().ravel()]
+    c = np.concatenate(parts + [F0.ravel(order="F") for F0 in data.F0])
+    return (-M).T.tocsc(), -data.c, c, data
 
 
 class SDPABackend(Backend):
     """SDPA (primal-dual interior point) through sdpa-python, LMI form."""
 
     name: ClassVar[str] = "sdpa"
+    title: ClassVar[str] = "SDPA"
     requires: ClassVar[dict[str, str]] = {"sdpap": "sdpa-python"}
     full_rank: ClassVar[bool] = True
     description: ClassVar[str] = "SDPA interior point via sdpa-python (LMI form)"
@@ -92,8 +85,9 @@ class SDPABackend(Backend):
         "noINFO": "error",
     }
 
-    def _options(self, options: SolveOptions) -> dict:
-        opts: dict = {
+    def settings(self, options: SolveOptions) -> dict[str, Any]:
+        """sdpa-python's option dictionary from the uniform options (``extra`` verbatim, last)."""
+        opts: dict[str, Any] = {
             "print": "display" if options.verbose else "no",
             "epsilonStar": max(float(options.tol), TOL_FLOOR),
             "epsilonDash": max(float(options.tol), 1e-7),
@@ -103,63 +97,29 @@ class SDPABackend(Backend):
         opts.update(options.extra)
         return opts
 
-    def _solve(self, problem: Problem, options: SolveOptions) -> Solution:
+    def call(self, problem: Problem, settings: dict[str, Any]) -> NativeResult:
+        """Lower to SeDuMi form (:func:`sdpa_data`), run ``sdpap.solve``, invert its primal ``xi``."""
         import sdpap
 
-        A, b, c, layout = sdpa_data(problem)
-        eq, ge, dims = layout["eq"], layout["ge"], layout["dims"]
-        K = sdpap.SymCone(f=len(eq), l=len(ge), s=tuple(dims))
+        A, b, c, data = sdpa_data(problem)
+        K = sdpap.SymCone(f=len(data.eq), l=len(data.ge), s=tuple(data.dims))
         J = sdpap.SymCone(f=problem.n)
         t0 = time.perf_counter()
-        with quiet_native(not options.verbose), warnings.catch_warnings():
+        with quiet_native(settings.get("print") == "no"), warnings.catch_warnings():
             # sdpa-python recomputes feasibility errors with scipy eigs and warns on tiny blocks
             warnings.simplefilter("ignore", RuntimeWarning)
-            xi, y, _pinfo, _tinfo, info = sdpap.solve(A, b, c, K, J, self._options(options))
+            xi, y, _pinfo, _tinfo, info = sdpap.solve(A, b, c, K, J, dict(settings))
         solve_s = time.perf_counter() - t0
         native = str(info.get("phasevalue", "noINFO"))
-        status = self.map_status(native)
-        sol = Solution(
-            status=status,
-            backend=self.label,
-            native_status=native,
-            solve_s=solve_s,
-            iterations=int(info.get("iteration", 0)),
-        )
         xi = np.asarray(xi.toarray() if sp.issparse(xi) else xi, dtype=float).ravel()
         x = np.asarray(y.toarray() if sp.issparse(y) else y, dtype=float).ravel()
-        mult = self._multipliers(xi, layout, len(problem.linear))
-        if status in ("optimal", "inaccurate"):
-            sol.x = x
-            if problem.objective.sense != "feasibility":
-                sol.objective = problem.objective.value(x)
-            sol.duals = mult
-            if status == "inaccurate":
-                sol.message = f"SDPA stopped with phase {native}"
-        elif status == "infeasible":
+        mult = LMIForm.invert_stacked(data, xi)
+        gap = float(c @ xi)
+        if self.map_status(native) == "infeasible" and gap < 0:
             # SDPA detects infeasibility by a diverging dual: scale it into a Farkas ray
-            gap = float(c @ xi)
-            if gap < 0:
-                mult = {
-                    "lmis": [Z / -gap for Z in mult["lmis"]],
-                    "linear": mult["linear"] / -gap,
-                }
-            sol.farkas = mult
-        elif status == "unbounded":
-            sol.info["ray"] = x
-        else:
-            sol.message = f"SDPA stopped with phase {native}"
-        return sol
-
-    @staticmethod
-    def _multipliers(xi: np.ndarray, layout: dict, n_rows: int) -> dict:
-        eq, ge = layout["eq"], layout["ge"]
-        y = np.zeros(n_rows)
-        y[eq] = xi[: len(eq)]
-        y[ge] = xi[len(eq) : len(eq) + len(ge)]
-        off = len(eq) + len(ge)
-        mats = []
-        for d in layout["dims"]:
-            Z = xi[off : off + d * d].reshape(d, d, order="F")
-            mats.append(0.5 * (Z + Z.T))
-            off += d * d
-        return {"lmis": mats, "linear": y}
+            mult = {"lmis": [Z / -gap for Z in mult["lmis"]], "linear": mult["linear"] / -gap}
+        failed = self.map_status(native) in ("inaccurate", "error")
+        message = f"SDPA stopped with phase {native}" if failed else ""
+        return NativeResult(
+            native, x=x, duals=mult, solve_s=solve_s, iterations=int(info.get("iteration", 0)), message=message
+        )

@@ -11,6 +11,8 @@ Like CVXPY's reduction chain (``cvxpy/reductions``), each pass is ``apply(proble
                                        scale-free problems)
 :mod:`lmic.reductions.precondition`    diagonal congruence ``D F D`` at a reference point
 :mod:`lmic.reductions.fix`             fix variables to given values (audits of published points)
+:mod:`lmic.reductions.pipeline`        the composition around one backend: eliminate, strict,
+                                       the check of inexact infeasibility rays (``solve``)
 =====================================  ==========================================================
 
 Backends only lower, call and map (:mod:`lmic.backends`); which passes run, and in which order

@@ -39,6 +39,7 @@ import scipy.sparse as sp
 from lmic.backends.base import Backend, SolveOptions
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 from lmic.ir.svec import tril_vec
+from lmic.reductions.pipeline import solve as solve_with_reductions
 from lmic.solution import Solution
 
 __all__ = [
@@ -443,7 +444,7 @@ def run_case(backend: Backend, case: Case, options: SolveOptions | None = None) 
     if not ok:
         return CaseResult(case.name, label, True, "", "", 0.0, skipped=why)
     t0 = time.perf_counter()
-    sol = backend.solve(problem, options)
+    sol = solve_with_reductions(backend, problem, options)
     seconds = time.perf_counter() - t0
     if sol.status != case.expect:
         msg = f"status '{sol.status}' (native '{sol.native_status}'), expected '{case.expect}'"

@@ -17,6 +17,7 @@ from lmic.api import solve
 from lmic.backends.base import SolveOptions, eliminate_unused, independent_columns
 from lmic.backends.registry import get_backend
 from lmic.compile import compile_theorem
+from lmic.reductions.pipeline import solve as solve_with_reductions
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 UIO32 = EXAMPLES / "uio_dt.thm3_2.flexible_joint.yaml"
@@ -140,7 +141,7 @@ def test_a_genuine_solver_crash_is_an_error_with_its_message(monkeypatch):
         raise ZeroDivisionError("float division by zero")
 
     monkeypatch.setattr(cvxopt.solvers, "sdp", crash)
-    sol = get_backend("cvxopt").solve(compile_theorem("thesis.thm3_2_2", THESIS, {"gamma": 0.5}))
+    sol = solve_with_reductions(get_backend("cvxopt"), compile_theorem("thesis.thm3_2_2", THESIS, {"gamma": 0.5}))
     assert sol.status == "error" and "ZeroDivisionError: float division by zero" in sol.message
 
 

@@ -13,9 +13,10 @@ import pytest
 
 from lmic.api import certify_solution, load_target
 from lmic.backends.base import SolveOptions
-from lmic.backends.outcomes import settle_inexact_infeasible
 from lmic.backends.registry import get_backend
 from lmic.ir.io import load_problem
+from lmic.reductions.pipeline import settle_inexact_infeasible
+from lmic.reductions.pipeline import solve as solve_with_reductions
 from lmic.solution import Solution
 from lmic.testing.conformance import CASES, bounded_real_problem, hinf_norm
 
@@ -35,7 +36,7 @@ def _published(name: str) -> float:
 @pytest.mark.parametrize("backend", ["picos", "cvxpy", "cvxpy:CVXOPT"])
 def test_control1_is_certified_at_the_published_optimum(backend):
     problem = load_problem(SDPLIB / "control1.dat-s")
-    sol = get_backend(backend).solve(problem)
+    sol = solve_with_reductions(get_backend(backend), problem)
     cert = certify_solution(problem, sol)
     assert sol.status == "optimal", sol.message
     assert cert.verdict == "certified", cert.reason
@@ -55,7 +56,7 @@ def _brl(seed: int, n: int):
 def test_minimal_gamma_is_certified_and_is_the_hinf_norm(backend, seed):
     problem, reference = _brl(seed, 8)
     be = get_backend(backend)
-    sol = be.solve(problem)
+    sol = solve_with_reductions(be, problem)
     cert = certify_solution(problem, sol)
     assert sol.status == "optimal", f"{sol.native_status}: {sol.message}"
     assert cert.verdict == "certified", cert.reason
@@ -69,8 +70,8 @@ def test_picos_keeps_cvxopts_last_iterate_where_cvxopt_stops_unknown():
     """uio_dt.thm4_1 (shipped example): CVXOPT stops 'unknown' after 100 iterations; PICOS
     reports unknown/unknown. Both backends must hand the same iterate to the certifier."""
     problem, _, _ = load_target("uio_dt.thm4_1", ROOT / "examples" / "uio_dt.thm4_1.flexible_joint.yaml")
-    native = get_backend("cvxopt").solve(problem)
-    layer = get_backend("picos").solve(problem)
+    native = solve_with_reductions(get_backend("cvxopt"), problem)
+    layer = solve_with_reductions(get_backend("picos"), problem)
     assert native.native_status == "unknown" and layer.native_status == "unknown/unknown"
     assert layer.status == native.status == "inaccurate"
     assert layer.x is not None and native.x is not None
@@ -80,7 +81,7 @@ def test_picos_keeps_cvxopts_last_iterate_where_cvxopt_stops_unknown():
 
 def test_picos_time_limit_is_enforced_by_the_sandbox():
     problem, _ = _brl(3, 30)  # ~0.5 s on CVXOPT
-    sol = get_backend("picos").solve(problem, SolveOptions(time_limit=0.01))
+    sol = solve_with_reductions(get_backend("picos"), problem, SolveOptions(time_limit=0.01))
     assert sol.status == "error" and sol.info["time_limit"] and sol.x is None
 
 
@@ -89,7 +90,7 @@ def test_cvxpy_inexact_infeasibility_is_kept_when_its_ray_verifies():
     """CVXPY/Clarabel reports infp1 'infeasible_inaccurate': the ray verifies, so it stays a
     infeasibility; the certifier checks it independently (exactly, for a global proof)."""
     problem = load_problem(SDPLIB / "infp1.dat-s")
-    sol = get_backend("cvxpy").solve(problem, SolveOptions(tol=1e-7))
+    sol = solve_with_reductions(get_backend("cvxpy"), problem, SolveOptions(tol=1e-7))
     assert sol.native_status == "infeasible_inaccurate"
     assert sol.status == "infeasible"
     # the float ray verifies (bounded infeasibility); the exact proof makes it global

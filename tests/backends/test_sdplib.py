@@ -16,6 +16,7 @@ import pytest
 from lmic.backends.base import SolveOptions
 from lmic.backends.registry import get_backend
 from lmic.ir.io import load_problem
+from lmic.reductions.pipeline import solve as solve_with_reductions
 from lmic.testing.conformance import farkas_residuals
 
 SDPLIB = Path(__file__).resolve().parents[3] / "shared" / "sdplib"
@@ -99,7 +100,7 @@ def test_sdplib(backend, problem):
     prob = load_problem(SDPLIB / f"{problem}.dat-s")
     be = get_backend(backend)
     tol = 1e-6 if not be.interior_point else 1e-7
-    sol = be.solve(prob, SolveOptions(tol=tol, time_limit=120))
+    sol = solve_with_reductions(be, prob, SolveOptions(tol=tol, time_limit=120))
     published = PUBLISHED[problem]
     if solver == "cvxopt" and problem == "hinf2":
         # CVXOPT raises ZeroDivisionError inside coneprog here: it must be a status, not a crash

@@ -9,6 +9,7 @@ from lmic.backends import strict
 from lmic.backends.base import SolveOptions
 from lmic.backends.registry import available_backend_names, get_backend
 from lmic.errors import LmicError
+from lmic.reductions.pipeline import solve as solve_with_reductions
 from lmic.solution import Solution
 from lmic.testing.conformance import CASES, lyapunov_problem
 
@@ -134,7 +135,7 @@ def test_homogeneous_lmi_stays_bounded_on_every_backend(backend):
     """P stays O(1): the normalisation, not the solver, fixes the scale (SDPA gave P ~ 1e17)."""
     A = np.array([[-1.0, 5.0], [0.0, -2.0]])
     for choice in ("max-margin", "fixed-margin"):
-        sol = get_backend(backend).solve(lyapunov_problem(A), SolveOptions(strict=choice))
+        sol = solve_with_reductions(get_backend(backend), lyapunov_problem(A), SolveOptions(strict=choice))
         assert sol.status == "feasible" and sol.strategy == choice
         assert np.max(np.abs(sol.x)) < 10 and sol.margin > 1e-3
         assert [a["strategy"] for a in sol.info["strict_attempts"]] == [choice]
@@ -143,7 +144,7 @@ def test_homogeneous_lmi_stays_bounded_on_every_backend(backend):
 def test_large_scale_free_problem_takes_the_fixed_margin_route():
     """40x40 Lyapunov LMIs: one fixed-margin solve, verified; its margin is relative."""
     A = -np.eye(40) + np.diag(np.full(39, 0.5), 1)
-    sol = get_backend("scs").solve(lyapunov_problem(A))
+    sol = solve_with_reductions(get_backend("scs"), lyapunov_problem(A))
     assert sol.status == "feasible" and sol.strategy == "fixed-margin"
     assert [a["strategy"] for a in sol.info["strict_attempts"]] == ["fixed-margin"]
     assert sol.info["imposed_margin"] == pytest.approx(strict.RELATIVE_MARGIN)  # SCS tol floor 1e-6: 10 tol < 1e-4
@@ -154,10 +155,10 @@ def test_infeasible_problem_is_decided_by_a_verified_ray_or_by_max_margin():
     """Unstable A: a fixed-margin Farkas ray that proves the original problem infeasible ends the
     plan; otherwise (or on a small problem) max-margin decides."""
     unstable = lyapunov_problem(np.diag([0.5, -1.0]))
-    sol = get_backend("clarabel").solve(unstable)
+    sol = solve_with_reductions(get_backend("clarabel"), unstable)
     assert sol.status == "infeasible" and sol.strategy == "max-margin" and sol.margin <= 0
     assert [a["strategy"] for a in sol.info["strict_attempts"]] == ["max-margin"]
-    sol = get_backend("scs").solve(unstable)
+    sol = solve_with_reductions(get_backend("scs"), unstable)
     assert [a["strategy"] for a in sol.info["strict_attempts"]] == ["fixed-margin"]
     assert sol.status == "infeasible" and "proves the original problem infeasible" in sol.message
     from lmic.certify.farkas import verify_farkas

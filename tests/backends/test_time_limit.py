@@ -16,6 +16,7 @@ from lmic.backends.outcomes import is_time_limit
 from lmic.backends.registry import get_backend
 from lmic.cli import main
 from lmic.errors import LmicError
+from lmic.reductions.pipeline import solve as solve_with_reductions
 from lmic.solution import Solution
 from lmic.testing.conformance import bounded_real_problem, lyapunov_problem
 
@@ -36,12 +37,12 @@ def _brl(n: int = 24):
 def test_a_tiny_time_limit_stops_every_backend(name):
     problem = _brl()
     be = get_backend(name)
-    free = be.solve(problem)
+    free = solve_with_reductions(be, problem)
     # the problem needs longer than the limit, and is solvable: the limit is what stops it
     assert free.solve_s > LIMIT
     assert certify_solution(problem, free).verdict == "certified", free.message
     t0 = time.perf_counter()
-    sol = be.solve(problem, SolveOptions(time_limit=LIMIT))
+    sol = solve_with_reductions(be, problem, SolveOptions(time_limit=LIMIT))
     wall = time.perf_counter() - t0
     assert wall < LIMIT + GRACE
     assert sol.status == "error" and is_time_limit(sol), (sol.status, sol.message)
@@ -65,7 +66,7 @@ def test_one_deadline_covers_every_strict_attempt():
     problem = lyapunov_problem(-np.eye(30))
     limit = 1.5
     t0 = time.perf_counter()
-    sol = _Sleepy().solve(problem, SolveOptions(time_limit=limit))
+    sol = solve_with_reductions(_Sleepy(), problem, SolveOptions(time_limit=limit))
     wall = time.perf_counter() - t0
     attempts = sol.info.get("strict_attempts", [])
     assert len(attempts) == 2, attempts
