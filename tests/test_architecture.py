@@ -103,7 +103,6 @@ KNOWN_OVERSIZE: dict[str, str] = {
     # issue #10: one JSON converter (ir/jsonio, api and commands each have one)
     "lmic.ir.jsonio": "issue #10",
     "lmic.certify.enclosure": "issue #10 (split: dual repair, rigorous bounds, exact mode)",
-    "lmic.reductions.strict": "issue #10 (fixed-margin and max-margin passes apart)",
     "lmic.template.builder": "issue #10 (authoring sugar apart from the declaration core)",
 }
 
