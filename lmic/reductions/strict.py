@@ -97,19 +97,33 @@ Examples
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
 from typing import Any
 
-import numpy as np
-import scipy.sparse as sp
-
-from lmic.certify.check import Tolerances, lmi_report
-from lmic.certify.farkas import ray_report, verify_farkas
-from lmic.ir.problem import LinearConstraints, Objective, Problem, Variable
-from lmic.ir.svec import tril_size
+from lmic.certify.farkas import verify_farkas
+from lmic.ir.problem import Problem
 from lmic.options import SolveOptions
+
+# the private names are re-exported for the callers that used them before the split
+# (lmic.backends.strict, the deprecated alias, names some of them)
+from lmic.reductions.strict_common import (  # noqa: F401
+    StrictInverse,
+    _diagonal_positions,
+    _identity_tril,
+    _restrict,
+    _trace_row,
+    has_strict,
+    is_scale_free,
+    verify_point,
+)
+from lmic.reductions.strict_fixed import _fixed_margin, _shift, achieved_margin, invert_fixed  # noqa: F401
+from lmic.reductions.strict_max import (  # noqa: F401
+    MARGIN_VARIABLE,
+    _dual_verifies,
+    _inaccurate_max_margin,
+    _max_margin,
+    invert_max,
+)
 from lmic.solution import Solution
 
 __all__ = [
@@ -142,54 +156,11 @@ RELATIVE_MARGIN = 1e-4
 SMALL_PSD = 800
 SMALL_N = 100
 
-#: name of the margin variable added by the ``max-margin`` strategy
-MARGIN_VARIABLE = "_lmic_margin_t"
-
-
-@dataclass
-class StrictInverse:
-    """What :func:`invert` needs to map a reduced problem's solution back."""
-
-    strategy: str
-    n: int
-    n_rows: int
-    margin: float | None = None
-    scale_free: bool = False
-    sense: str = "feasibility"
-
-
-def has_strict(problem: Problem) -> bool:
-    """True when some LMI or linear row is strict.
-
-    >>> import scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
-    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p>=0", 1, sp.csc_matrix([[0., 1.]]),
-    ...             strict=False)], LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
-    >>> has_strict(p)
-    False
-    """
-    return any(lmi.strict for lmi in problem.lmis) or any(problem.linear.strict)
-
-
-def is_scale_free(problem: Problem) -> bool:
-    """True when every LMI has ``F0 = 0`` and every linear row ``a0 = 0`` (a conic feasible set).
-
-    >>> import scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
-    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p>1", 1, sp.csc_matrix([[-1., 1.]]))],
-    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
-    >>> is_scale_free(p)
-    False
-    """
-    if not all(lmi.homogeneous for lmi in problem.lmis):
-        return False
-    a0 = problem.linear.A[:, 0]
-    return a0.nnz == 0 or not np.any(a0.toarray())
-
 
 def is_small(problem: Problem) -> bool:
     """``sum d_i^2 <= SMALL_PSD`` and ``n <= SMALL_N`` (solves of milliseconds).
 
+    >>> import numpy as np
     >>> from lmic.testing.conformance import lyapunov_problem
     >>> is_small(lyapunov_problem(-np.eye(3))), is_small(lyapunov_problem(-np.eye(40)))
     (True, False)
@@ -206,6 +177,7 @@ def plan(problem: Problem, options: SolveOptions, first_order: bool = False) -> 
     on ``nonuniform.thm1`` chua, where the fixed-margin point takes 4500; on flexible-arm, whose
     largest margin is tiny, it is the reverse: 57000 against 3200, docs/backends.md).
 
+    >>> import numpy as np
     >>> from lmic.testing.conformance import lyapunov_problem
     >>> plan(lyapunov_problem(-np.eye(40)), SolveOptions())
     ['fixed-margin', 'max-margin']
@@ -226,45 +198,6 @@ def plan(problem: Problem, options: SolveOptions, first_order: bool = False) -> 
     if is_small(problem) and not first_order:
         return ["max-margin", "fixed-margin"]
     return ["fixed-margin", "max-margin"]
-
-
-def _diagonal_positions(d: int) -> np.ndarray:
-    """Storage positions of the diagonal entries (column-major lower triangle).
-
-    >>> _diagonal_positions(3).tolist()
-    [0, 3, 5]
-    """
-    j = np.arange(d)
-    return j * d - j * (j - 1) // 2
-
-
-def _identity_tril(d: int) -> np.ndarray:
-    out = np.zeros(tril_size(d))
-    out[_diagonal_positions(d)] = 1.0
-    return out
-
-
-def _trace_row(lmi: Any) -> np.ndarray:
-    """``[tr F0, tr F_1, ..., tr F_n]`` of one LMI (one pass over its entries)."""
-    C = lmi.coeffs.tocoo()
-    on_diagonal = np.zeros(C.shape[0], dtype=bool)
-    on_diagonal[_diagonal_positions(lmi.dim)] = True
-    keep = on_diagonal[C.row]
-    return np.bincount(C.col[keep], weights=C.data[keep], minlength=C.shape[1])
-
-
-def _shift(lmi: Any, margin: float) -> Any:
-    """``lmi`` with ``F0 - margin I`` and not strict."""
-    C = lmi.coeffs.tocoo()
-    d = _diagonal_positions(lmi.dim)
-    coeffs = sp.csc_matrix(
-        (
-            np.concatenate([C.data, np.full(len(d), -margin)]),
-            (np.concatenate([C.row, d]), np.concatenate([C.col, np.zeros(len(d), dtype=C.col.dtype)])),
-        ),
-        shape=C.shape,
-    )
-    return replace(lmi, coeffs=coeffs, strict=False)
 
 
 def reduce(
@@ -296,168 +229,6 @@ def reduce(
     return reduced, StrictInverse("fixed-margin", problem.n, n_rows, margin=delta, scale_free=scale_free, sense=sense)
 
 
-def _fixed_margin(problem: Problem, margin: float, normalise: bool = False) -> Problem:
-    lmis = []
-    norm_rows = []
-    n = problem.n
-    for lmi in problem.lmis:
-        if lmi.strict:
-            if normalise:  # trace F(x) <= d  <=>  d - sum_k x_k tr F_k >= 0
-                norm_rows.append(np.concatenate([[float(lmi.dim)], -_trace_row(lmi)[1:]]))
-            lmi = _shift(lmi, margin)
-        lmis.append(lmi)
-    lin = problem.linear
-    A = lin.A.tolil(copy=True)
-    strict_rows = np.flatnonzero(np.asarray(lin.strict, dtype=bool)) if len(lin) else np.zeros(0, dtype=np.intp)
-    for r in strict_rows:
-        if normalise:  # a . x <= 1
-            norm_rows.append(np.concatenate([[1.0], -lin.A[r].toarray().ravel()[1:]]))
-        A[r, 0] = A[r, 0] - margin
-    kinds, names = list(lin.kinds), list(lin.names)
-    A = A.tocsr()
-    if norm_rows:
-        A = (
-            sp.vstack([A, sp.csr_matrix(np.vstack(norm_rows))], format="csr")
-            if len(lin)
-            else (sp.csr_matrix(np.vstack(norm_rows)))
-        )
-        kinds += ["ge"] * len(norm_rows)
-        names += [f"scale normalisation {k}" for k in range(len(norm_rows))]
-    linear = LinearConstraints(A, kinds, [False] * len(kinds), names)
-    objective = problem.objective
-    if objective.sense == "feasibility":
-        objective = Objective("feasibility", np.zeros(n + 1))
-    return replace(problem, lmis=lmis, linear=linear, objective=objective)
-
-
-def _max_margin(problem: Problem) -> tuple[Problem, StrictInverse]:
-    n = problem.n
-    scale_free = is_scale_free(problem)
-    t_var = Variable(MARGIN_VARIABLE, "scalar", (1, 1), offset=n)
-    lmis = []
-    norm_rows = []
-    for lmi in problem.lmis:
-        m = tril_size(lmi.dim)
-        col = -_identity_tril(lmi.dim) if lmi.strict else np.zeros(m)
-        coeffs = sp.hstack([lmi.coeffs, sp.csc_matrix(col.reshape(-1, 1))], format="csc")
-        lmis.append(replace(lmi, coeffs=coeffs, strict=False))
-        if lmi.strict and scale_free:
-            # trace F(x) <= d  <=>  d - sum_k x_k tr F_k >= 0
-            norm_rows.append(np.concatenate([[float(lmi.dim)], -_trace_row(lmi)[1:], [0.0]]))
-    lin = problem.linear
-    strict_mask = np.asarray(lin.strict, dtype=bool) if len(lin) else np.zeros(0, dtype=bool)
-    t_col = -strict_mask.astype(float).reshape(-1, 1)
-    A = sp.hstack([lin.A, sp.csr_matrix(t_col)], format="csr") if len(lin) else sp.csr_matrix((0, n + 2))
-    if scale_free:
-        for r in np.flatnonzero(strict_mask):
-            a = lin.A[r].toarray().ravel()
-            norm_rows.append(np.concatenate([[1.0], -a[1:], [0.0]]))
-    cap = np.zeros(n + 2)
-    cap[0], cap[-1] = 1.0, -1.0  # 1 - t >= 0
-    extra = sp.csr_matrix(np.vstack([cap, *norm_rows]))
-    linear = LinearConstraints(
-        sp.vstack([A, extra], format="csr"),
-        list(lin.kinds) + ["ge"] * extra.shape[0],
-        [False] * (len(lin) + extra.shape[0]),
-        list(lin.names) + ["margin t <= 1"] + [f"scale normalisation {k}" for k in range(len(norm_rows))],
-    )
-    c = np.zeros(n + 2)
-    c[-1] = 1.0
-    reduced = Problem(
-        variables=[*problem.variables, t_var],
-        lmis=lmis,
-        linear=linear,
-        objective=Objective("max", c),
-        data=problem.data,
-        derived=[],
-        checks=[],
-        meta=dict(problem.meta),
-    )
-    return reduced, StrictInverse("max-margin", n, len(lin), scale_free=scale_free)
-
-
-def _restrict(duals: dict | None, n_lmis: int, n_rows: int) -> dict | None:
-    if not duals:
-        return duals
-    out = dict(duals)
-    if "lmis" in out and out["lmis"] is not None:
-        out["lmis"] = list(out["lmis"])[:n_lmis]
-    if "linear" in out and out["linear"] is not None:
-        out["linear"] = np.asarray(out["linear"], dtype=float)[:n_rows]
-    return out
-
-
-def achieved_margin(problem: Problem, x: np.ndarray, scale_free: bool) -> float:
-    """The margin ``x`` achieves on the strict constraints of ``problem``.
-
-    ``min_i lambda_min(F_i(x)) / (trace F_i(x) / d_i)`` over the strict LMIs and
-    ``(a0 + a . x) / |a . x|`` over the strict rows when ``scale_free``; the absolute
-    ``lambda_min`` and row values otherwise. ``inf`` when nothing is strict.
-
-    >>> from lmic.testing.conformance import lyapunov_problem
-    >>> float(achieved_margin(lyapunov_problem(-np.eye(1)), np.array([2.0]), True))
-    1.0
-    """
-    x = np.asarray(x, dtype=float)
-    values = [math.inf]
-    for lmi in problem.lmis:
-        if not lmi.strict or lmi.dim == 0:
-            continue
-        F = lmi.matrix(x)
-        lmin = float(np.linalg.eigvalsh(F)[0])
-        if scale_free:
-            mean = float(np.trace(F)) / lmi.dim
-            lmin = lmin / mean if mean > 0 else -math.inf
-        values.append(lmin)
-    lin = problem.linear
-    if len(lin) and any(lin.strict):
-        res = lin.residuals(x)
-        for r in np.flatnonzero(np.asarray(lin.strict, dtype=bool)):
-            v = float(res[r])
-            if scale_free:
-                v = 1.0 if v > 0 else -math.inf
-            values.append(v)
-    return float(min(values))
-
-
-def verify_point(problem: Problem, x: np.ndarray | None) -> tuple[bool, str]:
-    """Whether every LMI and row of ``problem`` holds at ``x`` by the certifier's rules.
-
-    The LMIs are judged by :func:`lmic.certify.check.lmi_report` (strict LMIs: ``lambda_min``
-    positive beyond float64 doubt, relative to the term scale; closed ones to ``1e-8``
-    relative); rows likewise. Returns ``(ok, reason)``.
-
-    >>> from lmic.testing.conformance import lyapunov_problem
-    >>> verify_point(lyapunov_problem(-np.eye(1)), np.array([1.0]))
-    (True, '')
-    >>> verify_point(lyapunov_problem(-np.eye(1)), np.array([0.0]))[0]
-    False
-    """
-    if x is None or not np.all(np.isfinite(x)):
-        return False, "no finite point"
-    tol = Tolerances()
-    for lmi in problem.lmis:
-        rep = lmi_report(lmi, x, tol)
-        if not rep["ok"]:
-            return False, f"LMI '{lmi.name}': lambda_min {rep['min_eig']:.3g}"
-    lin = problem.linear
-    if len(lin):
-        xx = np.concatenate([[1.0], x])
-        res = np.asarray(lin.A @ xx).ravel()
-        scale = np.asarray(abs(lin.A) @ np.abs(xx)).ravel()
-        for r, kind in enumerate(lin.kinds):
-            allowed = tol.rel * scale[r] + 1e-15
-            if kind == "eq":
-                ok = abs(res[r]) <= allowed
-            elif lin.strict[r]:
-                ok = res[r] > tol.strict_rel * scale[r] and scale[r] > 0
-            else:
-                ok = res[r] >= -allowed
-            if not ok:
-                return False, f"row '{lin.names[r]}': {res[r]:.3g}"
-    return True, ""
-
-
 def invert(
     solution: Solution,
     inverse: StrictInverse,
@@ -482,106 +253,8 @@ def invert(
         )
         solution.info.pop("ray", None)
     if inverse.strategy == "fixed-margin":
-        solution.margin = inverse.margin
-        if solution.farkas is not None:
-            solution.farkas = dict(solution.farkas, margin=inverse.margin)
-        if inverse.sense == "feasibility":
-            n_lmis = len(problem.lmis) if problem is not None else None
-            if n_lmis is not None:
-                solution.duals = _restrict(solution.duals, n_lmis, inverse.n_rows) or {}
-                if solution.farkas is not None:
-                    solution.farkas = _restrict(solution.farkas, n_lmis, inverse.n_rows)
-            solution.info["imposed_margin"] = inverse.margin
-            solution.info["scale_free"] = inverse.scale_free
-            solution.objective = None
-            if problem is not None and solution.x is not None:
-                solution.margin = achieved_margin(problem, solution.x, inverse.scale_free)
-            if solution.status == "optimal":
-                if solution.margin is not None and solution.margin <= 0:
-                    solution.status = "inaccurate"
-                    solution.message = (
-                        f"the solver's point misses the strict constraints (margin {solution.margin:.3g}); "
-                        "it met the closed ones only to its tolerance"
-                    )
-                else:
-                    solution.status = "feasible"
-            elif solution.status == "infeasible":
-                solution.message = (
-                    f"no point with margin {inverse.margin:g}"
-                    + (" (relative, under the trace normalisation)" if inverse.scale_free else "")
-                    + "; a smaller margin may exist (strict='max-margin' decides)"
-                )
-        return solution
-    n_lmis = len(problem.lmis) if problem is not None else len(solution.duals.get("lmis", []) or [])
-    x = solution.x
-    t = None
-    if x is not None and len(x) == inverse.n + 1:
-        t = float(x[-1])
-        solution.x = x[: inverse.n]
-    solution.margin = t
-    solution.objective = None
-    duals = _restrict(solution.duals, n_lmis, inverse.n_rows) or {}
-    solution.duals = duals
-    if solution.farkas is not None:
-        solution.farkas = _restrict(solution.farkas, n_lmis, inverse.n_rows)
-    solution.info["scale_free"] = inverse.scale_free
-    threshold = 10.0 * max(options.tol, 1e-12)
-    if solution.status in ("optimal", "feasible") and t is not None:
-        if t > threshold or (t > 0 and problem is not None and verify_point(problem, solution.x)[0]):
-            solution.status = "feasible"
-        elif t <= 0 or problem is None or _dual_verifies(duals, problem):
-            solution.status = "infeasible"
-            solution.message = f"maximal margin t* = {t:.3g} <= 0: the strict constraints cannot be met"
-            if t > 0:
-                solution.message = (
-                    f"maximal margin t* = {t:.3g} is within the tolerance of 0 and the dual of the margin "
-                    "problem proves the strict constraints infeasible"
-                )
-            if duals.get("lmis") is not None:
-                solution.farkas = dict(duals, strict=True)
-        else:
-            solution.status = "inaccurate"
-            solution.message = (
-                f"maximal margin t* = {t:.3g} is positive but within {threshold:.1g} (10 tol) of 0: the point "
-                "does not verify and the dual is no Farkas certificate; a tighter tolerance decides"
-            )
-    elif solution.status == "inaccurate" and t is not None and problem is not None:
-        _inaccurate_max_margin(solution, t, duals, problem, options)
-    return solution
-
-
-def _dual_verifies(duals: dict, problem: Problem) -> bool:
-    """Whether the max-margin dual (restricted to the original constraints) is a Farkas ray."""
-    if duals.get("lmis") is None or len(duals["lmis"]) != len(problem.lmis):
-        return False
-    try:
-        return bool(verify_farkas(problem, duals).get("verified"))
-    except Exception:  # noqa: BLE001 - a malformed dual is just not a certificate
-        return False
-
-
-def _inaccurate_max_margin(solution: Solution, t: float, duals: dict, problem: Problem, options: SolveOptions) -> None:
-    """Issue an ``infeasible`` for an inaccurate max-margin solve only on a verified dual."""
-    threshold = 10.0 * max(options.tol, 1e-12)
-    if t >= -threshold:
-        return
-    report: dict[str, Any] = {"verified": False, "reason": "the solver returned no dual"}
-    if duals.get("lmis") is not None and len(duals["lmis"]) == len(problem.lmis):
-        report = ray_report(problem, duals)
-    if report.get("verified"):
-        solution.status = "infeasible"
-        solution.farkas = dict(duals, strict=True)
-        solution.message = (
-            f"max-margin solve inaccurate ({solution.native_status}) at t* = {t:.3g} < "
-            f"-{threshold:.1g}, and its dual verifies as a {report.get('kind', '')} Farkas "
-            "certificate: infeasible"
-        )
-    else:
-        why = report.get("reason") or "residuals above tolerance"
-        solution.message = (
-            f"max-margin solve inaccurate ({solution.native_status}) at t* = {t:.3g}: suggests "
-            f"infeasibility, but its dual is not a verified Farkas certificate ({why})"
-        )
+        return invert_fixed(solution, inverse, problem)
+    return invert_max(solution, inverse, options, problem)
 
 
 def _attempt_record(sol: Solution) -> dict[str, Any]:
@@ -606,6 +279,7 @@ def solve(
     Follows :func:`plan`; see the module docstring for when a second reduction runs. The
     returned solution's ``solve_s`` is the sum over the attempts.
 
+    >>> import numpy as np
     >>> from lmic.backends.registry import get_backend
     >>> from lmic.testing.conformance import lyapunov_problem
     >>> sol = solve(lyapunov_problem(-np.eye(2)), SolveOptions(), get_backend("clarabel")._run)

@@ -6,11 +6,14 @@ has to follow every oscillation of ``v`` with its step size control, evaluating 
 signal expressions at each of its stages. Here instead:
 
 1. the signal is evaluated once, vectorised, on a uniform fine grid ``h = dt / m``
-   (:class:`TimeSignal`); ``m`` (a power of two, at most :data:`MAX_REFINE`) is the smallest
-   for which the local cubic interpolation of the samples reproduces the signal at the
-   midpoints to :data:`SIGNAL_TOL` (relative to its largest value): a step size chosen from
-   the fastest frequency in the signal (a sinusoid of ``omega`` needs ``omega h`` of about
-   ``1e-2``);
+   (:class:`TimeSignal`); ``m`` (a power of two) is the smallest for which the local cubic
+   interpolation of the samples reproduces the signal at the midpoints to :data:`SIGNAL_TOL`
+   (relative to its largest value): a step size chosen from the fastest frequency in the signal
+   (a sinusoid of ``omega`` needs ``omega h`` of about ``1e-2``). ``m`` stops at
+   :data:`MAX_REFINE`, at :data:`MAX_SAMPLES` samples (a 10 s run at ``dt = 0.002`` refines 64
+   times at most: a signal faster than ``omega dt ~ 0.6`` is then followed to ``(omega h)^4 /
+   40`` only), and at :data:`JUMP_REFINE` when the error stops shrinking like a cubic's (a
+   jump, which no step size resolves better);
 2. on each fine interval ``v`` is the cubic through the four nearest samples, and the state is
    propagated *exactly* for that cubic: ``s(t + h) = Phi s(t) + sum_i W_i v_i`` with ``Phi =
    expm(A h)`` and ``W_i`` from one matrix exponential of the block matrix ``[[A h, B h, 0,
@@ -34,6 +37,7 @@ True
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from math import factorial
 from typing import Any
@@ -52,7 +56,12 @@ __all__ = [
 ]
 
 #: largest number of fine steps per output step
-MAX_REFINE = 64
+MAX_REFINE = 1024
+#: most signal samples one refinement evaluates (bounds the memory: 1e6 samples of 3 signals = 24 MB)
+MAX_SAMPLES = 1_000_000
+#: from this refinement on, an interpolation error that no longer shrinks like a cubic's (by 16
+#: per halving; less than 4 is taken as a jump: a pulse, held noise) ends the refinement
+JUMP_REFINE = 64
 #: relative accuracy asked of the cubic interpolation of the signals
 SIGNAL_TOL = 1e-9
 
@@ -192,18 +201,52 @@ def _refinement(signal: TimeSignal, t0: float, dt: float, count: int) -> tuple[i
     values = signal.on(t0 + dt * np.arange(count * m + 1) / m)
     inner = _lagrange(_STENCILS["inner"])
     half = np.array([1.0, 0.5, 0.25, 0.125]) @ inner  # the cubic through 4 samples at sigma = 1/2
-    while m < MAX_REFINE:
+    previous = math.inf
+    while m < MAX_REFINE and 2 * count * m + 1 <= MAX_SAMPLES:
         finer = signal.on(t0 + dt * np.arange(2 * count * m + 1) / (2 * m))
         scale = float(np.max(np.abs(finer), initial=0.0))
-        if values.shape[0] < 4 or scale == 0.0 or not np.all(np.isfinite(finer)):
+        if scale == 0.0 or not np.all(np.isfinite(finer)):
             return m, values
         K = values.shape[0] - 1
-        mid = sum(half[i] * values[i : K - 2 + i] for i in range(4))  # midpoints of intervals 1 .. K-2
-        err = float(np.max(np.abs(mid - finer[3 : 2 * K - 2 : 2]), initial=0.0))
-        if err <= SIGNAL_TOL * scale:
-            return m, values
+        if K >= 3:  # fewer samples cannot show a cubic's error: refine
+            mid = sum(half[i] * values[i : K - 2 + i] for i in range(4))  # midpoints of intervals 1 .. K-2
+            err = float(np.max(np.abs(mid - finer[3 : 2 * K - 2 : 2]), initial=0.0))
+            if err <= SIGNAL_TOL * scale or (m >= JUMP_REFINE and err > previous / 4):
+                return m, values
+            previous = err
         m, values = 2 * m, finer
     return m, values
+
+
+def _stepped(V: np.ndarray, powers: list[np.ndarray], Psi: list[np.ndarray], m: int, count: int) -> np.ndarray:
+    """``sum_r Phi^(m-1-r) g_(j m + r)`` for every output step ``j`` (``g_k``: the forcing of fine step ``k``).
+
+    Interior fine steps use the centred cubic, ``g_k = sum_i W_i v_(k-1+i)``, so one output step
+    is ``sum_l Omega_l v_(j m - 1 + l)`` (``l = 0 .. m + 2``, ``Omega_l = sum_(r+i=l) Phi^(m-1-r)
+    W_i``): one product of the windows of samples with the stacked ``Omega``. The first and last
+    fine steps use one-sided cubics; their difference is added afterwards.
+    """
+    n, q = Psi[0].shape[0], V.shape[1]
+    K = count * m
+    W = {}
+    for key, offsets in _STENCILS.items():
+        lag = _lagrange(offsets)
+        W[key] = [sum(Psi[p] * lag[p, i] for p in range(4)) for i in range(4)]
+    omega = np.zeros((m + 3, n, q))
+    for r in range(m):
+        for i in range(4):
+            omega[r + i] += powers[m - 1 - r] @ W["inner"][i]
+    padded = np.vstack([np.zeros((1, q)), V, np.zeros((1, q))])  # v_(-1) and v_(K+1) as zeros
+    windows = np.lib.stride_tricks.sliding_window_view(padded, (m + 3, q))[::m, 0][:count]  # (count, m+3, q)
+    stepped = windows.reshape(count, (m + 3) * q) @ omega.transpose(0, 2, 1).reshape((m + 3) * q, n)
+    # the one-sided first and last fine steps, instead of the centred ones that read the zero padding
+    inner0 = sum(W["inner"][i] @ padded[i] for i in range(4))
+    first = sum(W["first"][i] @ V[i] for i in range(4))
+    innerK = sum(W["inner"][i] @ padded[K - 1 + i] for i in range(4))
+    last = sum(W["last"][i] @ V[K - 3 + i] for i in range(4))
+    stepped[0] += powers[m - 1] @ (first - inner0)
+    stepped[count - 1] += powers[0] @ (last - innerK)
+    return stepped
 
 
 def propagate(A: np.ndarray, B: np.ndarray, s0: np.ndarray, grid: np.ndarray, signal: TimeSignal) -> np.ndarray:
@@ -239,27 +282,16 @@ def propagate(A: np.ndarray, B: np.ndarray, s0: np.ndarray, grid: np.ndarray, si
     K = count * m  # fine intervals
     h = dt / m
     Phi, Psi = _cubic_hold(A, B, h)
-    G = np.empty((K, n))
+    powers = [np.eye(n)]
+    for _ in range(m):
+        powers.append(Phi @ powers[-1])
     with np.errstate(all="ignore"):
         if K < 3:  # too few samples for a cubic: hold linearly between the two ends of each interval
-            for k in range(K):
-                G[k] = Psi[0] @ V[k] + Psi[1] @ (V[k + 1] - V[k])
+            G = np.array([Psi[0] @ V[k] + Psi[1] @ (V[k + 1] - V[k]) for k in range(K)])
+            weights = np.vstack([powers[m - 1 - r].T for r in range(m)])  # (m n, n)
+            stepped = G.reshape(count, m * n) @ weights
         else:
-            W = {}
-            for key, offsets in _STENCILS.items():
-                lag = _lagrange(offsets)
-                W[key] = [sum(Psi[p] * lag[p, i] for p in range(4)) for i in range(4)]
-            G[0] = sum(W["first"][i] @ V[i] for i in range(4))
-            G[K - 1] = sum(W["last"][i] @ V[K - 3 + i] for i in range(4))
-            if K > 2:
-                window = np.hstack([V[i : K - 2 + i] for i in range(4)])  # (K - 2, 4 q), contiguous
-                G[1 : K - 1] = window @ np.ascontiguousarray(np.vstack([W["inner"][i].T for i in range(4)]))
-        # the m fine steps of each output step at once: s_{j+m} = Phi^m s_j + sum_r Phi^(m-1-r) g_{j+r}
-        powers = [np.eye(n)]
-        for _ in range(m):
-            powers.append(Phi @ powers[-1])
-        weights = np.ascontiguousarray(np.vstack([powers[m - 1 - r].T for r in range(m)]))  # (m n, n)
-        stepped = G.reshape(count, m * n) @ weights
+            stepped = _stepped(V, powers, Psi, m, count)
         Phim = powers[m]
         s = np.asarray(s0, dtype=float)
         for k in range(count):

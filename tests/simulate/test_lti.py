@@ -48,3 +48,13 @@ def test_parsed_expressions_are_evaluated_on_the_grid():
     ts = np.linspace(0, 1, 7)
     np.testing.assert_allclose(sig.on(ts), np.c_[np.sin(5 * ts), 0.5 * np.ones(7)])
     np.testing.assert_allclose(sig(0.3), [np.sin(1.5), 0.5])
+
+
+def test_one_output_step_refined_for_a_fast_input():
+    # a single output interval: the first and the last fine steps fall in the same block
+    A, B = np.array([[-2.0, 1.0], [0.0, -1.0]]), np.array([[0.0], [1.0]])
+    grid = np.array([0.0, 0.5])
+    S = propagate(A, B, np.array([1.0, 0.0]), grid, TimeSignal(1, lambda ts: np.sin(30 * ts)[:, None]))
+    ref = solve_ivp(lambda t, s: A @ s + B[:, 0] * np.sin(30 * t), (0.0, 0.5), [1.0, 0.0], t_eval=grid,
+                    method="DOP853", rtol=1e-12, atol=1e-14)  # fmt: skip
+    np.testing.assert_allclose(S, ref.y.T, atol=1e-8)

@@ -1,0 +1,138 @@
+"""What both strict reductions share: the inverse record, the tests of a problem and of a point.
+
+Split out of :mod:`lmic.reductions.strict` (which re-exports every public name).
+
+Examples
+--------
+>>> from lmic.testing.conformance import lyapunov_problem
+>>> has_strict(lyapunov_problem(-np.eye(1))), is_scale_free(lyapunov_problem(-np.eye(1)))
+(True, True)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from lmic.certify.check import Tolerances, lmi_report
+from lmic.ir.problem import Problem
+from lmic.ir.svec import tril_size
+
+__all__ = ["StrictInverse", "has_strict", "is_scale_free", "verify_point"]
+
+
+@dataclass
+class StrictInverse:
+    """What :func:`invert` needs to map a reduced problem's solution back."""
+
+    strategy: str
+    n: int
+    n_rows: int
+    margin: float | None = None
+    scale_free: bool = False
+    sense: str = "feasibility"
+
+
+def has_strict(problem: Problem) -> bool:
+    """True when some LMI or linear row is strict.
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p>=0", 1, sp.csc_matrix([[0., 1.]]),
+    ...             strict=False)], LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> has_strict(p)
+    False
+    """
+    return any(lmi.strict for lmi in problem.lmis) or any(problem.linear.strict)
+
+
+def is_scale_free(problem: Problem) -> bool:
+    """True when every LMI has ``F0 = 0`` and every linear row ``a0 = 0`` (a conic feasible set).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p>1", 1, sp.csc_matrix([[-1., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> is_scale_free(p)
+    False
+    """
+    if not all(lmi.homogeneous for lmi in problem.lmis):
+        return False
+    a0 = problem.linear.A[:, 0]
+    return a0.nnz == 0 or not np.any(a0.toarray())
+
+
+def _diagonal_positions(d: int) -> np.ndarray:
+    """Storage positions of the diagonal entries (column-major lower triangle).
+
+    >>> _diagonal_positions(3).tolist()
+    [0, 3, 5]
+    """
+    j = np.arange(d)
+    return j * d - j * (j - 1) // 2
+
+
+def _identity_tril(d: int) -> np.ndarray:
+    out = np.zeros(tril_size(d))
+    out[_diagonal_positions(d)] = 1.0
+    return out
+
+
+def _trace_row(lmi: Any) -> np.ndarray:
+    """``[tr F0, tr F_1, ..., tr F_n]`` of one LMI (one pass over its entries)."""
+    C = lmi.coeffs.tocoo()
+    on_diagonal = np.zeros(C.shape[0], dtype=bool)
+    on_diagonal[_diagonal_positions(lmi.dim)] = True
+    keep = on_diagonal[C.row]
+    return np.bincount(C.col[keep], weights=C.data[keep], minlength=C.shape[1])
+
+
+def _restrict(duals: dict | None, n_lmis: int, n_rows: int) -> dict | None:
+    if not duals:
+        return duals
+    out = dict(duals)
+    if "lmis" in out and out["lmis"] is not None:
+        out["lmis"] = list(out["lmis"])[:n_lmis]
+    if "linear" in out and out["linear"] is not None:
+        out["linear"] = np.asarray(out["linear"], dtype=float)[:n_rows]
+    return out
+
+
+def verify_point(problem: Problem, x: np.ndarray | None) -> tuple[bool, str]:
+    """Whether every LMI and row of ``problem`` holds at ``x`` by the certifier's rules.
+
+    The LMIs are judged by :func:`lmic.certify.check.lmi_report` (strict LMIs: ``lambda_min``
+    positive beyond float64 doubt, relative to the term scale; closed ones to ``1e-8``
+    relative); rows likewise. Returns ``(ok, reason)``.
+
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> verify_point(lyapunov_problem(-np.eye(1)), np.array([1.0]))
+    (True, '')
+    >>> verify_point(lyapunov_problem(-np.eye(1)), np.array([0.0]))[0]
+    False
+    """
+    if x is None or not np.all(np.isfinite(x)):
+        return False, "no finite point"
+    tol = Tolerances()
+    for lmi in problem.lmis:
+        rep = lmi_report(lmi, x, tol)
+        if not rep["ok"]:
+            return False, f"LMI '{lmi.name}': lambda_min {rep['min_eig']:.3g}"
+    lin = problem.linear
+    if len(lin):
+        xx = np.concatenate([[1.0], x])
+        res = np.asarray(lin.A @ xx).ravel()
+        scale = np.asarray(abs(lin.A) @ np.abs(xx)).ravel()
+        for r, kind in enumerate(lin.kinds):
+            allowed = tol.rel * scale[r] + 1e-15
+            if kind == "eq":
+                ok = abs(res[r]) <= allowed
+            elif lin.strict[r]:
+                ok = res[r] > tol.strict_rel * scale[r] and scale[r] > 0
+            else:
+                ok = res[r] >= -allowed
+            if not ok:
+                return False, f"row '{lin.names[r]}': {res[r]:.3g}"
+    return True, ""
