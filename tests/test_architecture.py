@@ -41,6 +41,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "base",
         (
             "lmic._version",
+            "lmic.cache",
             "lmic.errors",
             "lmic.limits",
             "lmic.output",
@@ -54,7 +55,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("ir", ("lmic.ir.*",)),
     ("template", ("lmic.template.*",)),
     ("theorem plugins", ("lmic_observers.*",)),
-    ("catalogue", ("lmic.registry", "lmic.plant")),
+    ("catalogue", ("lmic.registry", "lmic.plugin_index", "lmic.plant")),
     ("compile", ("lmic.compile.*",)),
     ("backends", ("lmic.backends.*",)),
     ("certify", ("lmic.certify.*",)),
