@@ -123,9 +123,8 @@ def main(argv: list[str] | None = None) -> None:
                 timings[name].append(json.loads(out)["timings"])
     shutil.rmtree(work, ignore_errors=True)
     base = walls["import numpy"]
-    print(
-        f"start-up, {args.rounds} interleaved rounds, medians (python {sys.version.split()[0]}, {os.cpu_count()} cpus)"
-    )
+    where = f"python {sys.version.split()[0]}, {os.cpu_count()} cpus"
+    print(f"start-up, {args.rounds} interleaved rounds, medians ({where})")
     print(f"{'method':38} {'wall s':>8} {'x numpy':>8} {'compile_s':>10} {'solver s':>9} {'lmic share':>11}")
     for name in names:
         med, ratio = median_ratio(walls[name], base)
