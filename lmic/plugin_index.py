@@ -188,7 +188,13 @@ def theorem_index() -> tuple[list[TheoremInfo], list[BrokenPlugin], list[Conflic
         if infos is not None:
             return infos, [], []
     infos, broken, clashes = full_index()
-    if key is not None and not broken and not clashes:
+    # stored under the state *after* loading (importing a plugin may write __pycache__ into a
+    # folder of sys.path), provided no source file or entry point changed meanwhile
+    after = fingerprint() if key is not None else None
+    if key is None or after is None or any(after[k] != key[k] for k in ("entry_points", "files")):
+        return infos, broken, clashes
+    key = after
+    if not broken and not clashes:
         records = [
             {**asdict(i), "provider": None if i.provider is None else [list(kv) for kv in i.provider.items()]}
             for i in infos
