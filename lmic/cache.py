@@ -17,8 +17,8 @@ Safety rules:
 * a write goes to a temporary file in the same folder and is renamed over the entry
   (:func:`lmic.output.write_output`), so concurrent writers leave one complete entry;
 * a read returns ``None`` (a miss) for a missing, unreadable, truncated, corrupt, oversized or
-  mismatched entry (other format, kind or key, wrong checksum); the caller recomputes and
-  writes the entry again;
+  mismatched entry (other format, kind or key, wrong checksum), and for a file owned by another
+  user; the caller recomputes and writes the entry again;
 * any error while reading or writing is a miss or a skipped write, never an error of lmic.
 
 Examples
@@ -76,9 +76,15 @@ def cache_dir() -> Path | None:
     given = os.environ.get(CACHE_DIR_ENV, "").strip()
     if given:
         return Path(given).expanduser()
-    import platformdirs
+    try:
+        import platformdirs
 
-    return Path(platformdirs.user_cache_dir("lmic", appauthor=False))
+        return Path(platformdirs.user_cache_dir("lmic", appauthor=False))
+    except ImportError:  # a dependency, but an install without it still runs (XDG layout)
+        try:
+            return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "lmic"
+        except RuntimeError:  # no home folder: no cache
+            return None
 
 
 def entry_path(kind: str, key: Any) -> Path | None:
@@ -105,6 +111,8 @@ def load(kind: str, key: Any) -> Any:
         return None
     try:
         with open(path, "rb") as fh:
+            if hasattr(os, "geteuid") and os.fstat(fh.fileno()).st_uid != os.geteuid():
+                return None  # planted by another user (a shared LMIC_CACHE_DIR): never trusted
             raw = fh.read(MAX_BYTES + 1)
         if len(raw) > MAX_BYTES:
             return None

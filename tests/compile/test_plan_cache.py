@@ -231,3 +231,14 @@ def test_concurrent_writers_leave_one_complete_entry(cache_dir):
     assert final is not None and final["data"] == [int(final["who"])] * 200000
     assert [p.name for p in (cache_dir / "race").iterdir()] == [cache.entry_path("race", {"k": 1}).name]
     assert seen | {final["who"]} <= {"1", "2", "3"}
+
+
+@pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() != 0, reason="chown to another user needs root")
+def test_an_entry_owned_by_another_user_is_not_trusted(cache_dir, count):
+    thm = get_theorem("thesis.lyapunov")
+    plan_cache.cached_analyse(thm)
+    (entry,) = _entries(cache_dir)
+    os.chown(entry, 12345, 12345)  # as if planted in a shared LMIC_CACHE_DIR
+    plan = plan_cache.cached_analyse(thm)
+    assert len(count) == 2 and _same(plan, analyse_template(thm, plan.template))
+    assert entry.stat().st_uid == os.geteuid()  # replaced by the user's own entry
