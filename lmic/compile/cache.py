@@ -266,8 +266,9 @@ def _int(v: Any) -> int:
 
 
 class _Decoder:
-    def __init__(self, nodes: list[Any]) -> None:
+    def __init__(self, nodes: list[Any], variables: set[str]) -> None:
         self.nodes = nodes
+        self.variables = variables  # the template's decision variables: a term names one of them
 
     def __call__(self, i: Any) -> Any:
         if not isinstance(i, int) or isinstance(i, bool) or not 0 <= i < len(self.nodes):
@@ -276,7 +277,7 @@ class _Decoder:
 
     def term(self, rec: Any) -> Term:
         coef, var, transposed, left, right, text = rec
-        if not (var is None or isinstance(var, str)) or not isinstance(transposed, bool) or not isinstance(text, str):
+        if not (var is None or var in self.variables) or not isinstance(transposed, bool) or not isinstance(text, str):
             raise Unsupported("term")
         return Term(self(coef), var, transposed, tuple(self(f) for f in left), tuple(self(f) for f in right), text)
 
@@ -285,7 +286,7 @@ class _Decoder:
         out = LinearForm(self(const))
         for c, atom in terms:
             var, kind, i, j = atom
-            if not (isinstance(var, str) and kind in ("scalar", "entry", "trace")):
+            if not (var in self.variables and kind in ("scalar", "entry", "trace")):
                 raise Unsupported("atom")
             out.terms.append((self(c), (var, kind, _int(i), _int(j))))
         for c, ts in traces:
@@ -300,7 +301,7 @@ def decode_plan(payload: Any, theorem: Theorem, t: Template) -> Plan:
     """
     if not isinstance(payload, dict) or set(payload) != {"nodes", "lmis", "constraints", "objective"}:
         raise Unsupported("payload")
-    dec = _Decoder(_decode_nodes(payload["nodes"]))
+    dec = _Decoder(_decode_nodes(payload["nodes"]), {v.name for v in t.variables})
     recs = payload["lmis"]
     if not isinstance(recs, list) or [r.get("name") for r in recs] != [d.name for d in t.lmis]:
         raise Unsupported("LMI names")

@@ -151,6 +151,9 @@ def _corruptions(entry: Path) -> list[bytes]:
     huge["payload"]["nodes"].append(["Integer", 10**40])
     wrong_lmi = json.loads(good)
     wrong_lmi["payload"]["lmis"][0]["name"] = "another"
+    wrong_var = json.loads(good)
+    entry_terms = wrong_var["payload"]["lmis"][-1]["entries"][0][2]
+    entry_terms[0][1] = "not_a_variable"
 
     def resealed(d: dict) -> bytes:  # a valid checksum over a damaged payload
         body = json.dumps(d["payload"], sort_keys=True, separators=(",", ":")).encode()
@@ -168,6 +171,7 @@ def _corruptions(entry: Path) -> list[bytes]:
         resealed(bad_index),
         resealed(huge),
         resealed(wrong_lmi),
+        resealed(wrong_var),
     ]
 
 
