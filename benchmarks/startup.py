@@ -15,7 +15,9 @@ theorems`` at most 6x). Methods:
   taken from the JSON's ``timings``;
 * lmic's own share of the warm one-shot solve: ``1 - solve_s / wall`` (``solve_s``: the
   solver's own time, from the JSON) -- for the small example (where start-up dominates) and,
-  with ``--n N``, for a random ``N``-state ``qib.thm1`` system.
+  with ``--n N``, for a random ``N``-state ``qib.thm1`` system;
+* ``plan_for`` alone in a new process (imports excluded): template build plus analysis with the
+  cache off, with an empty cache (analysis + storing) and warm (cache read), for three theorems.
 
 Every process runs the code of this checkout (``PYTHONPATH`` = the checkout and its
 ``plugins/``). Usage::
@@ -121,7 +123,6 @@ def main(argv: list[str] | None = None) -> None:
             walls[name].append(wall)
             if "--json" in cmd:
                 timings[name].append(json.loads(out)["timings"])
-    shutil.rmtree(work, ignore_errors=True)
     base = walls["import numpy"]
     where = f"python {sys.version.split()[0]}, {os.cpu_count()} cpus"
     print(f"start-up, {args.rounds} interleaved rounds, medians ({where})")
@@ -138,6 +139,43 @@ def main(argv: list[str] | None = None) -> None:
     cold = statistics.median(t["compile_s"] for t in timings["lmic solve (plan cache cold)"])
     warm = statistics.median(t["compile_s"] for t in timings["lmic solve (plan cache warm)"])
     print(f"plan cache: compile_s {cold:.3f} s cold -> {warm:.3f} s warm ({cold - warm:+.3f} s of analysis skipped)")
+    _plan_times(args.rounds, work)
+    shutil.rmtree(work, ignore_errors=True)
+
+
+PLAN_PROBE = """
+import sys, time
+from lmic.compile import plan_for
+from lmic.registry import get_theorem
+thm = get_theorem(sys.argv[1])
+t0 = time.perf_counter()
+plan_for(thm)
+print(time.perf_counter() - t0)
+"""
+
+
+def _plan_times(rounds: int, work: Path) -> None:
+    """``plan_for`` alone (template build + analysis, or + cache read), each in a new process."""
+    ids = ["qib.thm1", "uncertain_dt.thm1", "delay_b.thm4_1"]
+    warm_dir = work / "plans-warm"
+    for tid in ids:  # fill the warm folder
+        _run([sys.executable, "-c", PLAN_PROBE, tid], _env(LMIC_CACHE_DIR=str(warm_dir)))
+    times: dict[tuple[str, str], list[float]] = {(tid, m): [] for tid in ids for m in ("off", "cold", "warm")}
+    for _ in range(rounds):
+        for tid in ids:
+            for mode in ("off", "cold", "warm"):
+                env = {
+                    "off": _env(LMIC_NO_CACHE="1"),
+                    "cold": _env(LMIC_CACHE_DIR=tempfile.mkdtemp(dir=work)),
+                    "warm": _env(LMIC_CACHE_DIR=str(warm_dir)),
+                }[mode]
+                _, out = _run([sys.executable, "-c", PLAN_PROBE, tid], env)
+                times[(tid, mode)].append(float(out.strip()))
+    print("plan_for in a new process (template build + analysis / cache read), medians, s")
+    print(f"{'theorem':22} {'no cache':>9} {'cold':>9} {'warm':>9} {'warm/no cache':>14}")
+    for tid in ids:
+        off, cold, warm = (statistics.median(times[(tid, m)]) for m in ("off", "cold", "warm"))
+        print(f"{tid:22} {off:9.3f} {cold:9.3f} {warm:9.3f} {warm / off:13.2f}x")
 
 
 if __name__ == "__main__":
