@@ -19,16 +19,78 @@ Examples
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+import importlib
+from typing import TYPE_CHECKING, Any, cast
 
 from lmic._version import __version__
 
-__all__ = ["__version__", "solve", "theorem", "theorems", "compile_theorem"]
+__all__ = [
+    "__version__",
+    "solve",
+    "theorem",
+    "theorems",
+    "compile_theorem",
+    "register",
+    "Theorem",
+    "Result",
+    "SolveOptions",
+]
 
 if TYPE_CHECKING:  # pragma: no cover
     from lmic.api import Result
     from lmic.ir.problem import Problem
+    from lmic.options import SolveOptions
+    from lmic.registry import register
     from lmic.template.theorem import Theorem
+
+# Importing lmic is cheap (``lmic --version`` loads neither numpy nor sympy): the names below and
+# the sub-packages (``lmic.api``, ``lmic.compile``, ...) are imported on first access (PEP 562).
+_LAZY: dict[str, tuple[str, str]] = {
+    "register": ("lmic.registry", "register"),
+    "Theorem": ("lmic.template.theorem", "Theorem"),
+    "Result": ("lmic.api", "Result"),
+    "SolveOptions": ("lmic.options", "SolveOptions"),
+}
+_SUBMODULES = frozenset(
+    {
+        "api",
+        "backends",
+        "cache",
+        "certify",
+        "compile",
+        "errors",
+        "ir",
+        "options",
+        "outcome",
+        "output",
+        "plugin_index",
+        "registry",
+        "system",
+        "template",
+    }
+)
+
+
+def __getattr__(name: str) -> Any:
+    """``lmic.Theorem``, ``lmic.register``, ... and ``lmic.compile``, ...: imported on first use.
+
+    >>> import lmic
+    >>> lmic.Theorem.__name__, lmic.registry.__name__
+    ('Theorem', 'lmic.registry')
+    """
+    if name in _LAZY:
+        module, attr = _LAZY[name]
+        value = getattr(importlib.import_module(module), attr)
+        globals()[name] = value
+        return value
+    if name in _SUBMODULES:
+        return importlib.import_module(f"lmic.{name}")
+    raise AttributeError(f"module 'lmic' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    """The public names, the lazily imported ones included."""
+    return sorted(set(globals()) | set(_LAZY) | _SUBMODULES)
 
 
 def solve(
@@ -68,7 +130,8 @@ def solve(
     """
     from lmic.api import solve as _solve
 
-    return _solve(theorem, system, params, backend, options=options, exact=exact)
+    # api.solve takes Theorem objects too (its annotation names str, path and Problem only)
+    return _solve(cast(Any, theorem), system, params, backend, options=options, exact=exact)
 
 
 def theorem(theorem_id: str) -> Theorem:

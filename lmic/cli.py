@@ -117,12 +117,13 @@ def _notes_as_lines() -> None:
     """Show lmic's notes (e.g. unused data keys) as ``lmic: note: ...`` lines on stderr."""
     import warnings
 
-    from lmic.system import UnusedDataNote
-
     default = warnings.showwarning
 
     def show(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001
-        if issubclass(category, UnusedDataNote):
+        # lmic.system (numpy, sympy) is not imported for this: a note can only have been issued
+        # once it is loaded
+        system = sys.modules.get("lmic.system")
+        if system is not None and issubclass(category, system.UnusedDataNote):
             sys.stderr.write(f"lmic: note: {message}\n")
         else:
             default(message, category, filename, lineno, file, line)

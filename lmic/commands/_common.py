@@ -14,10 +14,12 @@ import math
 import os
 import sys
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from lmic.errors import DataError
-from lmic.jsonable import to_jsonable
+
+if TYPE_CHECKING:  # lmic.jsonable imports numpy: re-exported lazily by __getattr__ below
+    from lmic.jsonable import to_jsonable
 
 __all__ = [
     "parse_params",
@@ -61,6 +63,8 @@ def add_param_option(parser: Any) -> None:
 
 def print_json(obj: Any) -> None:
     """Print one JSON object on stdout."""
+    from lmic.jsonable import to_jsonable
+
     sys.stdout.write(json.dumps(to_jsonable(obj), indent=2, allow_nan=False) + "\n")
 
 
@@ -123,3 +127,12 @@ def check_executor_args(args: argparse.Namespace) -> None:
     spec = args.executor
     if spec is not None and not (spec in ("local", "dask") or spec.startswith("tcp://")):
         raise DataError(f"--executor {spec}: use local, dask or tcp://HOST:PORT")
+
+
+def __getattr__(name: str) -> Any:
+    """``to_jsonable`` (re-exported from :mod:`lmic.jsonable`) is imported on first use: numpy."""
+    if name == "to_jsonable":
+        from lmic.jsonable import to_jsonable
+
+        return to_jsonable
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -23,11 +23,10 @@ from __future__ import annotations
 
 import argparse
 import math
+from typing import TYPE_CHECKING
 
-from rich.console import Console
-from rich.table import Table
-
-from lmic.certify.certificate import AuditResult, audit_certificate
+if TYPE_CHECKING:  # imported by the functions that use them (lmic's start-up stays light)
+    from lmic.certify.certificate import AuditResult
 
 __all__ = ["register", "run", "exit_code"]
 
@@ -78,6 +77,7 @@ def _tolerances(items: list[str]) -> dict[str, float]:
 def exit_code(result: AuditResult) -> int:
     """0 consistent and certified, 3 consistent and infeasible-certified, 1 otherwise.
 
+    >>> from lmic.certify.certificate import AuditResult
     >>> exit_code(AuditResult(ok=False, verdict="rejected", recorded_verdict="certified"))
     1
     """
@@ -98,6 +98,11 @@ def _fmt(v: object) -> str:
 
 def run(args: argparse.Namespace) -> int:
     """Audit the certificate; print a table (or JSON); return the exit code."""
+    from rich.console import Console
+    from rich.table import Table
+
+    from lmic.certify.certificate import audit_certificate
+
     result = audit_certificate(args.certificate, exact=args.exact, tol=_tolerances(args.tol) or None)
     code = exit_code(result)
     if args.json:

@@ -29,18 +29,18 @@ import sys
 import types
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-import sympy
-
+from lmic.commands._check_values import _dim, _environment, choose_dims
 from lmic.errors import DataError, LmicError
-from lmic.template.blocks import STAR, Block
-from lmic.template.builder import Template
-from lmic.template.convert import as_expr
-from lmic.template.theorem import Theorem
 
-__all__ = ["register", "run", "check_theorem", "load_module_theorems", "CheckReport"]
+if TYPE_CHECKING:  # numpy, sympy and the template layer are imported by the functions that use them
+    import numpy as np
+
+    from lmic.template.builder import Template
+    from lmic.template.theorem import Theorem
+
+__all__ = ["register", "run", "check_theorem", "load_module_theorems", "CheckReport", "choose_dims"]
 
 
 @dataclass
@@ -57,111 +57,16 @@ class CheckReport:
     summary: str = ""
 
 
-# ---- dimensions and random values ------------------------------------------------------------
-
-
-def _shapes(t: Template) -> list[Any]:
-    out: list[Any] = []
-    for d in t.data_decls + t.variables:
-        out += [as_expr(s) for s in d.shape]
-    for v in t.variables:
-        out += [as_expr(b) for b in v.blocks]
-    for c in t.consts:
-        if c.shape is not None:
-            out += [as_expr(s) for s in c.shape]
-    return out
-
-
-def choose_dims(t: Template, seed: int = 0, tries: int = 400) -> dict[sympy.Symbol, int] | None:
-    """Small random dimensions making every declared shape a positive integer.
-
-    >>> t = Template("x"); n, p = t.dims("n p"); _ = t.data("H", n - p, n)
-    >>> d = choose_dims(t); d[n] > d[p] >= 1
-    True
-    """
-    rng = np.random.default_rng(seed)
-    shapes = _shapes(t)
-    k = len(t.dimensions)
-    if k == 0:
-        return {}
-    for attempt in range(tries):
-        hi = 2 + k + 3 + attempt // 50
-        pool = np.arange(1 if attempt >= tries // 2 else 2, hi)
-        if len(pool) >= k and attempt < tries // 2:
-            vals = rng.choice(pool, size=k, replace=False)
-        else:
-            vals = rng.choice(pool, size=k, replace=True)
-        dims = {s: int(v) for s, v in zip(t.dimensions, vals, strict=True)}
-        ok = True
-        for s in shapes:
-            v = as_expr(s.xreplace(dims))
-            if not (v.is_Integer and int(v) >= 1):
-                ok = False
-                break
-        if ok:
-            return dims
-    return None
-
-
-def _dim(s: Any, dims: dict) -> int:
-    return int(as_expr(s).xreplace(dims))
-
-
-def _random_matrix(rng: np.random.Generator, r: int, c: int, kind: str = "full") -> np.ndarray:
-    M = rng.standard_normal((r, c))
-    if kind in ("symmetric", "pd") and r == c:
-        M = M + M.T
-        if kind == "pd":
-            M = M @ M.T / max(r, 1) + np.eye(r)
-    if kind == "diagonal":
-        M = np.diag(rng.standard_normal(r))
-    return M
-
-
-def _param_value(p: Any) -> float:
-    if p.default is not None:
-        return float(p.default)
-    for v in (0.5, 2.0, 1.0, -0.5, 0.0):
-        if sympy.Float(v) in p.domain or sympy.Integer(int(v)) == v and sympy.Integer(int(v)) in p.domain:
-            return v
-    return 1.0
-
-
-def _environment(t: Template, dims: dict, rng: np.random.Generator) -> dict[str, Any]:
-    env: dict[str, Any] = {}
-    for d in t.data_decls:
-        kind = "pd" if d.positive_definite else ("symmetric" if d.symmetric else "full")
-        env[d.name] = _random_matrix(rng, _dim(d.shape[0], dims), _dim(d.shape[1], dims), kind)
-    for p in t.params:
-        env[p.name] = _param_value(p)
-    for c in t.consts:
-        if c.shape is None:
-            env[c.name] = 0.7
-        else:  # a square constant is taken symmetric: its symmetry is unknown without data
-            env[c.name] = _random_matrix(rng, _dim(c.shape[0], dims), _dim(c.shape[1], dims), "symmetric")
-    for v in t.variables:
-        r, cols = _dim(v.shape[0], dims), _dim(v.shape[1], dims)
-        if v.kind == "scalar":
-            env[v.name] = 0.3
-        elif v.kind == "blockdiag":
-            sizes = [_dim(b, dims) for b in v.blocks]
-            M = np.zeros((r, r))
-            k = 0
-            for s in sizes:
-                M[k : k + s, k : k + s] = _random_matrix(rng, s, s, "pd")
-                k += s
-            env[v.name] = M
-        else:
-            env[v.name] = _random_matrix(rng, r, cols, {"symmetric": "pd"}.get(v.kind, v.kind))
-    return env
-
-
 # ---- the checks ----------------------------------------------------------------------------------
 
 
 def _bilinear(t: Template) -> list[str]:
     """Every product of decision variables, and every non-linear use of one."""
+    import sympy
+
     from lmic.compile.plan import _Analyser, _atom_var
+    from lmic.template.blocks import STAR
+    from lmic.template.convert import as_expr
 
     an = _Analyser(t)
     out: list[str] = []
@@ -217,10 +122,17 @@ def _dims_text(dims: dict) -> str:
 
 
 def _shape_of(v: Any) -> tuple[int, int]:
+    import numpy as np
+
     return v.shape if isinstance(v, np.ndarray) else (1, 1)
 
 
 def _lmi_numeric(t: Template, dims: dict, env: dict) -> list[str]:
+    import numpy as np
+    import sympy
+
+    from lmic.template.blocks import STAR
+
     out: list[str] = []
     at = f"(at {_dims_text(dims)})"
     for lmi in t.lmis:
@@ -278,6 +190,9 @@ def _lmi_numeric(t: Template, dims: dict, env: dict) -> list[str]:
 
 
 def _derived_numeric(t: Template, dims: dict, env: dict) -> list[str]:
+    import numpy as np
+    import sympy
+
     out: list[str] = []
     at = f"(at {_dims_text(dims)})"
     for d in t.derived:
@@ -353,6 +268,8 @@ def _code_strings(fn: Any, depth: int = 0) -> set[str]:
 
 
 def _unused(t: Template) -> list[str]:
+    from lmic.template.blocks import STAR, Block
+
     def names(e: Any) -> set[str]:
         if isinstance(e, Block):
             return set().union(*(names(x) for row in e.rows for x in row if x is not STAR))
@@ -394,6 +311,8 @@ def _unused(t: Template) -> list[str]:
 def _one(
     thm: Theorem, options: dict[str, Any], seed: int, errors: list | None = None
 ) -> tuple[list[str], dict, Template | None]:
+    import numpy as np
+
     try:
         t = thm.template(options)
     except LmicError as err:
@@ -465,6 +384,8 @@ def load_module_theorems(path: str | Path) -> tuple[list[Theorem], list[str]]:
 
     Raises :class:`DataError` (one line, with the file and line) when the file cannot be imported.
     """
+    from lmic.template.theorem import Theorem
+
     p = Path(path)
     if not p.is_file():
         raise DataError(f"{p}: no such file")

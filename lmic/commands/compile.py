@@ -6,7 +6,6 @@ import argparse
 import sys
 
 from lmic.commands._common import add_param_option, parse_params
-from lmic.compile import compile_theorem
 
 __all__ = ["register", "run"]
 
@@ -23,6 +22,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Compile and write the IR atomically."""
+    from lmic.compile import compile_theorem
     from lmic.ir.io import save_problem
     from lmic.output import check_output_path
 

@@ -9,13 +9,12 @@ from __future__ import annotations
 
 import argparse
 import sys
-
-from rich.console import Console
+from typing import TYPE_CHECKING
 
 from lmic.commands._common import parse_params, print_json
-from lmic.registry import get_theorem
-from lmic.template.render import describe, theorem_latex
-from lmic.template.theorem import Theorem
+
+if TYPE_CHECKING:  # the template layer (sympy) is imported by run
+    from lmic.template.theorem import Theorem
 
 __all__ = ["register", "run"]
 
@@ -44,6 +43,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the theorem's declarations and LMIs."""
+    from rich.console import Console
+
+    from lmic.registry import get_theorem
+    from lmic.template.render import describe, theorem_latex
+
     thm = get_theorem(args.theorem)
     options = parse_params(args.param)
     t = thm.template(options)

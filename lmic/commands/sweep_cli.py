@@ -13,10 +13,12 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from lmic.errors import LmicError
-from lmic.sweep import PointResult, SupResult, SweepResult, maximize, minimize, parse_grid, sweep, write_end_certificate
+
+if TYPE_CHECKING:  # lmic.sweep (numpy, solvers) is imported by run_cli: the parser stays light
+    from lmic.sweep import PointResult, SupResult, SweepResult
 
 __all__ = ["add_cli_options", "run_cli"]
 
@@ -108,6 +110,7 @@ class _Bar:
 def run_cli(args: argparse.Namespace) -> int:
     """Run ``lmic solve THEOREM SYSTEM --maximize P`` or ``--sweep P=a:b:n``; return the exit code."""
     from lmic.commands._common import parse_params, print_json, solve_options
+    from lmic.sweep import maximize, minimize, parse_grid, sweep, write_end_certificate
 
     if sum(bool(a) for a in (args.maximize, args.minimize, args.sweep)) > 1:
         raise LmicError("give one of --maximize, --minimize, --sweep")

@@ -9,11 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from rich.console import Console
-from rich.table import Table
-
 from lmic.commands._common import print_json
-from lmic.registry import broken_plugins, conflicts, list_theorems
 
 __all__ = ["register", "run"]
 
@@ -33,10 +29,14 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """List id, title, citation and objective of every theorem; report broken plugins."""
-    thms = list_theorems()
-    broken = broken_plugins()
-    clashes = conflicts()
+    """List id, title, citation and objective of every theorem; report broken plugins.
+
+    The list comes from :func:`lmic.plugin_index.theorem_index` (cached: no plugin is imported
+    when nothing changed since the last run).
+    """
+    from lmic.plugin_index import theorem_index
+
+    thms, broken, clashes = theorem_index()
     if args.json:
         print_json(
             {
@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
                         "citation": t.citation,
                         "kind": t.kind,
                         "objective": t.objective,
-                        "provider": t.provider.to_dict() if t.provider else None,
+                        "provider": t.provider,
                     }
                     for t in thms
                 ],
@@ -59,6 +59,9 @@ def run(args: argparse.Namespace) -> int:
             }
         )
     else:
+        from rich.console import Console
+        from rich.table import Table
+
         console = Console(highlight=False, soft_wrap=True)
         table = Table(title=f"{len(thms)} theorems")
         # ids are never cut, whatever the terminal width (the other columns fold)

@@ -1,7 +1,8 @@
 """Compile a theorem template plus a system's numbers into the IR.
 
-:func:`compile_theorem` analyses a theorem once per set of structural options (cached) and
-binds numbers to the cached plan; a parameter sweep re-binds, it does not re-analyse.
+:func:`compile_theorem` analyses a theorem once per set of structural options (cached in memory,
+and on disk across processes by :mod:`lmic.compile.cache`) and binds numbers to the cached plan;
+a parameter sweep re-binds, it does not re-analyse.
 
 Examples
 --------
@@ -18,6 +19,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from lmic.compile.bind import bind
+from lmic.compile.cache import cached_analyse
 from lmic.compile.plan import Plan, analyse
 from lmic.ir.problem import Problem
 from lmic.system import System, load_system
@@ -53,7 +55,7 @@ def plan_for(theorem: Theorem | str, params: Mapping[str, Any] | None = None) ->
         plan = _PLANS.get((*tkey, tuple(sorted(chosen.items()))))
         if plan is not None:
             return plan
-    plan = analyse(thm, params)
+    plan = cached_analyse(thm, params)
     _OPTION_DEFAULTS[tkey] = {o.name: o.default for o in plan.template.options}
     _PLANS[(*tkey, tuple(sorted(plan.options.items())))] = plan
     return plan

@@ -50,7 +50,7 @@ from lmic.template.builder import Template
 from lmic.template.convert import as_expr
 from lmic.template.theorem import Theorem
 
-__all__ = ["Term", "EntryPlan", "LmiPlan", "LinearForm", "Plan", "analyse"]
+__all__ = ["Term", "EntryPlan", "LmiPlan", "LinearForm", "Plan", "analyse", "analyse_template"]
 
 
 @dataclass(frozen=True)
@@ -133,8 +133,15 @@ class Plan:
 
 
 def analyse(theorem: Theorem, options: Mapping[str, Any] | None = None) -> Plan:
-    """Build the template of ``theorem`` and expand it into a :class:`Plan`."""
-    t = theorem.template(options)
+    """Build the template of ``theorem`` and expand it into a :class:`Plan`.
+
+    :func:`lmic.compile.cache.cached_analyse` is the same with the expansion cached on disk.
+    """
+    return analyse_template(theorem, theorem.template(options))
+
+
+def analyse_template(theorem: Theorem, t: Template) -> Plan:
+    """Expand the built template ``t`` of ``theorem`` into a :class:`Plan` (see :func:`analyse`)."""
     an = _Analyser(t)
     lmis = [an.lmi(d.name, d.spec) for d in t.lmis]
     constraints = []

@@ -1,0 +1,203 @@
+"""What ``lmic theorems`` lists, without importing every plugin (and sympy) each time.
+
+:func:`theorem_index` returns each installed theorem's metadata (:class:`TheoremInfo`: id,
+title, citation, kind, objective, provider), the plugins that failed to load and the ambiguous
+ids -- exactly what the full registry (:mod:`lmic.registry`) gives. The full registry imports
+every plugin module; its answer is stored in lmic's on-disk cache (:mod:`lmic.cache`, kind
+``theorems``), keyed by a *fingerprint* of everything that answer depends on:
+
+* lmic's version and the Python version;
+* every entry point of the ``lmic.theorems`` group (name, target, distribution and version);
+* size and modification time of every ``.py`` file of each plugin's top-level package and of
+  lmic itself (editable installs change files, not versions);
+* the modification time of every folder on ``sys.path`` but the working folder (installing or
+  removing a distribution changes its folder).
+
+Only a clean answer is stored (no broken plugin, no ambiguous id): a failure is re-examined by
+the full registry on every run, so ``lmic theorems`` keeps failing CI until it is fixed. Any
+plugin works unchanged (nothing is declared by the plugin); ``LMIC_NO_CACHE=1`` forces the full
+registry. ``LMIC_DISABLE_PLUGIN_AUTOLOAD`` bypasses the index (nothing is discovered).
+
+Examples
+--------
+>>> infos, broken, clashes = theorem_index()
+>>> any(i.id == "qib.thm1" for i in infos), broken, clashes
+(True, [], [])
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import sys
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from lmic import cache
+from lmic._version import __version__
+
+if TYPE_CHECKING:  # the registry imports the template layer (sympy): only on a miss
+    from lmic.registry import BrokenPlugin, Conflict
+    from lmic.template.theorem import Theorem
+
+__all__ = ["TheoremInfo", "theorem_index", "fingerprint", "KIND"]
+
+#: the cache kind of the index
+KIND = "theorems"
+GROUP = "lmic.theorems"
+_KIND_WORDS = {"S": "synthesis", "A": "analysis"}
+
+
+@dataclass(frozen=True)
+class TheoremInfo:
+    """A theorem's metadata as ``lmic theorems`` prints it (no build function, no sympy).
+
+    >>> TheoremInfo("a.b", "t", "c", "A", "feasibility", None).kind_word
+    'analysis'
+    """
+
+    id: str
+    title: str
+    citation: str
+    kind: str
+    objective: str
+    provider: dict[str, str] | None
+
+    @property
+    def kind_word(self) -> str:
+        """``synthesis`` or ``analysis``."""
+        return _KIND_WORDS.get(self.kind, self.kind)
+
+    @classmethod
+    def of(cls, thm: Theorem) -> TheoremInfo:
+        """The metadata of a registered theorem."""
+        provider = thm.provider.to_dict() if thm.provider else None
+        return cls(thm.id, thm.title, thm.citation, thm.kind, thm.objective, provider)
+
+
+def _files(root: Path) -> list[list[Any]]:
+    """``[relative path, size, mtime_ns]`` of every ``.py`` file below ``root`` (or of ``root``)."""
+    if root.is_file():
+        st = root.stat()
+        return [[root.name, st.st_size, st.st_mtime_ns]]
+    out: list[list[Any]] = []
+    for folder, dirs, names in os.walk(root):
+        dirs[:] = sorted(d for d in dirs if d != "__pycache__" and not d.startswith("."))
+        for name in sorted(names):
+            if name.endswith(".py"):
+                path = os.path.join(folder, name)
+                st = os.stat(path)
+                out.append([os.path.relpath(path, root), st.st_size, st.st_mtime_ns])
+    return out
+
+
+def _package_root(top: str) -> Path | None:
+    """The folder (or single file) of the top-level module ``top``, found without importing it."""
+    spec = importlib.util.find_spec(top)
+    if spec is None:
+        return None
+    if spec.submodule_search_locations:
+        return Path(list(spec.submodule_search_locations)[0])
+    return Path(spec.origin) if spec.origin else None
+
+
+def fingerprint() -> dict[str, Any] | None:
+    """The key of the index: what the registry's answer depends on (module docstring).
+
+    ``None`` when it cannot be computed (a plugin's module cannot be located): no caching.
+
+    >>> fp = fingerprint(); fp["lmic"] == __import__("lmic").__version__
+    True
+    """
+    from importlib.metadata import entry_points
+
+    try:
+        eps = []
+        tops: set[str] = set()
+        for ep in entry_points(group=GROUP):
+            dist = getattr(ep, "dist", None)
+            eps.append([ep.name, ep.value, str(getattr(dist, "name", "")), str(getattr(dist, "version", ""))])
+            tops.add(ep.value.split(":")[0].split(".")[0].strip())
+        files: dict[str, Any] = {"lmic": _files(Path(__file__).resolve().parent)}
+        for top in sorted(tops):
+            root = _package_root(top)
+            if root is None:
+                return None
+            files[top] = [str(root), _files(root)]
+        paths = []
+        cwd = os.getcwd()
+        for entry in sys.path:
+            if entry in ("", ".") or os.path.abspath(entry) == cwd:
+                continue  # the working folder (python -m): files written there do not install anything
+            try:
+                paths.append([entry, os.stat(entry or ".").st_mtime_ns])
+            except OSError:
+                paths.append([entry, None])
+    except (OSError, ValueError, ImportError):
+        return None
+    return {
+        "lmic": __version__,
+        "python": list(sys.version_info[:3]) + [sys.implementation.name],
+        "entry_points": sorted(eps),
+        "files": files,
+        "sys_path": paths,
+    }
+
+
+def _from_payload(payload: Any) -> list[TheoremInfo] | None:
+    """The index stored in the cache, checked field by field; ``None`` if anything is off."""
+    if not isinstance(payload, dict) or not isinstance(payload.get("theorems"), list):
+        return None
+    out = []
+    for rec in payload["theorems"]:
+        if not isinstance(rec, dict) or set(rec) != {"id", "title", "citation", "kind", "objective", "provider"}:
+            return None
+        if not all(isinstance(rec[k], str) for k in ("id", "title", "citation", "kind", "objective")):
+            return None
+        prov = rec["provider"]  # [key, value] pairs: the cache sorts keys, the order is the dict's
+        if prov is not None:
+            if not isinstance(prov, list) or not all(
+                isinstance(kv, list) and len(kv) == 2 and isinstance(kv[0], str) for kv in prov
+            ):
+                return None
+            prov = {k: v for k, v in prov}
+        out.append(TheoremInfo(**{**rec, "provider": prov}))
+    if [i.id for i in out] != sorted({i.id for i in out}):
+        return None
+    return out
+
+
+def full_index() -> tuple[list[TheoremInfo], list[BrokenPlugin], list[Conflict]]:
+    """The answer of the full registry (imports every plugin)."""
+    from lmic.registry import broken_plugins, conflicts, list_theorems
+
+    return [TheoremInfo.of(t) for t in list_theorems()], broken_plugins(), conflicts()
+
+
+def theorem_index() -> tuple[list[TheoremInfo], list[BrokenPlugin], list[Conflict]]:
+    """Installed theorems (sorted by id), broken plugins and ambiguous ids; cached (see above)."""
+    registry = sys.modules.get("lmic.registry")
+    if registry is not None and getattr(registry.REGISTRY, "_loaded", False):
+        return full_index()  # already loaded in this process (theorems registered from Python too)
+    if os.environ.get("LMIC_DISABLE_PLUGIN_AUTOLOAD") or cache.cache_dir() is None:
+        return full_index()
+    key = fingerprint()
+    if key is not None:
+        infos = _from_payload(cache.load(KIND, key))
+        if infos is not None:
+            return infos, [], []
+    infos, broken, clashes = full_index()
+    # stored under the state *after* loading (importing a plugin may write __pycache__ into a
+    # folder of sys.path), provided no source file or entry point changed meanwhile
+    after = fingerprint() if key is not None else None
+    if key is None or after is None or any(after[k] != key[k] for k in ("entry_points", "files")):
+        return infos, broken, clashes
+    key = after
+    if not broken and not clashes:
+        records = [
+            {**asdict(i), "provider": None if i.provider is None else [list(kv) for kv in i.provider.items()]}
+            for i in infos
+        ]
+        cache.store(KIND, key, {"theorems": records})
+    return infos, broken, clashes
