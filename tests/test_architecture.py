@@ -105,7 +105,6 @@ KNOWN_OVERSIZE: dict[str, str] = {
     "lmic.certify.check": "issue #10",
     "lmic.certify.farkas": "issue #10",
     "lmic.certify.certificate": "issue #10",
-    "lmic.certify.enclosure": "issue #10 (split: dual repair, rigorous bounds, exact mode)",
     "lmic.reductions.strict": "issue #10 (fixed-margin and max-margin passes apart)",
     "lmic.template.builder": "issue #10 (authoring sugar apart from the declaration core)",
     "lmic.simulate.run": "issue #10",
