@@ -424,7 +424,8 @@ def _enclosure(
 ) -> tuple[dict[str, Any] | None, float]:
     """The enclosure of an optimisation problem's optimal value (``None`` for feasibility).
 
-    A degenerate dual is retried on a perturbed problem, solved on the backend that answered.
+    A degenerate dual is retried on a perturbed problem, then on a centred dual point (the dual
+    problem solved for the largest interior margin), both on the backend that answered.
     """
     if problem.objective.sense == "feasibility" or cert is None or sol.status in ("infeasible", "unbounded"):
         return None, 0.0
@@ -440,7 +441,14 @@ def _enclosure(
             return None
         return other.duals if other.status in ("optimal", "inaccurate") else None
 
-    enc = enclosure(problem, sol.duals, x, exact=exact, resolve=resolve)
+    def solve_point(other_problem: Problem) -> np.ndarray | None:
+        try:
+            other = solve_problem(other_problem, backend, options)
+        except LmicError:
+            return None
+        return other.x if other.status in ("optimal", "inaccurate") else None
+
+    enc = enclosure(problem, sol.duals, x, exact=exact, resolve=resolve, solve_point=solve_point)
     return enc, time.perf_counter() - t0
 
 

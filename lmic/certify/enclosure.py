@@ -111,6 +111,7 @@ from typing import Any
 
 import numpy as np
 
+from lmic.certify.enclosure_conditional import RADIUS_FACTOR, best_box_bound, verify_box_bound
 from lmic.certify.enclosure_dual import dual_bound, verify_dual_bound
 from lmic.certify.enclosure_exact import EXACT_MAX_N
 from lmic.certify.enclosure_float import lambda_min_lower, primal_end
@@ -142,6 +143,7 @@ def enclosure(
     *,
     exact: bool = False,
     resolve: Callable[[Problem], dict[str, Any] | None] | None = None,
+    solve_point: Callable[[Problem], np.ndarray | None] | None = None,
 ) -> dict[str, Any]:
     """The certified enclosure of the optimal value, in the problem's own sense.
 
@@ -157,6 +159,9 @@ def enclosure(
     exact : bool
     resolve : callable, optional
         A solve of a perturbed problem on the caller's backend (:func:`dual_bound`).
+    solve_point : callable, optional
+        A solve on the caller's backend returning its primal point (the centred route of
+        :func:`dual_bound`).
 
     Returns
     -------
@@ -188,7 +193,7 @@ def enclosure(
         dual = {"proven": False, "reason": "the solver returned no dual point"}
     else:
         try:
-            dual = dual_bound(problem, duals, exact=exact, resolve=resolve)
+            dual = dual_bound(problem, duals, exact=exact, resolve=resolve, solve_point=solve_point)
         except CertificateError as exc:
             dual = {"proven": False, "reason": str(exc)}
     out["dual"] = dual
@@ -199,6 +204,8 @@ def enclosure(
         pe = primal_end(problem, x)
         upper_value = pe["value"] if pe["proven"] else None
         out["primal"] = "certified point" if pe["proven"] else "no rigorous primal end: " + pe["reason"]
+    if not dual.get("proven") and x is not None and duals and duals.get("lmis") is not None:
+        out["conditional"] = _conditional(problem, duals, x)
     bound = None
     if dual.get("proven"):
         bound = dual["lower"] if sense == "min" else -dual["lower"]
@@ -230,6 +237,18 @@ def enclosure(
     return out
 
 
+def _conditional(problem: Problem, duals: dict[str, Any], x: np.ndarray) -> dict[str, Any]:
+    """The box bound (:mod:`lmic.certify.enclosure_conditional`) in the problem's own sense,
+    radius :data:`~lmic.certify.enclosure_conditional.RADIUS_FACTOR` times the point's size."""
+    radius = RADIUS_FACTOR * max(1.0, float(np.max(np.abs(np.asarray(x, dtype=float)), initial=0.0)))
+    box = best_box_bound(problem, duals, radius)
+    if not box.get("proven"):
+        return {"end": None, "value": None, "reason": box["reason"]}
+    end = "lower" if problem.objective.sense == "min" else "upper"
+    value = box["lower"] if end == "lower" else -box["lower"]
+    return {"end": end, "value": value, "radius": radius, "norm": "inf", "reason": box["reason"], "bound": box}
+
+
 def summary(record: dict[str, Any] | None) -> dict[str, Any] | None:
     """The enclosure without the dual point's matrices (for ``--json`` output).
 
@@ -241,6 +260,8 @@ def summary(record: dict[str, Any] | None) -> dict[str, Any] | None:
     out = {k: v for k, v in record.items() if k != "restored_x"}
     if isinstance(out.get("dual"), dict):
         out["dual"] = {k: v for k, v in out["dual"].items() if k != "dual"}
+    if isinstance(out.get("conditional"), dict):
+        out["conditional"] = {k: v for k, v in out["conditional"].items() if k != "bound"}
     return out
 
 
@@ -267,10 +288,20 @@ def describe(record: dict[str, Any] | None) -> list[str]:
     primal_end = "upper" if dual_end == "lower" else "lower"
     if dual.get("proven"):
         how = "exact rational arithmetic" if dual.get("method") == "exact" else "rigorous floating-point error bounds"
-        lines.append(f"  {dual_end} end: dual point proved feasible ({how}; interior shift {dual.get('shift'):g})")
+        if dual.get("route") == "centred":
+            where = f"centred dual point, weight {dual.get('theta'):g} at loss {dual.get('centring_loss'):g}"
+        else:
+            where = f"interior shift {dual.get('shift'):g}"
+        lines.append(f"  {dual_end} end: dual point proved feasible ({how}; {where})")
     else:
         lines.append(f"  {dual_end} end: no certified dual bound ({dual.get('reason', 'not attempted')})")
     lines.append(f"  {primal_end} end: {record.get('primal', 'no certified point')}")
+    cond = record.get("conditional") or {}
+    if cond.get("value") is not None:
+        lines.append(
+            f"  conditional {cond['end']} bound {cond['value']:.10g}: not a bound of the {kind}; it holds only "
+            f"for solutions with ||x||_inf <= {cond['radius']:.3g} (VSDP's bound for the unproved dual point)"
+        )
     if kind in ("infimum", "supremum"):
         lines.append(f"  strict constraints: the optimum is an {kind}, which no feasible point need attain")
     return lines
@@ -364,6 +395,15 @@ def audit_enclosure(
         v = verify_dual_bound(problem, dual)
         if not v["ok"]:
             return {"ok": False, "field": "enclosure.dual", "message": "enclosure.dual: " + v["reason"]}
+    cond = record.get("conditional") or {}
+    if cond.get("value") is not None:
+        box = cond.get("bound") or {}
+        expect = -float(box.get("lower", math.nan)) if sense == "max" else float(box.get("lower", math.nan))
+        v = verify_box_bound(problem, box) if box else {"ok": False, "reason": "no dual point recorded"}
+        if float(cond["value"]) != expect or float(cond.get("radius", math.nan)) != float(box.get("radius", math.nan)):
+            v = {"ok": False, "reason": "the value or radius differs from the recorded box bound"}
+        if not v["ok"]:
+            return {"ok": False, "field": "enclosure.conditional", "message": "enclosure.conditional: " + v["reason"]}
     lo, hi = record.get("lower"), record.get("upper")
     if lo is not None and hi is not None:
         if float(lo) > float(hi):

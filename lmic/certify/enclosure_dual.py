@@ -25,11 +25,13 @@ from typing import Any
 
 import numpy as np
 
+from lmic.certify.enclosure_centre import centred_bound
 from lmic.certify.enclosure_exact import _prove_exact
 from lmic.certify.enclosure_float import _prove_float
 from lmic.certify.enclosure_repair import (
     PERTURBATIONS,
     SHIFTS,
+    _active_of,
     _jacobian,
     _parse,
     _prepare,
@@ -50,6 +52,7 @@ def dual_bound(
     exact: bool = False,
     resolve: Callable[[Problem], dict[str, Any] | None] | None = None,
     budget_s: float = 20.0,
+    solve_point: Callable[[Problem], np.ndarray | None] | None = None,
 ) -> dict[str, Any]:
     """Prove a lower bound of the minimisation form's optimal value from a dual point.
 
@@ -67,11 +70,15 @@ def dual_bound(
         dual of :func:`perturbed_problem` is tried (``route`` ``"perturbed"``).
     budget_s : float
         No new attempt (shift or perturbation) starts after this many seconds.
+    solve_point : callable, optional
+        ``solve_point(problem) -> x or None`` (a solve on the caller's backend, its primal
+        point). When neither the shifts nor the perturbation prove, the dual problem is solved
+        for a centred point (:mod:`lmic.certify.enclosure_centre`, ``route`` ``"centred"``).
 
     Returns
     -------
     dict
-        ``proven`` (bool), ``route`` (``"solver dual"`` or ``"perturbed"``), ``lower`` (a
+        ``proven`` (bool), ``route`` (``"solver dual"``, ``"perturbed"`` or ``"centred"``), ``lower`` (a
         bound ``<= inf q_0 + q . x``, the minimisation form:
         for ``max`` problems ``-lower`` bounds the maximum from above), ``method``
         (``"rigorous-float"`` or ``"exact"``), ``shift`` (the ``eps_rel`` used), ``reason``,
@@ -97,7 +104,7 @@ def dual_bound(
     J, ranges = _jacobian(problem)
     out: dict[str, Any] = {"proven": False, "reason": "no shift gave a provable dual point"}
     top = _scale(problem, mats0, y0)
-    attempts: list[tuple[str, float, list, np.ndarray]] = [("solver dual", e, mats0, y0) for e in SHIFTS]
+    attempts: list[tuple[str, float, Any, Any]] = [("solver dual", e, mats0, y0) for e in SHIFTS]
     for k, (route, eps_rel, mz, yz) in enumerate(attempts):
         if k and time.perf_counter() - t0 > budget_s:
             out["reason"] = f"{out.get('reason')}; time budget {budget_s:g} s spent after {k} attempts"
@@ -127,6 +134,16 @@ def dual_bound(
             break
         if k == len(SHIFTS) - 1 and resolve is not None:
             attempts += [("perturbed", e, None, None) for e in PERTURBATIONS]
+    if not out.get("proven") and solve_point is not None and time.perf_counter() - t0 <= budget_s:
+        mats_c, y_c, res = _centred(
+            problem, J, ranges, q, mats0, y0, top, solve_point, lambda: time.perf_counter() - t0 > budget_s
+        )
+        res.update(method="rigorous-float", shift=0.0, route="centred")
+        if res["proven"]:
+            res["dual"] = {"lmis": [Z.tolist() for Z in mats_c], "linear": y_c.tolist()}
+            out = res
+        else:
+            out["reason"] = f"{out.get('reason')}; {res['reason']}"
     if exact and out.get("proven"):
         mats, y = _parse(problem, out["dual"])
         ex = _prove_exact(problem, J, ranges, q, mats, y)
@@ -135,6 +152,26 @@ def dual_bound(
             out.update(method="exact", lower=ex["lower"], lower_exact=ex["lower_exact"])
     out["time_s"] = time.perf_counter() - t0
     return out
+
+
+def _centred(problem: Problem, J, ranges, q, mats0, y0, top, solve_point, deadline):
+    """The centred route: the solver's dual projected onto the cone, the drop rule's active
+    entries, then :func:`lmic.certify.enclosure_centre.centred_bound`."""
+    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
+    proj = []
+    for Z in mats0:
+        if not Z.size:
+            proj.append(Z)
+            continue
+        w, V = np.linalg.eigh(Z)
+        proj.append((V * np.maximum(w, 0.0)) @ V.T)
+    y = np.where(ge, np.maximum(y0, 0.0), y0)
+    active = _active_of(problem, proj, y, ranges, top)
+    try:
+        res, mats, y = centred_bound(problem, J, ranges, q, proj, y, active, top, solve_point, deadline)
+    except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
+        return proj, y, {"proven": False, "reason": f"numerical failure in the centred route: {exc}"}
+    return mats, y, res
 
 
 def verify_dual_bound(problem: Problem, record: dict[str, Any], *, exact: bool = False) -> dict[str, Any]:

@@ -116,7 +116,8 @@ def _repair(
         if now <= 1e-15 * scale or (len(history) >= 6 and now > 0.9 * history[-6]):
             break  # converged, or stalled (no interior point near: the proof will say so)
         history.append(now)
-        blocks, factors = [], []
+        blocks: list[Any] = []
+        factors: list[Any] = []
         for lmi, Z, (a, b) in zip(problem.lmis, mats, ranges, strict=True):
             if not lmi.dim:
                 factors.append(None)
@@ -263,19 +264,35 @@ def _prepare(
     proj = [Z + eps * np.eye(Z.shape[0]) if on else np.zeros_like(Z) for Z, on in zip(proj, keep, strict=True)]
     y = np.where(ge & rows_on, y + eps, np.where(ge, 0.0, y))
     mats, y = _repair(problem, J, ranges, q, [0.5 * (Z + Z.T) for Z in proj], y, floor=0.5 * eps)
-    # what the damped steps left: a plain least-norm step over the active entries (it may
-    # leave the cone by its own size, which the shift pays for; the proof decides)
+    mats, y = _least_norm(problem, J, ranges, q, mats, y, active)
+    return mats, y, active
+
+
+def _least_norm(problem: Problem, J, ranges, q, mats, y, active: np.ndarray, steps: int = 2):
+    """What the damped steps left: plain least-norm steps over the active entries (they may
+    leave the cone by their own size, which the shift pays for; the proof decides)."""
     u = _pack(problem, mats, y)
     Js = J[1:][:, np.flatnonzero(active)]
-    for _ in range(2):
+    for _ in range(steps):
         rho = q[1:] - J[1:] @ u
         if not np.any(rho):
             break
         M = (Js @ Js.T).toarray()
         w = np.linalg.lstsq(M, rho, rcond=None)[0]
         u[active] += Js.T @ w
-    mats, y = _unpack(problem, u, ranges)
-    return mats, y, active
+    return _unpack(problem, u, ranges)
+
+
+def _active_of(problem: Problem, mats: list, y: np.ndarray, ranges: list, top: float) -> np.ndarray:
+    """The entries of ``u`` kept by the drop rule of :func:`_prepare` (blocks and ``ge`` rows
+    whose multiplier is above :data:`DROP` times the largest; ``eq`` rows always)."""
+    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
+    active = np.ones(_pack(problem, mats, y).size, dtype=bool)
+    for Z, (a, b) in zip(mats, ranges, strict=True):
+        active[a:b] = bool(Z.size and float(np.max(np.linalg.eigvalsh(Z))) > DROP * top)
+    off = ranges[-1][1] if ranges else 0
+    active[off:] = ~ge | (y > DROP * top)
+    return active
 
 
 def _default_active(problem: Problem, ranges: list, u: np.ndarray) -> np.ndarray:
