@@ -155,7 +155,8 @@ def _repair(
                 e = G.T @ np.linalg.solve(Gm, rho)
         except (np.linalg.LinAlgError, ValueError):
             e = scipy.linalg.lstsq(G, rho, lapack_driver="gelsy", check_finite=False)[0]
-        k, norms, Es = 0, [0.0], []
+        k, norms = 0, [0.0]
+        Es: list[Any] = []
         for f in factors:
             if f is None:
                 Es.append(None)
