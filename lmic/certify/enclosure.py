@@ -111,7 +111,8 @@ from typing import Any
 
 import numpy as np
 
-from lmic.certify.enclosure_conditional import RADIUS_FACTOR, best_box_bound, verify_box_bound
+from lmic.certify.enclosure_centre import centred_bound, centring_problem
+from lmic.certify.enclosure_conditional import RADIUS_FACTOR, best_box_bound, box_bound, verify_box_bound
 from lmic.certify.enclosure_dual import dual_bound, verify_dual_bound
 from lmic.certify.enclosure_exact import EXACT_MAX_N
 from lmic.certify.enclosure_float import lambda_min_lower, primal_end
@@ -133,6 +134,12 @@ __all__ = [
     "audit_enclosure",
     "with_primal",
     "primal_end",
+    "box_bound",
+    "best_box_bound",
+    "verify_box_bound",
+    "RADIUS_FACTOR",
+    "centring_problem",
+    "centred_bound",
 ]
 
 
