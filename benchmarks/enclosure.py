@@ -5,12 +5,15 @@ For every problem, two methods run interleaved (``--repeat`` rounds, the order r
 * ``plain``: compile or load, solve, certify (:func:`lmic.api.solve_problem` and
   :func:`lmic.certify.certify`): what ``lmic solve`` did before the enclosure;
 * ``enclosure``: the same followed by :func:`lmic.certify.enclosure.enclosure` (dual repair,
-  rigorous proof, the perturbed solve when the dual is degenerate) and, when the solver's point
+  rigorous proof, the perturbed and centred solves when the dual is degenerate, the box bound
+  when nothing proves) and, when the solver's point
   has no rigorous primal end, the restoration solve (:mod:`lmic.backoff`); no backoff.
 
 The report gives medians, the extra time ``enclosure - plain`` and the ratio, the enclosure
-(lower, upper, relative gap) and, for SDPLIB, whether the published optimum (its rounding
-interval: the README prints few digits) meets the enclosure. Usage::
+(lower, upper, relative gap, the dual route that proved, the conditional box bound), the
+relative gap of one run on a second backend (``--compare``, SCS by default) and, for SDPLIB,
+whether the published optimum (its rounding interval: the README prints few digits) meets the
+enclosure. Usage::
 
     python benchmarks/enclosure.py                      # examples + SDPLIB, 3 rounds
     python benchmarks/enclosure.py --repeat 5 --json out.json --backend cvxopt
@@ -119,7 +122,11 @@ def run_once(problem: Any, backend: str, method: str) -> dict[str, Any]:
             other = solve_problem(p, backend)
             return other.duals if other.status in ("optimal", "inaccurate") else None
 
-        enc = enclosure(problem, sol.duals, x, resolve=resolve)
+        def solve_point(p: Any) -> Any:
+            other = solve_problem(p, backend)
+            return other.x if other.status in ("optimal", "inaccurate") else None
+
+        enc = enclosure(problem, sol.duals, x, resolve=resolve, solve_point=solve_point)
         key = "upper" if problem.objective.sense == "min" else "lower"
         if enc[key] is None and sol.x is not None:
             from lmic.backoff import restore
@@ -132,6 +139,8 @@ def run_once(problem: Any, backend: str, method: str) -> dict[str, Any]:
                     enc = with_primal(enc, pe["value"], "restored point")
                     break
         out.update(lower=enc["lower"], upper=enc["upper"], rel_gap=enc["rel_gap"], kind=enc["kind"])
+        out["route"] = enc["dual"].get("route") if enc["dual"].get("proven") else None
+        out["conditional"] = (enc.get("conditional") or {}).get("value")
         out["dual"] = enc["dual"].get("reason", "")
     out["time_s"] = time.perf_counter() - t0
     return out
@@ -143,6 +152,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--backend", default="clarabel")
     ap.add_argument("--only", default="", help="comma-separated problem labels")
     ap.add_argument("--json", default=None)
+    ap.add_argument("--compare", default="scs", help="a second backend run once for its gap ('' for none)")
     args = ap.parse_args(argv)
     only = {s for s in args.only.split(",") if s} or None
     published = _published()
@@ -168,8 +178,18 @@ def main(argv: list[str] | None = None) -> int:
             "enclosure_s": enc,
             "extra_s": enc - plain,
             "ratio": enc / plain if plain > 0 else float("nan"),
-            **{k: last.get(k) for k in ("verdict", "kind", "lower", "upper", "rel_gap", "dual", "error")},
+            **{
+                k: last.get(k)
+                for k in ("verdict", "kind", "lower", "upper", "rel_gap", "route", "conditional", "dual", "error")
+            },
         }
+        if args.compare:
+            try:
+                other = run_once(prob, args.compare, "enclosure")
+                row["compare_rel_gap"] = other.get("rel_gap")
+                row["compare_ends"] = (other.get("lower"), other.get("upper"))
+            except Exception as exc:  # a benchmark cell, not a crash
+                row["compare_rel_gap"] = f"{type(exc).__name__}"
         if label in published:
             a, b = rounding_interval(published[label])
             lo, hi = row["lower"], row["upper"]
@@ -193,12 +213,16 @@ def _print_row(row: dict[str, Any]) -> None:
     print(
         f"| {row['problem']} | {_fmt(row['plain_s'], '.3f')} | {_fmt(row['enclosure_s'], '.3f')} | "
         f"{_fmt(row['extra_s'], '.3f')} | {_fmt(row['ratio'], '.2f')} | {_fmt(row['lower'], '.10g')} | "
-        f"{_fmt(row['upper'], '.10g')} | {_fmt(row['rel_gap'], '.2g')} | {row.get('published', '-')} | "
-        f"{row.get('inside', '-')} |"
+        f"{_fmt(row['upper'], '.10g')} | {_fmt(row['rel_gap'], '.2g')} | {_fmt(row.get('route'))} | "
+        f"{_fmt(row.get('conditional'), '.8g')} | {_fmt(row.get('compare_rel_gap'), '.2g')} | "
+        f"{row.get('published', '-')} | {row.get('inside', '-')} |"
     )
 
 
 if __name__ == "__main__":
-    print("| problem | plain s | with enclosure s | extra s | ratio | lower | upper | rel gap | published | inside |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+    print(
+        "| problem | plain s | with enclosure s | extra s | ratio | lower | upper | rel gap | dual route "
+        "| box bound | SCS rel gap | published | inside |"
+    )
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---|")
     sys.exit(main())

@@ -370,7 +370,7 @@ def solve(
         # the certifier's tolerance, or a rejected point): the backed-off point, else a point
         # strictly inside from a solve with every constraint tightened (lmic.backoff.restore)
         t_rest = time.perf_counter()
-        from lmic.certify.enclosure import primal_end, with_primal
+        from lmic.certify.enclosure import polish_primal, primal_end, with_primal
 
         if back is not None and back.get("x") is not None:
             pe = primal_end(problem, np.asarray(back["x"], dtype=float))
@@ -383,6 +383,10 @@ def solve(
                 rest = restore(problem, sol.x, used, options, rel=rel)
                 pe = primal_end(problem, np.asarray(rest["x"], dtype=float)) if rest["x"] is not None else {}
                 if pe.get("proven"):
+                    # as close to the solver's point as the proof allows
+                    pol = polish_primal(problem, np.asarray(rest["x"], dtype=float), np.asarray(sol.x, dtype=float))
+                    if pol["proven"]:
+                        pe, rest = pol, dict(rest, x=pol["x"])
                     enc = with_primal(enc, pe["value"], "restored point")
                     enc["restored_x"] = rest["x"]
                     break

@@ -115,7 +115,7 @@ from lmic.certify.enclosure_centre import centred_bound, centring_problem
 from lmic.certify.enclosure_conditional import RADIUS_FACTOR, best_box_bound, box_bound, verify_box_bound
 from lmic.certify.enclosure_dual import dual_bound, verify_dual_bound
 from lmic.certify.enclosure_exact import EXACT_MAX_N
-from lmic.certify.enclosure_float import lambda_min_lower, primal_end
+from lmic.certify.enclosure_float import lambda_min_lower, polish_primal, primal_end
 from lmic.certify.enclosure_repair import PERTURBATIONS, SHIFTS, perturbed_problem
 from lmic.errors import CertificateError
 from lmic.ir.problem import Problem
@@ -134,6 +134,7 @@ __all__ = [
     "audit_enclosure",
     "with_primal",
     "primal_end",
+    "polish_primal",
     "box_bound",
     "best_box_bound",
     "verify_box_bound",
@@ -211,6 +212,18 @@ def enclosure(
         pe = primal_end(problem, x)
         upper_value = pe["value"] if pe["proven"] else None
         out["primal"] = "certified point" if pe["proven"] else "no rigorous primal end: " + pe["reason"]
+        if pe["proven"] and strict and solve_point is not None:
+            # the strict problem's point keeps the solver's margin: move it towards a point of
+            # the closed problem as far as the proof allows
+            pol = _polish_strict(problem, np.asarray(x, dtype=float), solve_point)
+            better = pol.get("proven") and (
+                pol["value"] < upper_value if sense == "min" else pol["value"] > upper_value
+            )
+            if better:
+                upper_value = pol["value"]
+                out["primal"] = "restored point"
+                out["restored_x"] = pol["x"]
+                out["polish"] = {"theta": pol["theta"], "from": "closed problem"}
     if not dual.get("proven") and x is not None and duals and duals.get("lmis") is not None:
         out["conditional"] = _conditional(problem, duals, x)
     bound = None
@@ -242,6 +255,28 @@ def enclosure(
         )
     out["consistent"] = True
     return out
+
+
+def _polish_strict(problem: Problem, x: np.ndarray, solve_point: Callable[[Problem], Any]) -> dict[str, Any]:
+    """:func:`~lmic.certify.enclosure_float.polish_primal` from ``x`` towards the solver's
+    point of the closed problem (every strict constraint made non-strict)."""
+    import dataclasses
+
+    from lmic.ir.problem import LinearConstraints
+
+    lin = problem.linear
+    closed = dataclasses.replace(
+        problem,
+        lmis=[dataclasses.replace(lmi, strict=False) for lmi in problem.lmis],
+        linear=LinearConstraints(lin.A, list(lin.kinds), [False] * len(lin), list(lin.names)),
+    )
+    try:
+        xb = solve_point(closed)
+    except (ValueError, ArithmeticError):
+        xb = None
+    if xb is None:
+        return {"proven": False}
+    return polish_primal(problem, x, np.asarray(xb, dtype=float))
 
 
 def _conditional(problem: Problem, duals: dict[str, Any], x: np.ndarray) -> dict[str, Any]:

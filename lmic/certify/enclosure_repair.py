@@ -33,7 +33,7 @@ from lmic.ir.svec import tril_rows_cols, tril_unvec
 __all__ = ["SHIFTS", "PERTURBATIONS", "DROP", "jacobian", "perturbed_problem"]
 
 #: relative shifts ``eps_rel`` tried, smallest first (step 2 of the module docstring)
-SHIFTS = (1e-12, 1e-10, 1e-9, 1e-8, 3e-8, 1e-7, 3e-7, 1e-6)
+SHIFTS = (1e-15, 1e-14, 1e-13, 3e-13, 1e-12, 1e-11, 1e-10, 1e-9, 1e-8, 1e-7, 1e-6)
 
 
 #: relative perturbations ``eps_rel`` of :func:`perturbed_problem` tried when the solver's
@@ -101,12 +101,14 @@ def _repair(
     y: np.ndarray,
     floor: float = 0.0,
     steps: int = 40,
+    objective: float | None = None,
 ):
     import scipy.linalg
 
     ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
-    Jx = J[1:].tocsc()
-    qn = q[1:]
+    # with ``objective``, g_0(u) is held at it too (the repair then keeps the dual objective)
+    Jx = J[1:].tocsc() if objective is None else J.tocsc()
+    qn = q[1:] if objective is None else np.concatenate([[objective], q[1:]])
     scale = float(np.max(np.abs(qn), initial=0.0)) + 1e-300
     history: list[float] = []
     for _ in range(steps):
@@ -237,10 +239,21 @@ def perturbed_problem(problem: Problem, eps: float) -> Problem:
 
 
 def _prepare(
-    problem: Problem, J, ranges, q, mats, y, eps_rel: float, top: float | None = None, drop: bool = True
+    problem: Problem,
+    J,
+    ranges,
+    q,
+    mats,
+    y,
+    eps_rel: float,
+    top: float | None = None,
+    drop: bool = True,
+    objective: float | None = None,
 ) -> tuple[list, np.ndarray, np.ndarray]:
     """Steps 1-3 of the module docstring; returns ``(Z_i, y, active)`` (``active``: the
-    entries of ``u`` the proof may correct; the others are exactly zero)."""
+    entries of ``u`` the proof may correct; the others are exactly zero). With
+    ``objective``, the repair also holds ``g_0(u)`` at that value (the solver's dual
+    objective), so the least-norm steps do not trade objective for feasibility."""
     ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
     proj = []
     for Z in mats:
@@ -264,18 +277,23 @@ def _prepare(
     active[off:] = rows_on
     proj = [Z + eps * np.eye(Z.shape[0]) if on else np.zeros_like(Z) for Z, on in zip(proj, keep, strict=True)]
     y = np.where(ge & rows_on, y + eps, np.where(ge, 0.0, y))
-    mats, y = _repair(problem, J, ranges, q, [0.5 * (Z + Z.T) for Z in proj], y, floor=0.5 * eps)
-    mats, y = _least_norm(problem, J, ranges, q, mats, y, active)
+    proj = [0.5 * (Z + Z.T) for Z in proj]
+    mats, y = _repair(problem, J, ranges, q, proj, y, floor=0.5 * eps, objective=objective)
+    mats, y = _least_norm(problem, J, ranges, q, mats, y, active, objective=objective)
     return mats, y, active
 
 
-def _least_norm(problem: Problem, J, ranges, q, mats, y, active: np.ndarray, steps: int = 2):
+def _least_norm(
+    problem: Problem, J, ranges, q, mats, y, active: np.ndarray, steps: int = 2, objective: float | None = None
+):
     """What the damped steps left: plain least-norm steps over the active entries (they may
     leave the cone by their own size, which the shift pays for; the proof decides)."""
     u = _pack(problem, mats, y)
-    Js = J[1:][:, np.flatnonzero(active)]
+    Jr = J[1:] if objective is None else J
+    qr = q[1:] if objective is None else np.concatenate([[objective], q[1:]])
+    Js = Jr[:, np.flatnonzero(active)]
     for _ in range(steps):
-        rho = q[1:] - J[1:] @ u
+        rho = qr - Jr @ u
         if not np.any(rho):
             break
         M = (Js @ Js.T).toarray()
