@@ -135,6 +135,9 @@ __all__ = [
     "with_primal",
     "primal_end",
     "polish_primal",
+    "best_of",
+    "GAP_TARGET",
+    "TIGHT_TOL",
     "box_bound",
     "best_box_bound",
     "verify_box_bound",
@@ -277,6 +280,61 @@ def _polish_strict(problem: Problem, x: np.ndarray, solve_point: Callable[[Probl
     if xb is None:
         return {"proven": False}
     return polish_primal(problem, x, np.asarray(xb, dtype=float))
+
+
+#: relative gap above which a caller may re-solve at :data:`TIGHT_TOL` (:func:`best_of`)
+GAP_TARGET = 1e-6
+#: the solver tolerance of that re-solve (interior-point backends)
+TIGHT_TOL = 1e-10
+
+
+def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dict[str, Any]:
+    """Both enclosures are proven: keep the better end of each, with its evidence.
+
+    ``second`` is the enclosure of another solve (e.g. at a tighter tolerance) whose point
+    ``second_x`` gave its primal end; a primal end taken from it is recorded as a
+    ``"restored point"`` (its ``restored_x``), which :func:`audit_enclosure` re-proves.
+
+    >>> a = {"sense": "min", "kind": "minimum", "lower": 1.0, "upper": 3.0, "dual": {"proven": True},
+    ...      "primal": "certified point"}
+    >>> b = {"sense": "min", "kind": "minimum", "lower": 0.5, "upper": 2.0, "dual": {"proven": True},
+    ...      "primal": "certified point"}
+    >>> r = best_of(a, b, [2.0])
+    >>> r["lower"], r["upper"], r["primal"], r["restored_x"], r["gap"]
+    (1.0, 2.0, 'restored point', [2.0], 1.0)
+    """
+    out = dict(first)
+    sense = first.get("sense")
+    pkey, dkey = ("upper", "lower") if sense == "min" else ("lower", "upper")
+    better = (lambda a, b: a < b) if sense == "min" else (lambda a, b: a > b)
+    pv, pv2 = first.get(pkey), second.get(pkey)
+    if pv2 is not None and (pv is None or better(pv2, pv)):
+        out[pkey] = pv2
+        if second.get("primal") == "restored point":
+            out["primal"], out["restored_x"] = "restored point", second.get("restored_x")
+        else:
+            out["primal"], out["restored_x"] = "restored point", list(np.asarray(second_x, dtype=float).tolist())
+        out.pop("polish", None)
+        if "polish" in second:
+            out["polish"] = second["polish"]
+    dv, dv2 = first.get(dkey), second.get(dkey)
+    if dv2 is not None and (dv is None or better(dv, dv2)):
+        out[dkey] = dv2
+        out["dual"] = second["dual"]
+        out.pop("conditional", None)
+    elif dv is None and second.get("conditional") and not first.get("conditional"):
+        out["conditional"] = second["conditional"]
+    lo, hi = out.get("lower"), out.get("upper")
+    if lo is not None and hi is not None:
+        out["gap"] = hi - lo
+        out["rel_gap"] = (hi - lo) / max(1.0, 0.5 * (abs(hi) + abs(lo))) if hi >= lo else 0.0
+        out["consistent"] = bool(hi >= lo)
+        out["reason"] = (
+            f"{out['kind']} in [{lo:.10g}, {hi:.10g}] (relative gap {out['rel_gap']:.2g})"
+            if hi >= lo
+            else f"inconsistent ends: lower {lo:.10g} > upper {hi:.10g}"
+        )
+    return out
 
 
 def _conditional(problem: Problem, duals: dict[str, Any], x: np.ndarray) -> dict[str, Any]:
