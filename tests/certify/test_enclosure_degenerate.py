@@ -5,6 +5,7 @@ theorems cross-checked between backends' certified ends, and the audit of the bo
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -135,7 +136,35 @@ def test_sampled_euler_ends_of_two_backends_bracket_each_other(seed):
         assert r.verdict == "certified"
         e = r.enclosure
         assert e["dual"]["proven"] and e["lower"] is not None and e["upper"] is not None, e["reason"]
+        assert e["rel_gap"] <= 1e-6, (backend, e["reason"])
         ends[backend] = (e["lower"], e["upper"])
     (a_lo, a_hi), (b_lo, b_hi) = ends["clarabel"], ends["cvxopt"]
     # a lower end of one backend above the other's certified point would be a false proof
+    assert a_lo <= b_hi and b_lo <= a_hi
+
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+@pytest.mark.parametrize(
+    "theorem, system",
+    [
+        ("delay_b.thm4_1", "delay_b.thm4_1.ex1_lambda0_5.yaml"),
+        ("uncertain_dt.lemma3", "uncertain_dt.lemma3.example-plant.yaml"),
+        ("uncertain_dt.cor1", "uncertain_dt.cor1.example-plant.yaml"),
+    ],
+)
+def test_strict_examples_gap_within_1e6_and_backends_bracket_each_other(theorem, system):
+    """Strict problems: the upper end is moved towards the closed problem's point as far as the
+    proof allows (polish_primal), which brings the gap under 1e-6 on Clarabel."""
+    ends = {}
+    for backend in ("clarabel", "cvxopt"):
+        r = lmic.api.solve(theorem, str(EXAMPLES / system), backend=backend, backoff=0)
+        assert r.verdict == "certified"
+        e = r.enclosure
+        assert e["kind"] in ("infimum", "supremum") and e["lower"] is not None and e["upper"] is not None
+        ends[backend] = (e["lower"], e["upper"])
+        if backend == "clarabel":
+            assert e["rel_gap"] <= 1e-6, e["reason"]
+    (a_lo, a_hi), (b_lo, b_hi) = ends["clarabel"], ends["cvxopt"]
     assert a_lo <= b_hi and b_lo <= a_hi
