@@ -192,9 +192,13 @@ def centred_bound(
             u = (1.0 - theta) * u0 + theta * uc
             mats, y = _unpack(problem, u, ranges)
             mats = [0.5 * (Z + Z.T) for Z in mats]
-            mats, y = _repair(problem, J, ranges, q, mats, y, floor=0.5 * theta * t)
-            mats, y = _least_norm(problem, J, ranges, q, mats, y, active)
+            mats, y = _repair(problem, J, ranges, q, mats, y, floor=0.5 * theta * t, steps=80)
             res = _prove_float(problem, J, ranges, q, mats, y, active)
+            if not res["proven"]:
+                # the damped steps stalled above round-off: plain least-norm steps (which may
+                # leave the cone by their size; the proof decides)
+                mats, y = _least_norm(problem, J, ranges, q, mats, y, active)
+                res = _prove_float(problem, J, ranges, q, mats, y, active)
             if res["proven"]:
                 res.update(centring_loss=loss, centring_margin=t, theta=theta)
                 return res, mats, y
