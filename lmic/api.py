@@ -364,6 +364,7 @@ def solve(
     variables, derived = _values(problem, sol.x, cert)
     # -- optimal-value enclosure (lmic.certify.enclosure) --
     enc, enclosure_s = _enclosure(problem, sol, cert, exact, used, options)
+    tight_x = enc.pop("tight_x", None) if enc is not None else None
     back = _backoff(problem, enc, backoff, used, options, sol.objective)
     if enc is not None and (enc["upper"] if problem.objective.sense == "min" else enc["lower"]) is None:
         # no rigorous primal end at the solver's point (a non-strict constraint met only to
@@ -384,9 +385,10 @@ def solve(
                 pe = primal_end(problem, np.asarray(rest["x"], dtype=float)) if rest["x"] is not None else {}
                 if pe.get("proven"):
                     # as close to the solver's point as the proof allows
-                    pol = polish_primal(problem, np.asarray(rest["x"], dtype=float), np.asarray(sol.x, dtype=float))
-                    if pol["proven"]:
-                        pe, rest = pol, dict(rest, x=pol["x"])
+                    for outer in [sol.x] + ([tight_x] if tight_x is not None else []):
+                        pol = polish_primal(problem, np.asarray(rest["x"], dtype=float), np.asarray(outer, dtype=float))
+                        if pol["proven"] and (pol["value"] < pe["value"]) == (problem.objective.sense == "min"):
+                            pe, rest = pol, dict(rest, x=pol["x"])
                     enc = with_primal(enc, pe["value"], "restored point")
                     enc["restored_x"] = rest["x"]
                     break
@@ -487,7 +489,10 @@ def _tighter(
         if pol["proven"]:
             enc2 = dict(with_primal(enc2, pol["value"], "restored point"), restored_x=pol["x"])
             return best_of(enc, enc2, pol["x"])
-    return best_of(enc, enc2, sol2.x)
+    out = best_of(enc, enc2, sol2.x)
+    if out.get(key) is None:
+        out["tight_x"] = np.asarray(sol2.x, dtype=float).tolist()  # the restoration's target (solve())
+    return out
 
 
 def _backoff(
