@@ -4,13 +4,17 @@ For every problem, two methods run interleaved (``--repeat`` rounds, the order r
 
 * ``plain``: compile or load, solve, certify (:func:`lmic.api.solve_problem` and
   :func:`lmic.certify.certify`): what ``lmic solve`` did before the enclosure;
-* ``enclosure``: the same followed by :func:`lmic.certify.enclosure.enclosure` (dual repair,
-  rigorous proof, the perturbed solve when the dual is degenerate) and, when the solver's point
-  has no rigorous primal end, the restoration solve (:mod:`lmic.backoff`); no backoff.
+* ``enclosure``: :func:`lmic.api.solve` without backoff, which adds
+  :func:`lmic.certify.enclosure.enclosure` (dual repair, rigorous proof, the perturbed and
+  centred solves when the dual is degenerate, the box bound when nothing proves, a re-solve at
+  tol 1e-10 when the gap is above 1e-6) and, when the solver's point has no rigorous primal
+  end, the restoration solve (:mod:`lmic.backoff`); its own ``enclosure_s`` is reported too.
 
 The report gives medians, the extra time ``enclosure - plain`` and the ratio, the enclosure
-(lower, upper, relative gap) and, for SDPLIB, whether the published optimum (its rounding
-interval: the README prints few digits) meets the enclosure. Usage::
+(lower, upper, relative gap, the dual route that proved, the conditional box bound), the
+relative gap of one run on a second backend (``--compare``, SCS by default) and, for SDPLIB,
+whether the published optimum (its rounding interval: the README prints few digits) meets the
+enclosure. Usage::
 
     python benchmarks/enclosure.py                      # examples + SDPLIB, 3 rounds
     python benchmarks/enclosure.py --repeat 5 --json out.json --backend cvxopt
@@ -35,8 +39,6 @@ import sys
 import time
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 __all__ = ["rounding_interval", "problems", "run_once", "main"]
 
@@ -103,37 +105,32 @@ def problems(only: set[str] | None = None) -> list[tuple[str, Any]]:
 
 
 def run_once(problem: Any, backend: str, method: str) -> dict[str, Any]:
-    """One timed run of ``method`` (``plain`` or ``enclosure``)."""
+    """One timed run of ``method``: ``plain`` (solve and certify) or ``enclosure``
+    (:func:`lmic.api.solve` without backoff: solve, certify, the enclosure with every route
+    it takes, the restoration of a primal end; its own ``enclosure_s`` timing is reported)."""
+    import lmic.api
     from lmic.api import solve_problem
     from lmic.certify import certify
-    from lmic.certify.enclosure import enclosure
 
     t0 = time.perf_counter()
-    sol = solve_problem(problem, backend)
-    cert = certify(problem, sol)
-    out: dict[str, Any] = {"verdict": cert.verdict}
-    if method == "enclosure":
-        x = sol.x if cert.verdict == "certified" else None
-
-        def resolve(p: Any) -> Any:
-            other = solve_problem(p, backend)
-            return other.duals if other.status in ("optimal", "inaccurate") else None
-
-        enc = enclosure(problem, sol.duals, x, resolve=resolve)
-        key = "upper" if problem.objective.sense == "min" else "lower"
-        if enc[key] is None and sol.x is not None:
-            from lmic.backoff import restore
-            from lmic.certify.enclosure import primal_end, with_primal
-
-            for rel in (1e-10, 1e-9, 1e-8):
-                rest = restore(problem, sol.x, backend, rel=rel)
-                pe = primal_end(problem, np.asarray(rest["x"])) if rest["x"] is not None else {}
-                if pe.get("proven"):
-                    enc = with_primal(enc, pe["value"], "restored point")
-                    break
-        out.update(lower=enc["lower"], upper=enc["upper"], rel_gap=enc["rel_gap"], kind=enc["kind"])
-        out["dual"] = enc["dual"].get("reason", "")
-    out["time_s"] = time.perf_counter() - t0
+    if method == "plain":
+        sol = solve_problem(problem, backend)
+        cert = certify(problem, sol)
+        return {"verdict": cert.verdict, "time_s": time.perf_counter() - t0}
+    r = lmic.api.solve(problem, backend=backend, backoff=0)
+    out: dict[str, Any] = {"verdict": r.verdict, "time_s": time.perf_counter() - t0}
+    enc = r.enclosure or {}
+    dual = enc.get("dual") or {}
+    out.update(
+        lower=enc.get("lower"),
+        upper=enc.get("upper"),
+        rel_gap=enc.get("rel_gap"),
+        kind=enc.get("kind"),
+        route=dual.get("route") if dual.get("proven") else None,
+        conditional=(enc.get("conditional") or {}).get("value"),
+        dual=dual.get("reason", ""),
+        enclosure_s=r.timings.get("enclosure_s"),
+    )
     return out
 
 
@@ -143,6 +140,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--backend", default="clarabel")
     ap.add_argument("--only", default="", help="comma-separated problem labels")
     ap.add_argument("--json", default=None)
+    ap.add_argument("--compare", default="scs", help="a second backend run once for its gap ('' for none)")
     args = ap.parse_args(argv)
     only = {s for s in args.only.split(",") if s} or None
     published = _published()
@@ -167,9 +165,20 @@ def main(argv: list[str] | None = None) -> int:
             "plain_s": plain,
             "enclosure_s": enc,
             "extra_s": enc - plain,
+            "enclosure_only_s": last.get("enclosure_s"),
             "ratio": enc / plain if plain > 0 else float("nan"),
-            **{k: last.get(k) for k in ("verdict", "kind", "lower", "upper", "rel_gap", "dual", "error")},
+            **{
+                k: last.get(k)
+                for k in ("verdict", "kind", "lower", "upper", "rel_gap", "route", "conditional", "dual", "error")
+            },
         }
+        if args.compare:
+            try:
+                other = run_once(prob, args.compare, "enclosure")
+                row["compare_rel_gap"] = other.get("rel_gap")
+                row["compare_ends"] = (other.get("lower"), other.get("upper"))
+            except Exception as exc:  # a benchmark cell, not a crash
+                row["compare_rel_gap"] = f"{type(exc).__name__}"
         if label in published:
             a, b = rounding_interval(published[label])
             lo, hi = row["lower"], row["upper"]
@@ -192,13 +201,18 @@ def _fmt(v: Any, spec: str = ".4g") -> str:
 def _print_row(row: dict[str, Any]) -> None:
     print(
         f"| {row['problem']} | {_fmt(row['plain_s'], '.3f')} | {_fmt(row['enclosure_s'], '.3f')} | "
-        f"{_fmt(row['extra_s'], '.3f')} | {_fmt(row['ratio'], '.2f')} | {_fmt(row['lower'], '.10g')} | "
-        f"{_fmt(row['upper'], '.10g')} | {_fmt(row['rel_gap'], '.2g')} | {row.get('published', '-')} | "
-        f"{row.get('inside', '-')} |"
+        f"{_fmt(row['extra_s'], '.3f')} | {_fmt(row.get('enclosure_only_s'), '.3f')} | {_fmt(row['ratio'], '.2f')} | "
+        f"{_fmt(row['lower'], '.10g')} | "
+        f"{_fmt(row['upper'], '.10g')} | {_fmt(row['rel_gap'], '.2g')} | {_fmt(row.get('route'))} | "
+        f"{_fmt(row.get('conditional'), '.8g')} | {_fmt(row.get('compare_rel_gap'), '.2g')} | "
+        f"{row.get('published', '-')} | {row.get('inside', '-')} |"
     )
 
 
 if __name__ == "__main__":
-    print("| problem | plain s | with enclosure s | extra s | ratio | lower | upper | rel gap | published | inside |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+    print(
+        "| problem | plain s | with enclosure s | extra s | enclosure s | ratio | lower | upper | rel gap | dual route "
+        "| box bound | SCS rel gap | published | inside |"
+    )
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---|")
     sys.exit(main())

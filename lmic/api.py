@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -372,13 +372,14 @@ def solve(
     variables, derived = _values(problem, sol.x, cert)
     # -- optimal-value enclosure (lmic.certify.enclosure) --
     enc, enclosure_s = _enclosure(problem, sol, cert, exact, used, options)
+    tight_x = enc.pop("tight_x", None) if enc is not None else None
     back = _backoff(problem, enc, backoff, used, options, sol.objective)
     if enc is not None and (enc["upper"] if problem.objective.sense == "min" else enc["lower"]) is None:
         # no rigorous primal end at the solver's point (a non-strict constraint met only to
         # the certifier's tolerance, or a rejected point): the backed-off point, else a point
         # strictly inside from a solve with every constraint tightened (lmic.backoff.restore)
         t_rest = time.perf_counter()
-        from lmic.certify.enclosure import primal_end, with_primal
+        from lmic.certify.enclosure import polish_primal, primal_end, with_primal
 
         if back is not None and back.get("x") is not None:
             pe = primal_end(problem, np.asarray(back["x"], dtype=float))
@@ -391,6 +392,11 @@ def solve(
                 rest = restore(problem, sol.x, used, options, rel=rel)
                 pe = primal_end(problem, np.asarray(rest["x"], dtype=float)) if rest["x"] is not None else {}
                 if pe.get("proven"):
+                    # as close to the solver's point as the proof allows
+                    for outer in [sol.x] + ([tight_x] if tight_x is not None else []):
+                        pol = polish_primal(problem, np.asarray(rest["x"], dtype=float), np.asarray(outer, dtype=float))
+                        if pol["proven"] and (pol["value"] < pe["value"]) == (problem.objective.sense == "min"):
+                            pe, rest = pol, dict(rest, x=pol["x"])
                     enc = with_primal(enc, pe["value"], "restored point")
                     enc["restored_x"] = rest["x"]
                     break
@@ -432,7 +438,8 @@ def _enclosure(
 ) -> tuple[dict[str, Any] | None, float]:
     """The enclosure of an optimisation problem's optimal value (``None`` for feasibility).
 
-    A degenerate dual is retried on a perturbed problem, solved on the backend that answered.
+    A degenerate dual is retried on a perturbed problem, then on a centred dual point (the dual
+    problem solved for the largest interior margin), both on the backend that answered.
     """
     if problem.objective.sense == "feasibility" or cert is None or sol.status in ("infeasible", "unbounded"):
         return None, 0.0
@@ -448,8 +455,52 @@ def _enclosure(
             return None
         return other.duals if other.status in ("optimal", "inaccurate") else None
 
-    enc = enclosure(problem, sol.duals, x, exact=exact, resolve=resolve)
+    def solve_point(other_problem: Problem) -> np.ndarray | None:
+        try:
+            other = solve_problem(other_problem, backend, options)
+        except LmicError:
+            return None
+        return other.x if other.status in ("optimal", "inaccurate") else None
+
+    enc = enclosure(problem, sol.duals, x, exact=exact, resolve=resolve, solve_point=solve_point)
+    enc = _tighter(problem, enc, x, exact, backend, options, resolve, solve_point)
     return enc, time.perf_counter() - t0
+
+
+def _tighter(
+    problem: Problem, enc: dict[str, Any], x: Any, exact: bool, backend: str, options: Any, resolve, solve_point
+):
+    """A gap above :data:`lmic.certify.enclosure.GAP_TARGET` on an interior-point backend: a
+    re-solve at :data:`~lmic.certify.enclosure.TIGHT_TOL` and the better proven end of each."""
+    from lmic.certify.enclosure import GAP_TARGET, TIGHT_TOL, best_of, enclosure
+
+    gap = enc.get("rel_gap")
+    if (gap is not None and gap <= GAP_TARGET) or "scs" in backend.lower():
+        return enc
+    if options is not None and options.tol <= TIGHT_TOL:
+        return enc
+    tight = replace(options, tol=TIGHT_TOL) if options is not None else SolveOptions(tol=TIGHT_TOL)
+    try:
+        sol2 = solve_problem(problem, backend, tight)
+    except LmicError:
+        return enc
+    if sol2.status not in ("optimal", "inaccurate") or sol2.x is None:
+        return enc
+    enc2 = enclosure(problem, sol2.duals, sol2.x, exact=exact, resolve=resolve, solve_point=solve_point)
+    key = "upper" if problem.objective.sense == "min" else "lower"
+    inner = enc.get("restored_x") if enc.get("primal") == "restored point" else x
+    if enc2.get(key) is None and enc.get(key) is not None and inner is not None:
+        # the tight point is met only to round-off: as close to it as the proof allows
+        from lmic.certify.enclosure import polish_primal, with_primal
+
+        pol = polish_primal(problem, np.asarray(inner, dtype=float), np.asarray(sol2.x, dtype=float))
+        if pol["proven"]:
+            enc2 = dict(with_primal(enc2, pol["value"], "restored point"), restored_x=pol["x"])
+            return best_of(enc, enc2, pol["x"])
+    out = best_of(enc, enc2, sol2.x)
+    if out.get(key) is None:
+        out["tight_x"] = np.asarray(sol2.x, dtype=float).tolist()  # the restoration's target (solve())
+    return out
 
 
 def _backoff(

@@ -80,7 +80,6 @@ KNOWN_UPWARD: dict[tuple[str, str], str] = {}
 KNOWN_OVERSIZE: dict[str, str] = {
     # issue #10: split by job (result types, bisection, grids)
     "lmic.sweep": "issue #10",
-    "lmic.certify.enclosure": "issue #10 (split: dual repair, rigorous bounds, exact mode)",
 }
 
 

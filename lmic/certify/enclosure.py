@@ -106,18 +106,19 @@ Examples
 from __future__ import annotations
 
 import math
-import time
-import warnings
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-import scipy.sparse as sp
 
-from lmic.certify.multipliers import parse_multipliers
+from lmic.certify.enclosure_centre import centred_bound, centring_problem
+from lmic.certify.enclosure_conditional import RADIUS_FACTOR, best_box_bound, box_bound, verify_box_bound
+from lmic.certify.enclosure_dual import dual_bound, verify_dual_bound
+from lmic.certify.enclosure_exact import EXACT_MAX_N
+from lmic.certify.enclosure_float import lambda_min_lower, polish_primal, primal_end
+from lmic.certify.enclosure_repair import PERTURBATIONS, SHIFTS, perturbed_problem
 from lmic.errors import CertificateError
 from lmic.ir.problem import Problem
-from lmic.ir.svec import tril_rows_cols, tril_unvec
 
 __all__ = [
     "SHIFTS",
@@ -133,715 +134,17 @@ __all__ = [
     "audit_enclosure",
     "with_primal",
     "primal_end",
+    "polish_primal",
+    "best_of",
+    "GAP_TARGET",
+    "TIGHT_TOL",
+    "box_bound",
+    "best_box_bound",
+    "verify_box_bound",
+    "RADIUS_FACTOR",
+    "centring_problem",
+    "centred_bound",
 ]
-
-#: relative shifts ``eps_rel`` tried, smallest first (step 2 of the module docstring)
-SHIFTS = (1e-12, 1e-10, 1e-9, 1e-8, 3e-8, 1e-7, 3e-7, 1e-6)
-#: relative perturbations ``eps_rel`` of :func:`perturbed_problem` tried when the solver's
-#: own dual is degenerate
-PERTURBATIONS = (1e-8, 1e-6)
-#: a multiplier block below this times the largest multiplier is set to exactly zero (an
-#: inactive constraint; it then needs no interior shift)
-DROP = 1e-6
-#: largest number of variables the exact (rational) correction is attempted for
-EXACT_MAX_N = 400
-_U = 2.0**-53
-_SAFE = 1.0 + 1e-9
-
-
-def _gamma(m: int) -> float:
-    return m * _U / (1.0 - m * _U)
-
-
-def _down(v: float) -> float:
-    """A float ``<= v`` for a float ``v`` computed with one rounding."""
-    return float(np.nextafter(np.nextafter(v, -np.inf), -np.inf))
-
-
-def lambda_min_lower(A: np.ndarray) -> float:
-    """A rigorous lower bound of ``lambda_min(A)`` for a float symmetric matrix ``A``.
-
-    See the module docstring (Cholesky of ``A - s I`` with Higham's error bound). Returns
-    ``-inf`` when no shift below the estimated smallest eigenvalue factorises.
-
-    Examples
-    --------
-    >>> lb = lambda_min_lower(np.array([[2.0, 1.0], [1.0, 2.0]]))
-    >>> 0.99 < lb <= 1.0
-    True
-    """
-    A = np.asarray(A, dtype=float)
-    d = A.shape[0]
-    if d == 0:
-        return math.inf
-    if not np.all(np.isfinite(A)) or np.any(A != A.T):
-        return -math.inf
-    est = float(np.linalg.eigvalsh(A)[0])
-    norm = float(np.max(np.abs(A)))
-    g = _gamma(2 * (d + 1))
-    best = -math.inf
-    for f in (1e-9, 1e-6, 1e-3, 0.1, 0.5):
-        s = est - max(f * abs(est), 4.0 * (d + 1) * (d + 1) * _U * norm)
-        B = A - s * np.eye(d)
-        try:
-            R = np.linalg.cholesky(B)
-        except np.linalg.LinAlgError:
-            continue
-        if not np.all(np.isfinite(R)):
-            continue
-        err = (g * float(np.sum(R * R)) + _U * float(np.max(np.abs(np.diag(B))))) * _SAFE
-        lb = _down(s - err)
-        best = max(best, lb)
-        if lb > 0 or est <= 0:
-            break
-    return best
-
-
-# -- the linear map u -> g(u) ----------------------------------------------------------------
-
-
-def _weights(d: int) -> np.ndarray:
-    i, j = tril_rows_cols(d)
-    return np.where(i == j, 1.0, 2.0)
-
-
-def _jacobian(problem: Problem) -> tuple[sp.csr_matrix, list[tuple[int, int]]]:
-    """``J`` (``(1 + n) x m``, ``g = J u``) and the column range of every LMI's ``svec(Z_i)``."""
-    cols, ranges, start = [], [], 0
-    for lmi in problem.lmis:
-        C = lmi.coeffs.tocsc()
-        cols.append(sp.csr_matrix(C.T.multiply(_weights(lmi.dim)[None, :])))
-        t = C.shape[0]
-        ranges.append((start, start + t))
-        start += t
-    if len(problem.linear):
-        cols.append(sp.csr_matrix(problem.linear.A.T))
-    if not cols:
-        return sp.csr_matrix((1 + problem.n, 0)), ranges
-    return sp.csr_matrix(sp.hstack(cols)), ranges
-
-
-def _pack(problem: Problem, mats: list[np.ndarray], y: np.ndarray) -> np.ndarray:
-    parts = []
-    for lmi, Z in zip(problem.lmis, mats, strict=True):
-        r, c = tril_rows_cols(lmi.dim)
-        parts.append(Z[r, c])
-    parts.append(y)
-    return np.concatenate(parts) if parts else np.zeros(0)
-
-
-def _unpack(problem: Problem, u: np.ndarray, ranges: list[tuple[int, int]]) -> tuple[list[np.ndarray], np.ndarray]:
-    mats = [tril_unvec(u[a:b], lmi.dim) for lmi, (a, b) in zip(problem.lmis, ranges, strict=True)]
-    off = ranges[-1][1] if ranges else 0
-    return mats, u[off:].copy()
-
-
-def _parse(problem: Problem, record: dict[str, Any]) -> tuple[list[np.ndarray], np.ndarray]:
-    return parse_multipliers(problem, record, "dual point", missing_is_zero=False)
-
-
-def _target(problem: Problem) -> tuple[float, np.ndarray]:
-    s = -1.0 if problem.objective.sense == "max" else 1.0
-    q = s * problem.objective.c
-    return s, q
-
-
-# -- steps 1-3: a dual point inside the cone with round-off residual --------------------------
-
-
-def _repair(
-    problem: Problem,
-    J: sp.csr_matrix,
-    ranges: list,
-    q: np.ndarray,
-    mats: list,
-    y: np.ndarray,
-    floor: float = 0.0,
-    steps: int = 40,
-):
-    import scipy.linalg
-
-    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
-    Jx = J[1:].tocsc()
-    qn = q[1:]
-    scale = float(np.max(np.abs(qn), initial=0.0)) + 1e-300
-    history: list[float] = []
-    for _ in range(steps):
-        u = _pack(problem, mats, y)
-        rho = qn - Jx @ u
-        now = float(np.max(np.abs(rho), initial=0.0))
-        if now <= 1e-15 * scale or (len(history) >= 6 and now > 0.9 * history[-6]):
-            break  # converged, or stalled (no interior point near: the proof will say so)
-        history.append(now)
-        blocks: list[np.ndarray] = []
-        factors: list[tuple[np.ndarray, np.ndarray, np.ndarray] | None] = []
-        for lmi, Z, (a, b) in zip(problem.lmis, mats, ranges, strict=True):
-            if not lmi.dim:
-                factors.append(None)
-                continue
-            w, V = np.linalg.eigh(Z - floor * np.eye(lmi.dim))
-            sel = w > 0
-            U = V[:, sel] * np.sqrt(w[sel])
-            r = U.shape[1]
-            if not r:
-                factors.append(None)
-                continue
-            ri, ci = tril_rows_cols(lmi.dim)
-            ia, ib = np.triu_indices(r)
-            P, Qm = U[ri], U[ci]
-            T = P[:, ia] * Qm[:, ib] + P[:, ib] * Qm[:, ia]
-            T[:, ia == ib] *= 0.5
-            # d svec(Z) / d E_ab, mapped by J's columns of this LMI
-            blocks.append(np.asarray(Jx[:, a:b] @ T))
-            factors.append((U, ia, ib))
-        off = ranges[-1][1] if ranges else 0
-        rows = [r for r in range(len(y)) if (not ge[r]) or y[r] > floor]
-        top = max([float(np.max(np.abs(y), initial=0.0))] + [float(np.max(np.abs(Z), initial=0.0)) for Z in mats])
-        srow = np.array([y[r] - floor if ge[r] else max(abs(y[r]), 1e-3 * top, 1e-300) for r in rows])
-        if rows:
-            blocks.append(Jx[:, [off + r for r in rows]].toarray() * srow[None, :])
-        if not blocks:
-            break
-        G = np.hstack(blocks)
-        # least-norm step through the Gram matrix (n x n, cheap for the wide G of a face)
-        Gm = G @ G.T
-        Gm[np.diag_indices_from(Gm)] += 1e-14 * float(np.trace(Gm)) / max(1, Gm.shape[0]) + 1e-300
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
-                e = G.T @ np.linalg.solve(Gm, rho)
-        except (np.linalg.LinAlgError, ValueError):
-            e = scipy.linalg.lstsq(G, rho, lapack_driver="gelsy", check_finite=False)[0]
-        k, norms = 0, [0.0]
-        Es: list[np.ndarray | None] = []
-        for f in factors:
-            if f is None:
-                Es.append(None)
-                continue
-            U, ia, ib = f
-            r = U.shape[1]
-            E = np.zeros((r, r))
-            E[ia, ib] = e[k : k + len(ia)]
-            E[ib, ia] = e[k : k + len(ia)]
-            k += len(ia)
-            Es.append(E)
-            norms.append(float(np.max(np.abs(np.linalg.eigvalsh(E)))))
-        ey = e[k:]
-        norms += [abs(float(v)) for r, v in zip(rows, ey, strict=True) if ge[r]]
-        alpha = 1.0 if max(norms) <= 0.5 else 0.5 / max(norms)
-        new = []
-        for Z, f, Ef in zip(mats, factors, Es, strict=True):
-            if f is None or Ef is None:
-                new.append(Z)
-            else:
-                U = f[0]
-                Zn = U @ (np.eye(U.shape[1]) + alpha * Ef) @ U.T + floor * np.eye(U.shape[0])
-                new.append(0.5 * (Zn + Zn.T))
-        mats = new
-        y = y.copy()
-        for r, v, sr in zip(rows, ey, srow, strict=True):
-            y[r] += alpha * float(v) * sr
-    return mats, y
-
-
-def _scale(problem: Problem, mats: list, y: np.ndarray) -> float:
-    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
-    top = max(
-        [float(np.max(np.abs(y[ge]), initial=0.0))]
-        + [float(np.max(np.linalg.eigvalsh(Z), initial=0.0)) if Z.size else 0.0 for Z in mats]
-    )
-    return top if top > 0 else 1.0
-
-
-def perturbed_problem(problem: Problem, eps: float) -> Problem:
-    """The closed problem whose duals are ``eps`` inside the cone (VSDP's perturbation).
-
-    Its objective is the minimisation form's ``q`` minus ``eps t`` with ``t_k = sum_i tr
-    F_i^(k) + sum_{r ge} a_rk``: a dual point ``(Z_i', y')`` of it gives ``Z_i = Z_i' + eps I``,
-    ``y_r = y_r' + eps`` (``ge`` rows), a dual point of ``problem`` whose every eigenvalue is at
-    least ``eps``. Strict constraints are closed (the dual bound holds for the closure).
-
-    >>> import scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
-    >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t > 2", 1, sp.csc_matrix([[-2.0, 1.0]]))],
-    ...             LinearConstraints.empty(1), Objective("max", [1.0, -1.0]))
-    >>> q = perturbed_problem(p, 0.5)
-    >>> q.objective.sense, q.objective.c.tolist(), q.lmis[0].strict
-    ('min', [-1.0, 0.5], False)
-    """
-    import dataclasses
-
-    from lmic.ir.problem import LinearConstraints, Objective
-
-    _, q = _target(problem)
-    t = np.zeros(1 + problem.n)
-    for lmi in problem.lmis:
-        i, j = tril_rows_cols(lmi.dim)
-        t += np.asarray(lmi.coeffs.tocsr()[np.flatnonzero(i == j)].sum(axis=0)).ravel()
-    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
-    if np.any(ge):
-        t += np.asarray(problem.linear.A.tocsr()[np.flatnonzero(ge)].sum(axis=0)).ravel()
-    c = q - eps * t
-    c[0] = q[0]
-    lin = problem.linear
-    return Problem(
-        list(problem.variables),
-        [dataclasses.replace(lmi, strict=False) for lmi in problem.lmis],
-        LinearConstraints(lin.A, list(lin.kinds), [False] * len(lin), list(lin.names)),
-        Objective("min", c),
-        meta={"perturbed_from": problem.meta.get("theorem") if problem.meta else None},
-    )
-
-
-def _prepare(
-    problem: Problem, J, ranges, q, mats, y, eps_rel: float, top: float | None = None, drop: bool = True
-) -> tuple[list, np.ndarray, np.ndarray]:
-    """Steps 1-3 of the module docstring; returns ``(Z_i, y, active)`` (``active``: the
-    entries of ``u`` the proof may correct; the others are exactly zero)."""
-    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
-    proj = []
-    for Z in mats:
-        if not Z.size:
-            proj.append(Z)
-            continue
-        w, V = np.linalg.eigh(Z)
-        proj.append((V * np.maximum(w, 0.0)) @ V.T)
-    y = np.where(ge, np.maximum(y, 0.0), y)
-    if top is None:
-        top = _scale(problem, proj, y)
-    eps = eps_rel * top
-    active = np.ones(_pack(problem, proj, y).size, dtype=bool)
-    keep = []
-    for Z, (a, b) in zip(proj, ranges, strict=True):
-        on = not drop or (Z.size and float(np.max(np.linalg.eigvalsh(Z))) > DROP * top)
-        keep.append(on)
-        active[a:b] = on
-    off = ranges[-1][1] if ranges else 0
-    rows_on = ~ge | (y > DROP * top) | (not drop)
-    active[off:] = rows_on
-    proj = [Z + eps * np.eye(Z.shape[0]) if on else np.zeros_like(Z) for Z, on in zip(proj, keep, strict=True)]
-    y = np.where(ge & rows_on, y + eps, np.where(ge, 0.0, y))
-    mats, y = _repair(problem, J, ranges, q, [0.5 * (Z + Z.T) for Z in proj], y, floor=0.5 * eps)
-    # what the damped steps left: a plain least-norm step over the active entries (it may
-    # leave the cone by its own size, which the shift pays for; the proof decides)
-    u = _pack(problem, mats, y)
-    Js = J[1:][:, np.flatnonzero(active)]
-    for _ in range(2):
-        rho = q[1:] - J[1:] @ u
-        if not np.any(rho):
-            break
-        M = (Js @ Js.T).toarray()
-        w = np.linalg.lstsq(M, rho, rcond=None)[0]
-        u[active] += Js.T @ w
-    mats, y = _unpack(problem, u, ranges)
-    return mats, y, active
-
-
-# -- step 4: the rigorous bound -----------------------------------------------------------------
-
-
-def _prove_float(problem: Problem, J, ranges, q, mats, y, active: np.ndarray | None = None) -> dict[str, Any]:
-    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
-    u = _pack(problem, mats, y)
-    if active is None:  # every nonzero entry may be corrected
-        active = np.ones(u.size, dtype=bool)
-        for a, b in ranges:
-            active[a:b] = bool(np.any(u[a:b]))
-        off = ranges[-1][1] if ranges else 0
-        active[off:] = ~ge | (u[off:] != 0)
-    if np.any(u[~active] != 0):
-        return {"proven": False, "reason": "an inactive multiplier is not exactly zero"}
-    m = u.size
-    gm = _gamma(m + 2)
-    Ja = abs(J)
-    absu = np.abs(u)
-    g = J @ u
-    rho = q[1:] - g[1:]
-    rho_bar = (np.abs(rho) + gm * (np.abs(q[1:]) + (Ja @ absu)[1:])) * _SAFE
-    rho_norm = float(np.linalg.norm(rho_bar)) * _SAFE
-    Js = J[1:][:, np.flatnonzero(active)]
-    # a variable no active multiplier can move needs an exactly zero residual
-    nz = np.asarray(abs(Js).sum(axis=1)).ravel() > 0
-    if np.any(~nz & (rho_bar != 0)):
-        k = int(np.flatnonzero(~nz & (rho_bar != 0))[0])
-        return {"proven": False, "reason": f"x[{k}] has a residual no active multiplier can absorb"}
-    Js = Js[nz]
-    if Js.shape[0]:
-        M = (Js @ Js.T).toarray()
-        Jsa = abs(Js)
-        E = (Jsa @ Jsa.T).toarray()
-        err_M = _gamma(m + 1) * float(np.linalg.norm(E)) * _SAFE
-        lamM = lambda_min_lower(0.5 * (M + M.T)) - err_M - _U * float(np.max(np.abs(M - M.T), initial=0.0))
-        if not lamM > 0:
-            return {
-                "proven": False,
-                "reason": "the dual equality system is singular (no lower bound on sigma_min of the constraint map)",
-            }
-        dn = rho_norm / math.sqrt(_down(lamM)) * _SAFE
-    else:
-        dn = 0.0
-    margins = []
-    for lmi, Z, (a, b) in zip(problem.lmis, mats, ranges, strict=True):
-        if not np.any(active[a:b]):
-            continue  # exactly zero, not corrected: PSD
-        lb = lambda_min_lower(Z) if lmi.dim else math.inf
-        margins.append(lb)
-        if lmi.dim and not lb - math.sqrt(2.0) * dn * _SAFE >= 0:
-            return {
-                "proven": False,
-                "reason": f"multiplier of LMI '{lmi.name}' not proved PSD: lambda_min >= {lb:.3g}, "
-                f"correction up to {math.sqrt(2.0) * dn:.3g}",
-            }
-    off = ranges[-1][1] if ranges else 0
-    gea = ge & active[off:]
-    if np.any(gea) and not float(np.min(y[gea])) - dn * _SAFE >= 0:
-        return {"proven": False, "reason": "a row multiplier is not proved nonnegative after the correction"}
-    j0 = J[0].toarray().ravel()
-    g0 = float(g[0])
-    g0_err = gm * float(np.abs(j0) @ absu) * _SAFE
-    corr = float(np.linalg.norm(j0[active])) * dn * _SAFE
-    lower = _down(_down(q[0] - g0) - (g0_err + corr) * _SAFE)
-    return {
-        "proven": True,
-        "lower": lower,
-        "residual_bound": rho_norm,
-        "correction_bound": dn,
-        "min_eig_lower": min(margins, default=math.inf),
-        "reason": "dual point proved feasible with rigorous floating-point error bounds",
-    }
-
-
-def _default_active(problem: Problem, ranges: list, u: np.ndarray) -> np.ndarray:
-    """Entries a proof may correct: every nonzero block, ``eq`` rows, nonzero ``ge`` rows."""
-    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
-    active = np.ones(u.size, dtype=bool)
-    for a, b in ranges:
-        active[a:b] = bool(np.any(u[a:b]))
-    off = ranges[-1][1] if ranges else 0
-    active[off:] = ~ge | (u[off:] != 0)
-    return active
-
-
-def _prove_exact(problem: Problem, J, ranges, q, mats, y) -> dict[str, Any]:
-    from fractions import Fraction
-
-    from lmic.certify.exact import _flint, prove_psd
-
-    flint = _flint()
-    n = problem.n
-    if n > EXACT_MAX_N:
-        return {"proven": False, "reason": f"{n} variables: above the exact limit {EXACT_MAX_N}"}
-    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
-    u = _pack(problem, mats, y)
-
-    def fq(v: float) -> Any:
-        f = Fraction(float(v))
-        return flint.fmpq(f.numerator, f.denominator)
-
-    Jc = J.tocsr()
-    active = _default_active(problem, ranges, u)
-    uq = [fq(v) for v in u]
-
-    def row(k: int) -> dict[int, Any]:
-        a, b = Jc.indptr[k], Jc.indptr[k + 1]
-        return {int(j): fq(v) for j, v in zip(Jc.indices[a:b], Jc.data[a:b], strict=True)}
-
-    # exact residual over every entry; the correction moves only the active ones
-    rows, rho = [], []
-    for k in range(1, 1 + n):
-        full = row(k)
-        res = fq(q[k]) - sum((v * uq[j] for j, v in full.items()), flint.fmpq(0))
-        act = {j: v for j, v in full.items() if active[j]}
-        if not act:
-            if res != 0:
-                return {"proven": False, "reason": f"x[{k - 1}] has a residual no active multiplier can absorb"}
-            continue
-        rows.append(act)
-        rho.append(res)
-    p = len(rows)
-    if p:
-        Mq = flint.fmpq_mat(p, p)
-        for a in range(p):
-            ra = rows[a]
-            for b in range(a, p):
-                rb = rows[b]
-                s = flint.fmpq(0)
-                small, big = (ra, rb) if len(ra) <= len(rb) else (rb, ra)
-                for j, v in small.items():
-                    w = big.get(j)
-                    if w is not None:
-                        s += v * w
-                Mq[a, b] = s
-                Mq[b, a] = s
-        try:
-            w = Mq.solve(flint.fmpq_mat([[r] for r in rho]))
-        except ZeroDivisionError:
-            return {"proven": False, "reason": "the dual equality system is singular in exact arithmetic"}
-        ustar = list(uq)
-        for a in range(p):
-            wa = w[a, 0]
-            if wa != 0:
-                for j, v in rows[a].items():
-                    ustar[j] += v * wa
-    else:
-        ustar = list(uq)
-    # exact checks: Z_i* PSD, y* >= 0 on ge rows
-    for lmi, (a, b) in zip(problem.lmis, ranges, strict=True):
-        if not lmi.dim:
-            continue
-        vals = [Fraction(int(v.p), int(v.q)) for v in ustar[a:b]]
-        den = 1
-        for f in vals:
-            den = den * f.denominator // math.gcd(den, f.denominator)
-        ri, ci = tril_rows_cols(lmi.dim)
-        Mi = [[0] * lmi.dim for _ in range(lmi.dim)]
-        for f, r_, c_ in zip(vals, ri, ci, strict=True):
-            Mi[r_][c_] = Mi[c_][r_] = int(f * den)
-        pr = prove_psd(Mi)
-        if not pr["proven"]:
-            return {"proven": False, "reason": f"exact multiplier of LMI '{lmi.name}' not proved PSD ({pr['detail']})"}
-    off = ranges[-1][1] if ranges else 0
-    for r in range(len(y)):
-        if ge[r] and ustar[off + r] < 0:
-            return {"proven": False, "reason": f"exact multiplier of row '{problem.linear.names[r]}' is negative"}
-    r0 = row(0)
-    g0 = sum((v * ustar[j] for j, v in r0.items()), flint.fmpq(0))
-    L = fq(q[0]) - g0
-    Lf = Fraction(int(L.p), int(L.q))
-    lower = float(Lf)
-    if Fraction(lower) > Lf:
-        lower = _down(lower)
-    return {
-        "proven": True,
-        "lower": lower,
-        "lower_exact": f"{Lf.numerator}/{Lf.denominator}" if Lf.denominator != 1 else str(Lf.numerator),
-        "reason": "dual point corrected and proved feasible in exact rational arithmetic",
-    }
-
-
-def dual_bound(
-    problem: Problem,
-    duals: dict[str, Any],
-    *,
-    exact: bool = False,
-    resolve: Callable[[Problem], dict[str, Any] | None] | None = None,
-    budget_s: float = 20.0,
-) -> dict[str, Any]:
-    """Prove a lower bound of the minimisation form's optimal value from a dual point.
-
-    Parameters
-    ----------
-    problem : Problem
-        An optimisation problem (``min`` or ``max``).
-    duals : dict
-        ``{"lmis": [Z_i], "linear": y}`` (:attr:`lmic.solution.Solution.duals`).
-    exact : bool
-        Prove in rational arithmetic (module docstring, *Exact mode*) after the float proof.
-    resolve : callable, optional
-        ``resolve(problem) -> duals`` (a solve on the caller's backend). When the solver's own
-        dual cannot be proved (a degenerate dual: no strictly feasible point near it), the
-        dual of :func:`perturbed_problem` is tried (``route`` ``"perturbed"``).
-    budget_s : float
-        No new attempt (shift or perturbation) starts after this many seconds.
-
-    Returns
-    -------
-    dict
-        ``proven`` (bool), ``route`` (``"solver dual"`` or ``"perturbed"``), ``lower`` (a
-        bound ``<= inf q_0 + q . x``, the minimisation form:
-        for ``max`` problems ``-lower`` bounds the maximum from above), ``method``
-        (``"rigorous-float"`` or ``"exact"``), ``shift`` (the ``eps_rel`` used), ``reason``,
-        ``dual`` (the dual point the bound was proved from, JSON-ready), ``time_s``; the float
-        proof's ``residual_bound``, ``correction_bound``, ``min_eig_lower``.
-
-    Examples
-    --------
-    >>> import numpy as np, scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
-    >>> p = Problem([Variable("t", "scalar", (1, 1))],
-    ...             [LMI("t - 2 >= 0", 1, sp.csc_matrix([[-2.0, 1.0]]), strict=False)],
-    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
-    >>> r = dual_bound(p, {"lmis": [np.eye(1)], "linear": []})
-    >>> r["proven"], 1.9999999 < r["lower"] <= 2.0
-    (True, True)
-    """
-    t0 = time.perf_counter()
-    if problem.objective.sense == "feasibility":
-        raise CertificateError("a feasibility problem has no optimal value to bound")
-    mats0, y0 = _parse(problem, duals)
-    _, q = _target(problem)
-    J, ranges = _jacobian(problem)
-    out: dict[str, Any] = {"proven": False, "reason": "no shift gave a provable dual point"}
-    top = _scale(problem, mats0, y0)
-    attempts: list[tuple[str, float, list | None, np.ndarray | None]] = [("solver dual", e, mats0, y0) for e in SHIFTS]
-    for k, (route, eps_rel, mz, yz) in enumerate(attempts):
-        if k and time.perf_counter() - t0 > budget_s:
-            out["reason"] = f"{out.get('reason')}; time budget {budget_s:g} s spent after {k} attempts"
-            break
-        if route == "perturbed" and mz is None:
-            try:
-                d2 = resolve(perturbed_problem(problem, eps_rel * top)) if resolve is not None else None
-                mz, yz = _parse(problem, d2) if d2 else (None, None)
-            except CertificateError:
-                mz = None
-            if mz is None:
-                continue
-            # Z = Z' + eps I: the perturbed dual shifted back (the shift of _prepare)
-        try:
-            mats, y, active = _prepare(problem, J, ranges, q, mz, yz, eps_rel, top)
-            res = _prove_float(problem, J, ranges, q, mats, y, active)
-            if not res["proven"] and ("singular" in res["reason"] or "absorb" in res["reason"]):
-                mats, y, active = _prepare(problem, J, ranges, q, mz, yz, eps_rel, top, drop=False)
-                res = _prove_float(problem, J, ranges, q, mats, y, active)
-        except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
-            res = {"proven": False, "reason": f"numerical failure in the repair: {exc}"}
-        res.update(method="rigorous-float", shift=eps_rel, route=route)
-        if res["proven"] or not out.get("proven"):
-            res["dual"] = {"lmis": [Z.tolist() for Z in mats], "linear": y.tolist()} if res["proven"] else None
-            out = res
-        if res["proven"]:
-            break
-        if k == len(SHIFTS) - 1 and resolve is not None:
-            attempts += [("perturbed", e, None, None) for e in PERTURBATIONS]
-    if exact and out.get("proven"):
-        mats, y = _parse(problem, out["dual"])
-        ex = _prove_exact(problem, J, ranges, q, mats, y)
-        out["exact"] = ex
-        if ex["proven"]:
-            out.update(method="exact", lower=ex["lower"], lower_exact=ex["lower_exact"])
-    out["time_s"] = time.perf_counter() - t0
-    return out
-
-
-def verify_dual_bound(problem: Problem, record: dict[str, Any], *, exact: bool = False) -> dict[str, Any]:
-    """Re-prove a recorded dual bound from its recorded dual point alone (for ``lmic audit``).
-
-    The recorded point is used as it stands (no shift, no repair): its rigorous bound must be
-    at least the recorded ``lower`` (minimisation form).
-
-    Returns
-    -------
-    dict
-        ``ok`` (bool), ``lower`` (re-proved), ``reason``.
-
-    Examples
-    --------
-    >>> import numpy as np, scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
-    >>> p = Problem([Variable("t", "scalar", (1, 1))],
-    ...             [LMI("t - 2 >= 0", 1, sp.csc_matrix([[-2.0, 1.0]]), strict=False)],
-    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
-    >>> r = dual_bound(p, {"lmis": [np.eye(1)], "linear": []})
-    >>> verify_dual_bound(p, r)["ok"], verify_dual_bound(p, dict(r, lower=2.5))["ok"]
-    (True, False)
-    """
-    if not record.get("dual") or record.get("lower") is None:
-        return {"ok": False, "lower": None, "reason": "no dual point recorded"}
-    try:
-        mats, y = _parse(problem, record["dual"])
-    except CertificateError as exc:
-        return {"ok": False, "lower": None, "reason": str(exc)}
-    _, q = _target(problem)
-    J, ranges = _jacobian(problem)
-    if exact or record.get("method") == "exact":
-        res = _prove_exact(problem, J, ranges, q, mats, y)
-    else:
-        res = _prove_float(problem, J, ranges, q, mats, y)
-    if not res["proven"]:
-        return {
-            "ok": False,
-            "lower": None,
-            "reason": "the recorded dual point does not prove a bound: " + res["reason"],
-        }
-    rec = float(record["lower"])
-    if rec > res["lower"]:
-        return {
-            "ok": False,
-            "lower": res["lower"],
-            "reason": f"recorded lower bound {rec:.17g} exceeds the bound the dual point proves ({res['lower']:.17g})",
-        }
-    return {"ok": True, "lower": res["lower"], "reason": "lower bound re-proved from the recorded dual point"}
-
-
-def primal_end(problem: Problem, x: np.ndarray) -> dict[str, Any]:
-    """Prove ``x`` feasible with rigorous rounding, and bound its objective outwards.
-
-    Every ``F_i(x)`` is evaluated in floating point with the entrywise error bound
-    ``gamma_{k+1} (|F_i^(0)| + sum_k |x_k| |F_i^(k)|)`` (``k`` terms); ``lambda_min(F_i(x)) >=
-    lambda_min_lower(fl(F_i(x))) - ||E_i||_F`` must be ``>= 0`` (``> 0`` when strict). Rows
-    ``ge`` likewise; ``eq`` rows are evaluated exactly (rationals) and must vanish. The
-    certifier's tolerances play no part: a point it certifies with a non-strict constraint
-    violated by round-off gives no primal end here.
-
-    Returns
-    -------
-    dict
-        ``proven`` (bool), ``value`` (the objective, rounded up for ``min`` and down for
-        ``max``: a rigorous end), ``reason``.
-
-    Examples
-    --------
-    >>> import scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
-    >>> p = Problem([Variable("t", "scalar", (1, 1))],
-    ...             [LMI("t - 2 >= 0", 1, sp.csc_matrix([[-2.0, 1.0]]), strict=False)],
-    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
-    >>> primal_end(p, np.array([2.5]))["value"] >= 2.5, primal_end(p, np.array([1.9]))["proven"]
-    (True, False)
-    """
-    from fractions import Fraction
-
-    x = np.asarray(x, dtype=float).ravel()
-    if x.shape != (problem.n,) or not np.all(np.isfinite(x)):
-        return {"proven": False, "value": None, "reason": "no finite point of the right length"}
-    xx = np.concatenate([[1.0], x])
-    ax = np.abs(xx)
-    for lmi in problem.lmis:
-        C = lmi.coeffs.tocsr()
-        f = np.asarray(C @ xx).ravel()
-        k = int(np.max(np.diff(C.indptr), initial=0))
-        err = _gamma(k + 2) * np.asarray(abs(C) @ ax).ravel() * _SAFE
-        F = tril_unvec(f, lmi.dim)
-        E = tril_unvec(err, lmi.dim)
-        lb = lambda_min_lower(0.5 * (F + F.T)) - float(np.linalg.norm(E)) * _SAFE
-        if not (lb > 0 if lmi.strict else lb >= 0):
-            return {
-                "proven": False,
-                "value": None,
-                "reason": f"LMI '{lmi.name}' is not proved {'> 0' if lmi.strict else '>= 0'} at the point "
-                f"with rigorous rounding (lambda_min >= {lb:.3g})",
-            }
-    lin = problem.linear
-    if len(lin):
-        A = lin.A.tocsr()
-        r = np.asarray(A @ xx).ravel()
-        k = int(np.max(np.diff(A.indptr), initial=0))
-        err = _gamma(k + 2) * np.asarray(abs(A) @ ax).ravel() * _SAFE
-        for i, (kind, strict) in enumerate(zip(lin.kinds, lin.strict, strict=True)):
-            if kind == "eq":
-                a, b = A.indptr[i], A.indptr[i + 1]
-                exact = sum(
-                    (
-                        Fraction(float(v)) * Fraction(float(xx[j]))
-                        for j, v in zip(A.indices[a:b], A.data[a:b], strict=True)
-                    ),
-                    Fraction(0),
-                )
-                ok = exact == 0
-            else:
-                ok = (r[i] - err[i] > 0) if strict else (r[i] - err[i] >= 0)
-            if not ok:
-                return {
-                    "proven": False,
-                    "value": None,
-                    "reason": f"row '{lin.names[i]}' is not proved at the point with rigorous rounding",
-                }
-    c = problem.objective.c
-    v = float(c @ xx)
-    e = _gamma(problem.n + 2) * float(np.abs(c) @ ax) * _SAFE
-    up = problem.objective.sense != "max"
-    value = float(np.nextafter(v + e, np.inf)) if up else float(np.nextafter(v - e, -np.inf))
-    return {"proven": True, "value": value, "reason": "point proved feasible with rigorous rounding"}
 
 
 def enclosure(
@@ -851,6 +154,7 @@ def enclosure(
     *,
     exact: bool = False,
     resolve: Callable[[Problem], dict[str, Any] | None] | None = None,
+    solve_point: Callable[[Problem], np.ndarray | None] | None = None,
 ) -> dict[str, Any]:
     """The certified enclosure of the optimal value, in the problem's own sense.
 
@@ -866,6 +170,9 @@ def enclosure(
     exact : bool
     resolve : callable, optional
         A solve of a perturbed problem on the caller's backend (:func:`dual_bound`).
+    solve_point : callable, optional
+        A solve on the caller's backend returning its primal point (the centred route of
+        :func:`dual_bound`).
 
     Returns
     -------
@@ -897,7 +204,7 @@ def enclosure(
         dual = {"proven": False, "reason": "the solver returned no dual point"}
     else:
         try:
-            dual = dual_bound(problem, duals, exact=exact, resolve=resolve)
+            dual = dual_bound(problem, duals, exact=exact, resolve=resolve, solve_point=solve_point)
         except CertificateError as exc:
             dual = {"proven": False, "reason": str(exc)}
     out["dual"] = dual
@@ -908,6 +215,20 @@ def enclosure(
         pe = primal_end(problem, x)
         upper_value = pe["value"] if pe["proven"] else None
         out["primal"] = "certified point" if pe["proven"] else "no rigorous primal end: " + pe["reason"]
+        if pe["proven"] and strict and solve_point is not None:
+            # the strict problem's point keeps the solver's margin: move it towards a point of
+            # the closed problem as far as the proof allows
+            pol = _polish_strict(problem, np.asarray(x, dtype=float), solve_point)
+            better = pol.get("proven") and (
+                pol["value"] < upper_value if sense == "min" else pol["value"] > upper_value
+            )
+            if better:
+                upper_value = pol["value"]
+                out["primal"] = "restored point"
+                out["restored_x"] = pol["x"]
+                out["polish"] = {"theta": pol["theta"], "from": "closed problem"}
+    if not dual.get("proven") and x is not None and duals and duals.get("lmis") is not None:
+        out["conditional"] = _conditional(problem, duals, x)
     bound = None
     if dual.get("proven"):
         bound = dual["lower"] if sense == "min" else -dual["lower"]
@@ -939,6 +260,95 @@ def enclosure(
     return out
 
 
+def _polish_strict(problem: Problem, x: np.ndarray, solve_point: Callable[[Problem], Any]) -> dict[str, Any]:
+    """:func:`~lmic.certify.enclosure_float.polish_primal` from ``x`` towards the solver's
+    point of the closed problem (every strict constraint made non-strict)."""
+    import dataclasses
+
+    from lmic.ir.problem import LinearConstraints
+
+    lin = problem.linear
+    closed = dataclasses.replace(
+        problem,
+        lmis=[dataclasses.replace(lmi, strict=False) for lmi in problem.lmis],
+        linear=LinearConstraints(lin.A, list(lin.kinds), [False] * len(lin), list(lin.names)),
+    )
+    try:
+        xb = solve_point(closed)
+    except (ValueError, ArithmeticError):
+        xb = None
+    if xb is None:
+        return {"proven": False}
+    return polish_primal(problem, x, np.asarray(xb, dtype=float))
+
+
+#: relative gap above which a caller may re-solve at :data:`TIGHT_TOL` (:func:`best_of`)
+GAP_TARGET = 1e-6
+#: the solver tolerance of that re-solve (interior-point backends)
+TIGHT_TOL = 1e-10
+
+
+def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dict[str, Any]:
+    """Both enclosures are proven: keep the better end of each, with its evidence.
+
+    ``second`` is the enclosure of another solve (e.g. at a tighter tolerance) whose point
+    ``second_x`` gave its primal end; a primal end taken from it is recorded as a
+    ``"restored point"`` (its ``restored_x``), which :func:`audit_enclosure` re-proves.
+
+    >>> a = {"sense": "min", "kind": "minimum", "lower": 1.0, "upper": 3.0, "dual": {"proven": True},
+    ...      "primal": "certified point"}
+    >>> b = {"sense": "min", "kind": "minimum", "lower": 0.5, "upper": 2.0, "dual": {"proven": True},
+    ...      "primal": "certified point"}
+    >>> r = best_of(a, b, [2.0])
+    >>> r["lower"], r["upper"], r["primal"], r["restored_x"], r["gap"]
+    (1.0, 2.0, 'restored point', [2.0], 1.0)
+    """
+    out = dict(first)
+    sense = first.get("sense")
+    pkey, dkey = ("upper", "lower") if sense == "min" else ("lower", "upper")
+    better = (lambda a, b: a < b) if sense == "min" else (lambda a, b: a > b)
+    pv, pv2 = first.get(pkey), second.get(pkey)
+    if pv2 is not None and (pv is None or better(pv2, pv)):
+        out[pkey] = pv2
+        if second.get("primal") == "restored point":
+            out["primal"], out["restored_x"] = "restored point", second.get("restored_x")
+        else:
+            out["primal"], out["restored_x"] = "restored point", list(np.asarray(second_x, dtype=float).tolist())
+        out.pop("polish", None)
+        if "polish" in second:
+            out["polish"] = second["polish"]
+    dv, dv2 = first.get(dkey), second.get(dkey)
+    if dv2 is not None and (dv is None or better(dv, dv2)):
+        out[dkey] = dv2
+        out["dual"] = second["dual"]
+        out.pop("conditional", None)
+    elif dv is None and second.get("conditional") and not first.get("conditional"):
+        out["conditional"] = second["conditional"]
+    lo, hi = out.get("lower"), out.get("upper")
+    if lo is not None and hi is not None:
+        out["gap"] = hi - lo
+        out["rel_gap"] = (hi - lo) / max(1.0, 0.5 * (abs(hi) + abs(lo))) if hi >= lo else 0.0
+        out["consistent"] = bool(hi >= lo)
+        out["reason"] = (
+            f"{out['kind']} in [{lo:.10g}, {hi:.10g}] (relative gap {out['rel_gap']:.2g})"
+            if hi >= lo
+            else f"inconsistent ends: lower {lo:.10g} > upper {hi:.10g}"
+        )
+    return out
+
+
+def _conditional(problem: Problem, duals: dict[str, Any], x: np.ndarray) -> dict[str, Any]:
+    """The box bound (:mod:`lmic.certify.enclosure_conditional`) in the problem's own sense,
+    radius :data:`~lmic.certify.enclosure_conditional.RADIUS_FACTOR` times the point's size."""
+    radius = RADIUS_FACTOR * max(1.0, float(np.max(np.abs(np.asarray(x, dtype=float)), initial=0.0)))
+    box = best_box_bound(problem, duals, radius)
+    if not box.get("proven"):
+        return {"end": None, "value": None, "reason": box["reason"]}
+    end = "lower" if problem.objective.sense == "min" else "upper"
+    value = box["lower"] if end == "lower" else -box["lower"]
+    return {"end": end, "value": value, "radius": radius, "norm": "inf", "reason": box["reason"], "bound": box}
+
+
 def summary(record: dict[str, Any] | None) -> dict[str, Any] | None:
     """The enclosure without the dual point's matrices (for ``--json`` output).
 
@@ -950,6 +360,8 @@ def summary(record: dict[str, Any] | None) -> dict[str, Any] | None:
     out = {k: v for k, v in record.items() if k != "restored_x"}
     if isinstance(out.get("dual"), dict):
         out["dual"] = {k: v for k, v in out["dual"].items() if k != "dual"}
+    if isinstance(out.get("conditional"), dict):
+        out["conditional"] = {k: v for k, v in out["conditional"].items() if k != "bound"}
     return out
 
 
@@ -976,10 +388,20 @@ def describe(record: dict[str, Any] | None) -> list[str]:
     primal_end = "upper" if dual_end == "lower" else "lower"
     if dual.get("proven"):
         how = "exact rational arithmetic" if dual.get("method") == "exact" else "rigorous floating-point error bounds"
-        lines.append(f"  {dual_end} end: dual point proved feasible ({how}; interior shift {dual.get('shift'):g})")
+        if dual.get("route") == "centred":
+            where = f"centred dual point, weight {dual.get('theta'):g} at loss {dual.get('centring_loss'):g}"
+        else:
+            where = f"interior shift {dual.get('shift'):g}"
+        lines.append(f"  {dual_end} end: dual point proved feasible ({how}; {where})")
     else:
         lines.append(f"  {dual_end} end: no certified dual bound ({dual.get('reason', 'not attempted')})")
     lines.append(f"  {primal_end} end: {record.get('primal', 'no certified point')}")
+    cond = record.get("conditional") or {}
+    if cond.get("value") is not None:
+        lines.append(
+            f"  conditional {cond['end']} bound {cond['value']:.10g}: not a bound of the {kind}; it holds only "
+            f"for solutions with ||x||_inf <= {cond['radius']:.3g} (VSDP's bound for the unproved dual point)"
+        )
     if kind in ("infimum", "supremum"):
         lines.append(f"  strict constraints: the optimum is an {kind}, which no feasible point need attain")
     return lines
@@ -1073,6 +495,15 @@ def audit_enclosure(
         v = verify_dual_bound(problem, dual)
         if not v["ok"]:
             return {"ok": False, "field": "enclosure.dual", "message": "enclosure.dual: " + v["reason"]}
+    cond = record.get("conditional") or {}
+    if cond.get("value") is not None:
+        box = cond.get("bound") or {}
+        expect = -float(box.get("lower", math.nan)) if sense == "max" else float(box.get("lower", math.nan))
+        v = verify_box_bound(problem, box) if box else {"ok": False, "reason": "no dual point recorded"}
+        if float(cond["value"]) != expect or float(cond.get("radius", math.nan)) != float(box.get("radius", math.nan)):
+            v = {"ok": False, "reason": "the value or radius differs from the recorded box bound"}
+        if not v["ok"]:
+            return {"ok": False, "field": "enclosure.conditional", "message": "enclosure.conditional: " + v["reason"]}
     lo, hi = record.get("lower"), record.get("upper")
     if lo is not None and hi is not None:
         if float(lo) > float(hi):

@@ -1,0 +1,243 @@
+"""The dual (lower) end of the enclosure: :func:`dual_bound` and :func:`verify_dual_bound`.
+
+:func:`dual_bound` tries, in order, the solver's dual shifted inside the cone (:data:`SHIFTS`),
+the dual of VSDP's perturbed problem, and a centred dual point (the dual problem solved for the
+largest interior margin at a small loss of objective, combined with the solver's dual); each
+candidate is repaired (:mod:`lmic.certify.enclosure_repair`) and proved
+(:mod:`lmic.certify.enclosure_float`, optionally :mod:`lmic.certify.enclosure_exact`).
+
+Examples
+--------
+>>> import numpy as np, scipy.sparse as sp
+>>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+>>> p = Problem([Variable("t", "scalar", (1, 1))],
+...             [LMI("t - 2 >= 0", 1, sp.csc_matrix([[-2.0, 1.0]]), strict=False)],
+...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+>>> dual_bound(p, {"lmis": [np.eye(1)], "linear": []})["proven"]
+True
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from lmic.certify.enclosure_centre import centred_bound
+from lmic.certify.enclosure_exact import _prove_exact
+from lmic.certify.enclosure_float import _prove_float
+from lmic.certify.enclosure_repair import (
+    PERTURBATIONS,
+    SHIFTS,
+    _active_of,
+    _jacobian,
+    _parse,
+    _prepare,
+    _scale,
+    _target,
+    perturbed_problem,
+)
+from lmic.errors import CertificateError
+from lmic.ir.problem import Problem
+
+__all__ = ["dual_bound", "verify_dual_bound"]
+
+
+def dual_bound(
+    problem: Problem,
+    duals: dict[str, Any],
+    *,
+    exact: bool = False,
+    resolve: Callable[[Problem], dict[str, Any] | None] | None = None,
+    budget_s: float = 20.0,
+    solve_point: Callable[[Problem], np.ndarray | None] | None = None,
+) -> dict[str, Any]:
+    """Prove a lower bound of the minimisation form's optimal value from a dual point.
+
+    Parameters
+    ----------
+    problem : Problem
+        An optimisation problem (``min`` or ``max``).
+    duals : dict
+        ``{"lmis": [Z_i], "linear": y}`` (:attr:`lmic.solution.Solution.duals`).
+    exact : bool
+        Prove in rational arithmetic (module docstring, *Exact mode*) after the float proof.
+    resolve : callable, optional
+        ``resolve(problem) -> duals`` (a solve on the caller's backend). When the solver's own
+        dual cannot be proved (a degenerate dual: no strictly feasible point near it), the
+        dual of :func:`perturbed_problem` is tried (``route`` ``"perturbed"``).
+    budget_s : float
+        No new attempt (shift or perturbation) starts after this many seconds.
+    solve_point : callable, optional
+        ``solve_point(problem) -> x or None`` (a solve on the caller's backend, its primal
+        point). When neither the shifts nor the perturbation prove, the dual problem is solved
+        for a centred point (:mod:`lmic.certify.enclosure_centre`, ``route`` ``"centred"``).
+
+    Returns
+    -------
+    dict
+        ``proven`` (bool), ``route`` (``"solver dual"``, ``"perturbed"`` or ``"centred"``), ``lower`` (a
+        bound ``<= inf q_0 + q . x``, the minimisation form:
+        for ``max`` problems ``-lower`` bounds the maximum from above), ``method``
+        (``"rigorous-float"`` or ``"exact"``), ``shift`` (the ``eps_rel`` used), ``reason``,
+        ``dual`` (the dual point the bound was proved from, JSON-ready), ``time_s``; the float
+        proof's ``residual_bound``, ``correction_bound``, ``min_eig_lower``.
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+    >>> p = Problem([Variable("t", "scalar", (1, 1))],
+    ...             [LMI("t - 2 >= 0", 1, sp.csc_matrix([[-2.0, 1.0]]), strict=False)],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+    >>> r = dual_bound(p, {"lmis": [np.eye(1)], "linear": []})
+    >>> r["proven"], 1.9999999 < r["lower"] <= 2.0
+    (True, True)
+    """
+    t0 = time.perf_counter()
+    if problem.objective.sense == "feasibility":
+        raise CertificateError("a feasibility problem has no optimal value to bound")
+    mats0, y0 = _parse(problem, duals)
+    _, q = _target(problem)
+    J, ranges = _jacobian(problem)
+    out: dict[str, Any] = {"proven": False, "reason": "no shift gave a provable dual point"}
+    top = _scale(problem, mats0, y0)
+    attempts: list[tuple[str, float, Any, Any]] = [("solver dual", e, mats0, y0) for e in SHIFTS]
+    for k, (route, eps_rel, mz, yz) in enumerate(attempts):
+        if k and time.perf_counter() - t0 > budget_s:
+            out["reason"] = f"{out.get('reason')}; time budget {budget_s:g} s spent after {k} attempts"
+            break
+        if route == "perturbed" and mz is None:
+            try:
+                d2 = resolve(perturbed_problem(problem, eps_rel * top)) if resolve is not None else None
+                mz, yz = _parse(problem, d2) if d2 else (None, None)
+            except CertificateError:
+                mz = None
+            if mz is None:
+                continue
+            # Z = Z' + eps I: the perturbed dual shifted back (the shift of _prepare)
+        try:
+            mats, y, active = _prepare(problem, J, ranges, q, mz, yz, eps_rel, top)
+            res = _prove_float(problem, J, ranges, q, mats, y, active)
+            if not res["proven"] and ("singular" in res["reason"] or "absorb" in res["reason"]):
+                mats, y, active = _prepare(problem, J, ranges, q, mz, yz, eps_rel, top, drop=False)
+                res = _prove_float(problem, J, ranges, q, mats, y, active)
+        except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
+            res = {"proven": False, "reason": f"numerical failure in the repair: {exc}"}
+        res.update(method="rigorous-float", shift=eps_rel, route=route)
+        if res["proven"] or not out.get("proven"):
+            res["dual"] = {"lmis": [Z.tolist() for Z in mats], "linear": y.tolist()} if res["proven"] else None
+            out = res
+        if res["proven"]:
+            if route == "solver dual" and 0 < k < len(SHIFTS):
+                out = _refine(problem, J, ranges, q, mz, yz, top, SHIFTS[k - 1], eps_rel, out)
+            break
+        if k == len(SHIFTS) - 1 and resolve is not None:
+            attempts += [("perturbed", e, None, None) for e in PERTURBATIONS]
+    if not out.get("proven") and solve_point is not None and time.perf_counter() - t0 <= budget_s:
+        mats_c, y_c, res = _centred(
+            problem, J, ranges, q, mats0, y0, top, solve_point, lambda: time.perf_counter() - t0 > budget_s
+        )
+        res.update(method="rigorous-float", shift=0.0, route="centred")
+        if res["proven"]:
+            res["dual"] = {"lmis": [Z.tolist() for Z in mats_c], "linear": y_c.tolist()}
+            out = res
+        else:
+            out["reason"] = f"{out.get('reason')}; {res['reason']}"
+    if exact and out.get("proven"):
+        mats, y = _parse(problem, out["dual"])
+        ex = _prove_exact(problem, J, ranges, q, mats, y)
+        out["exact"] = ex
+        if ex["proven"]:
+            out.update(method="exact", lower=ex["lower"], lower_exact=ex["lower_exact"])
+    out["time_s"] = time.perf_counter() - t0
+    return out
+
+
+def _refine(problem: Problem, J, ranges, q, mats0, y0, top, low, high, best):
+    """Two shifts between a failing ``low`` and the proving ``high`` (geometric thirds,
+    smallest first): a smaller shift costs less of the bound."""
+    for f in (2.0 / 3.0, 1.0 / 3.0):
+        eps_rel = low**f * high ** (1.0 - f)
+        try:
+            mats, y, active = _prepare(problem, J, ranges, q, mats0, y0, eps_rel, top)
+            res = _prove_float(problem, J, ranges, q, mats, y, active)
+        except (np.linalg.LinAlgError, ValueError, FloatingPointError):
+            continue
+        if res["proven"] and res["lower"] > best["lower"]:
+            res.update(method="rigorous-float", shift=eps_rel, route="solver dual")
+            res["dual"] = {"lmis": [Z.tolist() for Z in mats], "linear": y.tolist()}
+            return res
+    return best
+
+
+def _centred(problem: Problem, J, ranges, q, mats0, y0, top, solve_point, deadline):
+    """The centred route: the solver's dual projected onto the cone, the drop rule's active
+    entries, then :func:`lmic.certify.enclosure_centre.centred_bound`."""
+    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
+    proj = []
+    for Z in mats0:
+        if not Z.size:
+            proj.append(Z)
+            continue
+        w, V = np.linalg.eigh(Z)
+        proj.append((V * np.maximum(w, 0.0)) @ V.T)
+    y = np.where(ge, np.maximum(y0, 0.0), y0)
+    active = _active_of(problem, proj, y, ranges, top)
+    try:
+        res, mats, y = centred_bound(problem, J, ranges, q, proj, y, active, top, solve_point, deadline)
+    except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
+        return proj, y, {"proven": False, "reason": f"numerical failure in the centred route: {exc}"}
+    return mats, y, res
+
+
+def verify_dual_bound(problem: Problem, record: dict[str, Any], *, exact: bool = False) -> dict[str, Any]:
+    """Re-prove a recorded dual bound from its recorded dual point alone (for ``lmic audit``).
+
+    The recorded point is used as it stands (no shift, no repair): its rigorous bound must be
+    at least the recorded ``lower`` (minimisation form).
+
+    Returns
+    -------
+    dict
+        ``ok`` (bool), ``lower`` (re-proved), ``reason``.
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+    >>> p = Problem([Variable("t", "scalar", (1, 1))],
+    ...             [LMI("t - 2 >= 0", 1, sp.csc_matrix([[-2.0, 1.0]]), strict=False)],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+    >>> r = dual_bound(p, {"lmis": [np.eye(1)], "linear": []})
+    >>> verify_dual_bound(p, r)["ok"], verify_dual_bound(p, dict(r, lower=2.5))["ok"]
+    (True, False)
+    """
+    if not record.get("dual") or record.get("lower") is None:
+        return {"ok": False, "lower": None, "reason": "no dual point recorded"}
+    try:
+        mats, y = _parse(problem, record["dual"])
+    except CertificateError as exc:
+        return {"ok": False, "lower": None, "reason": str(exc)}
+    _, q = _target(problem)
+    J, ranges = _jacobian(problem)
+    if exact or record.get("method") == "exact":
+        res = _prove_exact(problem, J, ranges, q, mats, y)
+    else:
+        res = _prove_float(problem, J, ranges, q, mats, y)
+    if not res["proven"]:
+        return {
+            "ok": False,
+            "lower": None,
+            "reason": "the recorded dual point does not prove a bound: " + res["reason"],
+        }
+    rec = float(record["lower"])
+    if rec > res["lower"]:
+        return {
+            "ok": False,
+            "lower": res["lower"],
+            "reason": f"recorded lower bound {rec:.17g} exceeds the bound the dual point proves ({res['lower']:.17g})",
+        }
+    return {"ok": True, "lower": res["lower"], "reason": "lower bound re-proved from the recorded dual point"}

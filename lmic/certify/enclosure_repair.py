@@ -1,0 +1,329 @@
+"""Dual repair of the enclosure (steps 1-3 of :mod:`lmic.certify.enclosure`).
+
+The solver's dual point ``u = (Z_i, y)`` is projected onto the cone, shifted inside, and
+repaired by damped least-squares steps that keep every eigenvalue above a floor until the dual
+equalities ``g_k(u) = q_k`` hold to round-off. The linear map ``u -> g(u)`` is the sparse
+matrix of :func:`jacobian`. :func:`perturbed_problem` is VSDP's perturbation for a degenerate
+dual. Nothing here is a proof: :mod:`lmic.certify.enclosure_float` and
+:mod:`lmic.certify.enclosure_exact` decide.
+
+Examples
+--------
+>>> import numpy as np, scipy.sparse as sp
+>>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+>>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t > 2", 1, sp.csc_matrix([[-2.0, 1.0]]))],
+...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+>>> J, ranges = jacobian(p)
+>>> J.toarray().tolist(), ranges
+([[-2.0], [1.0]], [(0, 1)])
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from lmic.certify.multipliers import parse_multipliers
+from lmic.ir.problem import Problem
+from lmic.ir.svec import tril_rows_cols, tril_unvec
+
+__all__ = ["SHIFTS", "PERTURBATIONS", "DROP", "jacobian", "perturbed_problem"]
+
+#: relative shifts ``eps_rel`` tried, smallest first (step 2 of the module docstring)
+SHIFTS = (1e-15, 1e-14, 1e-13, 3e-13, 1e-12, 1e-11, 1e-10, 1e-9, 1e-8, 1e-7, 1e-6)
+
+
+#: relative perturbations ``eps_rel`` of :func:`perturbed_problem` tried when the solver's
+#: own dual is degenerate
+PERTURBATIONS = (1e-8, 1e-6)
+
+
+#: a multiplier block below this times the largest multiplier is set to exactly zero (an
+#: inactive constraint; it then needs no interior shift)
+DROP = 1e-6
+
+
+def _weights(d: int) -> np.ndarray:
+    i, j = tril_rows_cols(d)
+    return np.where(i == j, 1.0, 2.0)
+
+
+def _jacobian(problem: Problem) -> tuple[sp.csr_matrix, list[tuple[int, int]]]:
+    """``J`` (``(1 + n) x m``, ``g = J u``) and the column range of every LMI's ``svec(Z_i)``."""
+    cols, ranges, start = [], [], 0
+    for lmi in problem.lmis:
+        C = lmi.coeffs.tocsc()
+        cols.append(sp.csr_matrix(C.T.multiply(_weights(lmi.dim)[None, :])))
+        t = C.shape[0]
+        ranges.append((start, start + t))
+        start += t
+    if len(problem.linear):
+        cols.append(sp.csr_matrix(problem.linear.A.T))
+    if not cols:
+        return sp.csr_matrix((1 + problem.n, 0)), ranges
+    return sp.csr_matrix(sp.hstack(cols)), ranges
+
+
+def _pack(problem: Problem, mats: list[np.ndarray], y: np.ndarray) -> np.ndarray:
+    parts = []
+    for lmi, Z in zip(problem.lmis, mats, strict=True):
+        r, c = tril_rows_cols(lmi.dim)
+        parts.append(Z[r, c])
+    parts.append(y)
+    return np.concatenate(parts) if parts else np.zeros(0)
+
+
+def _unpack(problem: Problem, u: np.ndarray, ranges: list[tuple[int, int]]) -> tuple[list[np.ndarray], np.ndarray]:
+    mats = [tril_unvec(u[a:b], lmi.dim) for lmi, (a, b) in zip(problem.lmis, ranges, strict=True)]
+    off = ranges[-1][1] if ranges else 0
+    return mats, u[off:].copy()
+
+
+def _parse(problem: Problem, record: dict[str, Any]) -> tuple[list[np.ndarray], np.ndarray]:
+    return parse_multipliers(problem, record, "dual point", missing_is_zero=False)
+
+
+def _target(problem: Problem) -> tuple[float, np.ndarray]:
+    s = -1.0 if problem.objective.sense == "max" else 1.0
+    q = s * problem.objective.c
+    return s, q
+
+
+def _repair(
+    problem: Problem,
+    J: sp.csr_matrix,
+    ranges: list,
+    q: np.ndarray,
+    mats: list,
+    y: np.ndarray,
+    floor: float = 0.0,
+    steps: int = 40,
+    objective: float | None = None,
+):
+    import scipy.linalg
+
+    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
+    # with ``objective``, g_0(u) is held at it too (the repair then keeps the dual objective)
+    Jx = J[1:].tocsc() if objective is None else J.tocsc()
+    qn = q[1:] if objective is None else np.concatenate([[objective], q[1:]])
+    scale = float(np.max(np.abs(qn), initial=0.0)) + 1e-300
+    history: list[float] = []
+    for _ in range(steps):
+        u = _pack(problem, mats, y)
+        rho = qn - Jx @ u
+        now = float(np.max(np.abs(rho), initial=0.0))
+        if now <= 1e-15 * scale or (len(history) >= 6 and now > 0.9 * history[-6]):
+            break  # converged, or stalled (no interior point near: the proof will say so)
+        history.append(now)
+        blocks: list[Any] = []
+        factors: list[Any] = []
+        for lmi, Z, (a, b) in zip(problem.lmis, mats, ranges, strict=True):
+            if not lmi.dim:
+                factors.append(None)
+                continue
+            w, V = np.linalg.eigh(Z - floor * np.eye(lmi.dim))
+            sel = w > 0
+            U = V[:, sel] * np.sqrt(w[sel])
+            r = U.shape[1]
+            if not r:
+                factors.append(None)
+                continue
+            ri, ci = tril_rows_cols(lmi.dim)
+            ia, ib = np.triu_indices(r)
+            P, Qm = U[ri], U[ci]
+            T = P[:, ia] * Qm[:, ib] + P[:, ib] * Qm[:, ia]
+            T[:, ia == ib] *= 0.5
+            # d svec(Z) / d E_ab, mapped by J's columns of this LMI
+            blocks.append(np.asarray(Jx[:, a:b] @ T))
+            factors.append((U, ia, ib))
+        off = ranges[-1][1] if ranges else 0
+        rows = [r for r in range(len(y)) if (not ge[r]) or y[r] > floor]
+        top = max([float(np.max(np.abs(y), initial=0.0))] + [float(np.max(np.abs(Z), initial=0.0)) for Z in mats])
+        srow = np.array([y[r] - floor if ge[r] else max(abs(y[r]), 1e-3 * top, 1e-300) for r in rows])
+        if rows:
+            blocks.append(Jx[:, [off + r for r in rows]].toarray() * srow[None, :])
+        if not blocks:
+            break
+        G = np.hstack(blocks)
+        # least-norm step through the Gram matrix (n x n, cheap for the wide G of a face)
+        Gm = G @ G.T
+        Gm[np.diag_indices_from(Gm)] += 1e-14 * float(np.trace(Gm)) / max(1, Gm.shape[0]) + 1e-300
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
+                e = G.T @ np.linalg.solve(Gm, rho)
+        except (np.linalg.LinAlgError, ValueError):
+            e = scipy.linalg.lstsq(G, rho, lapack_driver="gelsy", check_finite=False)[0]
+        k, norms = 0, [0.0]
+        Es: list[Any] = []
+        for f in factors:
+            if f is None:
+                Es.append(None)
+                continue
+            U, ia, ib = f
+            r = U.shape[1]
+            E = np.zeros((r, r))
+            E[ia, ib] = e[k : k + len(ia)]
+            E[ib, ia] = e[k : k + len(ia)]
+            k += len(ia)
+            Es.append(E)
+            norms.append(float(np.max(np.abs(np.linalg.eigvalsh(E)))))
+        ey = e[k:]
+        norms += [abs(float(v)) for r, v in zip(rows, ey, strict=True) if ge[r]]
+        alpha = 1.0 if max(norms) <= 0.5 else 0.5 / max(norms)
+        new = []
+        for Z, f, E in zip(mats, factors, Es, strict=True):
+            if f is None:
+                new.append(Z)
+            else:
+                U = f[0]
+                Zn = U @ (np.eye(U.shape[1]) + alpha * E) @ U.T + floor * np.eye(U.shape[0])
+                new.append(0.5 * (Zn + Zn.T))
+        mats = new
+        y = y.copy()
+        for r, v, sr in zip(rows, ey, srow, strict=True):
+            y[r] += alpha * float(v) * sr
+    return mats, y
+
+
+def _scale(problem: Problem, mats: list, y: np.ndarray) -> float:
+    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
+    top = max(
+        [float(np.max(np.abs(y[ge]), initial=0.0))]
+        + [float(np.max(np.linalg.eigvalsh(Z), initial=0.0)) if Z.size else 0.0 for Z in mats]
+    )
+    return top if top > 0 else 1.0
+
+
+def perturbed_problem(problem: Problem, eps: float) -> Problem:
+    """The closed problem whose duals are ``eps`` inside the cone (VSDP's perturbation).
+
+    Its objective is the minimisation form's ``q`` minus ``eps t`` with ``t_k = sum_i tr
+    F_i^(k) + sum_{r ge} a_rk``: a dual point ``(Z_i', y')`` of it gives ``Z_i = Z_i' + eps I``,
+    ``y_r = y_r' + eps`` (``ge`` rows), a dual point of ``problem`` whose every eigenvalue is at
+    least ``eps``. Strict constraints are closed (the dual bound holds for the closure).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t > 2", 1, sp.csc_matrix([[-2.0, 1.0]]))],
+    ...             LinearConstraints.empty(1), Objective("max", [1.0, -1.0]))
+    >>> q = perturbed_problem(p, 0.5)
+    >>> q.objective.sense, q.objective.c.tolist(), q.lmis[0].strict
+    ('min', [-1.0, 0.5], False)
+    """
+    import dataclasses
+
+    from lmic.ir.problem import LinearConstraints, Objective
+
+    _, q = _target(problem)
+    t = np.zeros(1 + problem.n)
+    for lmi in problem.lmis:
+        i, j = tril_rows_cols(lmi.dim)
+        t += np.asarray(lmi.coeffs.tocsr()[np.flatnonzero(i == j)].sum(axis=0)).ravel()
+    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
+    if np.any(ge):
+        t += np.asarray(problem.linear.A.tocsr()[np.flatnonzero(ge)].sum(axis=0)).ravel()
+    c = q - eps * t
+    c[0] = q[0]
+    lin = problem.linear
+    return Problem(
+        list(problem.variables),
+        [dataclasses.replace(lmi, strict=False) for lmi in problem.lmis],
+        LinearConstraints(lin.A, list(lin.kinds), [False] * len(lin), list(lin.names)),
+        Objective("min", c),
+        meta={"perturbed_from": problem.meta.get("theorem") if problem.meta else None},
+    )
+
+
+def _prepare(
+    problem: Problem,
+    J,
+    ranges,
+    q,
+    mats,
+    y,
+    eps_rel: float,
+    top: float | None = None,
+    drop: bool = True,
+    objective: float | None = None,
+) -> tuple[list, np.ndarray, np.ndarray]:
+    """Steps 1-3 of the module docstring; returns ``(Z_i, y, active)`` (``active``: the
+    entries of ``u`` the proof may correct; the others are exactly zero). With
+    ``objective``, the repair also holds ``g_0(u)`` at that value (the solver's dual
+    objective), so the least-norm steps do not trade objective for feasibility."""
+    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
+    proj = []
+    for Z in mats:
+        if not Z.size:
+            proj.append(Z)
+            continue
+        w, V = np.linalg.eigh(Z)
+        proj.append((V * np.maximum(w, 0.0)) @ V.T)
+    y = np.where(ge, np.maximum(y, 0.0), y)
+    if top is None:
+        top = _scale(problem, proj, y)
+    eps = eps_rel * top
+    active = np.ones(_pack(problem, proj, y).size, dtype=bool)
+    keep = []
+    for Z, (a, b) in zip(proj, ranges, strict=True):
+        on = not drop or (Z.size and float(np.max(np.linalg.eigvalsh(Z))) > DROP * top)
+        keep.append(on)
+        active[a:b] = on
+    off = ranges[-1][1] if ranges else 0
+    rows_on = ~ge | (y > DROP * top) | (not drop)
+    active[off:] = rows_on
+    proj = [Z + eps * np.eye(Z.shape[0]) if on else np.zeros_like(Z) for Z, on in zip(proj, keep, strict=True)]
+    y = np.where(ge & rows_on, y + eps, np.where(ge, 0.0, y))
+    proj = [0.5 * (Z + Z.T) for Z in proj]
+    mats, y = _repair(problem, J, ranges, q, proj, y, floor=0.5 * eps, objective=objective)
+    mats, y = _least_norm(problem, J, ranges, q, mats, y, active, objective=objective)
+    return mats, y, active
+
+
+def _least_norm(
+    problem: Problem, J, ranges, q, mats, y, active: np.ndarray, steps: int = 2, objective: float | None = None
+):
+    """What the damped steps left: plain least-norm steps over the active entries (they may
+    leave the cone by their own size, which the shift pays for; the proof decides)."""
+    u = _pack(problem, mats, y)
+    Jr = J[1:] if objective is None else J
+    qr = q[1:] if objective is None else np.concatenate([[objective], q[1:]])
+    Js = Jr[:, np.flatnonzero(active)]
+    for _ in range(steps):
+        rho = qr - Jr @ u
+        if not np.any(rho):
+            break
+        M = (Js @ Js.T).toarray()
+        w = np.linalg.lstsq(M, rho, rcond=None)[0]
+        u[active] += Js.T @ w
+    return _unpack(problem, u, ranges)
+
+
+def _active_of(problem: Problem, mats: list, y: np.ndarray, ranges: list, top: float) -> np.ndarray:
+    """The entries of ``u`` kept by the drop rule of :func:`_prepare` (blocks and ``ge`` rows
+    whose multiplier is above :data:`DROP` times the largest; ``eq`` rows always)."""
+    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
+    active = np.ones(_pack(problem, mats, y).size, dtype=bool)
+    for Z, (a, b) in zip(mats, ranges, strict=True):
+        active[a:b] = bool(Z.size and float(np.max(np.linalg.eigvalsh(Z))) > DROP * top)
+    off = ranges[-1][1] if ranges else 0
+    active[off:] = ~ge | (y > DROP * top)
+    return active
+
+
+def _default_active(problem: Problem, ranges: list, u: np.ndarray) -> np.ndarray:
+    """Entries a proof may correct: every nonzero block, ``eq`` rows, nonzero ``ge`` rows."""
+    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
+    active = np.ones(u.size, dtype=bool)
+    for a, b in ranges:
+        active[a:b] = bool(np.any(u[a:b]))
+    off = ranges[-1][1] if ranges else 0
+    active[off:] = ~ge | (u[off:] != 0)
+    return active
+
+
+#: public name of the Jacobian builder
+jacobian = _jacobian
