@@ -110,14 +110,27 @@ def run(args: argparse.Namespace) -> int:
     from lmic.studies.report import export, print_table
     from lmic.studies.spec import load_study
 
-    study = load_study(args.study)  # every check before any job runs
-    if os.path.exists(args.output) and not os.path.isdir(args.output):
-        raise DataError(f"-o {args.output}: exists and is not a folder")
+    # The local pool's job runners start first: each imports lmic (about a second) while this
+    # process loads and checks the study. They write nothing; a study that fails its checks
+    # stops them again (bad input: exit 2, nothing written).
+    executor: Any = args.executor
+    if args.executor == "local":
+        from lmic.studies.executors import LocalExecutor
+
+        executor = LocalExecutor(args.workers)
+    try:
+        study = load_study(args.study)  # every check before any job runs
+        if os.path.exists(args.output) and not os.path.isdir(args.output):
+            raise DataError(f"-o {args.output}: exists and is not a folder")
+    except BaseException:
+        if not isinstance(executor, str):
+            executor.close()
+        raise
     try:
         summary = run_study(
             study,
             args.output,
-            executor=args.executor,
+            executor=executor,
             workers=args.workers,
             progress=not (args.no_progress or args.json),
         )

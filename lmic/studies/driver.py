@@ -156,7 +156,8 @@ def run_study(
     out_dir : str
         The output folder (created; resumed if it holds results).
     executor : str or Executor
-        ``local`` (default), ``dask``, ``tcp://HOST:PORT`` or an executor instance.
+        ``local`` (default), ``dask``, ``tcp://HOST:PORT``, or an executor instance (already
+        started, e.g. to overlap its start-up with loading the study; closed when the run ends).
     workers : int, optional
         Local workers / LocalCluster processes (default: every core).
     progress : bool
@@ -195,9 +196,13 @@ def run_study(
         by_hash = {j.hash: j for j in pending}
         attempts: Counter[str] = Counter()
         try:
+            payload = {job.hash: job.to_dict() for job in pending}
+            if ex.shared_filesystem:  # runners write certificates themselves (see runner.write_certificate_here)
+                for key, d in payload.items():
+                    d["certificate_path"] = store.certificate_path(key)
             for job in pending:
                 attempts[job.hash] += 1
-            ex.submit_many([job.to_dict() for job in pending], study.time_limit)
+            ex.submit_many(list(payload.values()), study.time_limit)
             for rec in ex.results():
                 h = rec.get("hash")
                 if h not in by_hash or h in done:
@@ -207,12 +212,14 @@ def run_study(
                 if rec.get("crashed") and attempts[h] <= study.retries:
                     attempts[h] += 1
                     summary.retried += 1
-                    ex.submit(job.to_dict(), study.time_limit)
+                    ex.submit(payload[h], study.time_limit)
                     continue
                 cert = rec.pop("_certificate", None)
                 rec.pop("crashed", None)
                 rec.pop("attempt_pid", None)
-                if cert is not None:
+                if rec.pop("_certificate_written", False):
+                    rec["certificate"] = f"certificates/{h}.json"
+                elif cert is not None:
                     rec["certificate"] = store.write_certificate(h, cert)
                 rec.update(
                     task=job.task,

@@ -62,6 +62,8 @@ class Executor(ABC):
 
     label = "executor"
     workers = 1
+    #: the workers see the driver's file system (they may write certificate files themselves)
+    shared_filesystem = False
 
     @abstractmethod
     def submit(self, job: dict[str, Any], time_limit: float | None) -> None:
@@ -84,6 +86,8 @@ class Executor(ABC):
 class LocalExecutor(Executor):
     """``workers`` threads of the driver, each driving its own :class:`Runner` child."""
 
+    shared_filesystem = True
+
     def __init__(self, workers: int | None = None, stderr: Any = None) -> None:
         import subprocess
 
@@ -93,6 +97,8 @@ class LocalExecutor(Executor):
         self._done: queue.Queue[dict[str, Any]] = queue.Queue()
         self._outstanding = 0
         self._runners = [Runner(stderr if stderr is not None else subprocess.DEVNULL) for _ in range(self.workers)]
+        for r in self._runners:  # the children import lmic while the driver loads the study
+            r.start()
         self._threads = [threading.Thread(target=self._loop, args=(r,), daemon=True) for r in self._runners]
         for t in self._threads:
             t.start()
@@ -156,6 +162,7 @@ class DaskExecutor(Executor):
             )
             self._client = Client(self._cluster)
             self.label = f"dask LocalCluster ({self.workers} workers)"
+            self.shared_filesystem = True
         else:
             try:
                 self._client = Client(address, timeout=10)

@@ -32,7 +32,14 @@ from typing import Any
 
 from lmic.jsonable import to_jsonable
 
-__all__ = ["Runner", "local_runner", "run_in_runner", "run_many_in_runner", "TIME_LIMIT_GRACE"]
+__all__ = [
+    "Runner",
+    "local_runner",
+    "run_in_runner",
+    "run_many_in_runner",
+    "write_certificate_here",
+    "TIME_LIMIT_GRACE",
+]
 
 #: seconds a job may overrun its limit (the solver's own limit comes first) before it is killed
 TIME_LIMIT_GRACE = 2.0
@@ -64,6 +71,10 @@ class Runner:
         self._stderr = stderr
         self._proc: subprocess.Popen[bytes] | None = None
         self.last_pid: int | None = None
+
+    def start(self) -> None:
+        """Start the child now (it imports lmic while the caller does other work)."""
+        self._start()
 
     def _start(self) -> subprocess.Popen[bytes]:
         if self._proc is None or self._proc.poll() is not None:
@@ -203,12 +214,35 @@ def _watch_parent(parent: int) -> None:
             os._exit(1)
 
 
+#: what every job needs, imported when the child starts (often while the driver still loads the
+#: study) instead of inside the first job
+PRELOAD = (
+    "lmic.api",
+    "lmic.studies.tasks",
+    "lmic.certify.certificate",
+    "lmic.template",
+    "lmic.backends.clarabel",
+    "lmic.backends.scs",
+    "scipy.linalg",
+)
+
+
+def _preload() -> None:
+    import importlib
+
+    for name in PRELOAD:
+        try:
+            importlib.import_module(name)
+        except ImportError:  # an optional solver missing: its jobs will say so themselves
+            pass
+
+
 def _main() -> None:
     threading.Thread(target=_watch_parent, args=(os.getppid(),), daemon=True).start()
     proto = os.fdopen(os.dup(1), "w", encoding="utf-8")
     os.dup2(2, 1)  # anything printed by solvers goes to stderr
     sys.stdout = sys.stderr
-    import lmic.api  # noqa: F401 - import once, before the first job
+    _preload()
     from lmic.studies.tasks import run_job
 
     for line in sys.stdin:
@@ -216,8 +250,30 @@ def _main() -> None:
             continue
         msg = json.loads(line)
         rec = run_job(msg["job"], msg.get("time_limit"))
+        write_certificate_here(msg["job"], rec)
         proto.write(json.dumps(to_jsonable(rec), allow_nan=False) + "\n")
         proto.flush()
+
+
+def write_certificate_here(job: dict[str, Any], rec: dict[str, Any]) -> None:
+    """Write ``rec``'s certificate to ``job["certificate_path"]`` when the driver gave one.
+
+    A runner on the driver's machine (the local executor, a Dask ``LocalCluster``) writes the
+    certificate file itself, atomically, before it answers; the record then carries
+    ``_certificate_written`` instead of the document, so the (large) document is encoded once,
+    here, in parallel across workers, instead of being sent to the driver and encoded again there.
+    Without a path (a remote Dask worker) the document travels back in ``_certificate``.
+    """
+    path = job.get("certificate_path")
+    doc = rec.get("_certificate")
+    if not path or doc is None:
+        return
+    from lmic.studies.store import write_atomic
+
+    text = json.dumps(to_jsonable(doc), allow_nan=False)
+    write_atomic(path, lambda fh: fh.write(text))
+    del rec["_certificate"]
+    rec["_certificate_written"] = True
 
 
 if __name__ == "__main__":

@@ -1,11 +1,16 @@
 """A study's output folder: results that survive crashes, the manifest, certificates, a lock.
 
 ``DIR/results.jsonl`` gets one JSON line per finished job, appended by the driver process only,
-each with a single ``write`` of the whole line on a descriptor opened with ``O_APPEND`` and
-followed by ``fsync``: a killed run leaves whole lines (a torn last line, if the machine itself
-fails mid-write, is ignored and fenced off by a newline at the next run). Certificates are
-written (atomically) under ``DIR/certificates/<hash>.json`` before their result line, so a line
-always has its certificate. ``DIR/study.json`` lists the jobs of the last run; ``DIR/.lock``
+each with a single ``write`` of the whole line on a descriptor opened with ``O_APPEND``: once
+``write`` returns, the line is in the kernel, so a killed run (or a killed worker) leaves every
+finished line whole. ``fsync`` -- which only matters if the *machine* fails -- is grouped: at most
+one every ``sync_interval`` seconds (default 1 s) and one at :meth:`Store.close`, so a power
+failure can lose at most the last second of lines (those jobs simply run again at resume; a torn
+last line is ignored and fenced off by a newline at the next run). One ``fsync`` per line cost
+the driver about 4 ms a job, a fifth of a short job's time. Certificates are written
+(atomically, ``fsync``-ed) under ``DIR/certificates/<hash>.json`` before their result line -- by
+the job runner itself when it shares the driver's file system (the local executor), else by the
+driver -- so a line always has its certificate. ``DIR/study.json`` lists the jobs of the last run; ``DIR/.lock``
 keeps two drivers off one folder.
 
 Examples
@@ -91,8 +96,11 @@ def read_results(path: str | os.PathLike[str]) -> list[dict[str, Any]]:
 class Store:
     """The output folder ``root`` of a study (created if missing)."""
 
-    def __init__(self, root: str | os.PathLike[str]) -> None:
+    def __init__(self, root: str | os.PathLike[str], *, sync_interval: float = 1.0) -> None:
         self.root = Path(root)
+        self.sync_interval = float(sync_interval)
+        self._synced_at = time.monotonic()
+        self._unsynced = False
         try:
             (self.root / "certificates").mkdir(parents=True, exist_ok=True)
         except OSError as err:
@@ -146,13 +154,26 @@ class Store:
         return self._fd
 
     def append(self, record: dict[str, Any]) -> None:
-        """Append one record as one line: a single ``write`` with ``O_APPEND``, then ``fsync``."""
+        """Append one record as one line: a single ``write`` with ``O_APPEND``.
+
+        The file is ``fsync``-ed when ``sync_interval`` seconds have passed since the last
+        ``fsync`` (``sync_interval=0``: after every line) and at :meth:`sync` / :meth:`close`.
+        """
         line = (json.dumps(record, allow_nan=False, separators=(",", ":")) + "\n").encode()
         fd = self._open()
         written = os.write(fd, line)
         if written != len(line):  # regular files do not short-write short of a full disk
             raise OSError(f"{self.results_path}: short write ({written} of {len(line)} bytes)")
-        os.fsync(fd)
+        self._unsynced = True
+        if time.monotonic() - self._synced_at >= self.sync_interval:
+            self.sync()
+
+    def sync(self) -> None:
+        """``fsync`` the results file if lines were appended since the last one."""
+        if self._fd is not None and self._unsynced:
+            os.fsync(self._fd)
+            self._unsynced = False
+        self._synced_at = time.monotonic()
 
     def done(self) -> dict[str, dict[str, Any]]:
         """``hash -> record`` of the jobs already finished."""
@@ -161,8 +182,13 @@ class Store:
     def write_certificate(self, job_hash: str, document: dict[str, Any]) -> str:
         """Write ``certificates/<hash>.json`` atomically; return its path relative to the folder."""
         rel = f"certificates/{job_hash}.json"
-        write_atomic(self.root / rel, lambda fh: json.dump(document, fh, allow_nan=False))
+        text = json.dumps(document, allow_nan=False)  # one C-encoded string: json.dump is pure Python
+        write_atomic(self.root / rel, lambda fh: fh.write(text))
         return rel
+
+    def certificate_path(self, job_hash: str) -> str:
+        """The absolute path of ``certificates/<hash>.json`` (where a local runner writes it)."""
+        return str((self.root / "certificates" / f"{job_hash}.json").resolve())
 
     # -- manifest ---------------------------------------------------------------------------------
     def write_manifest(self, manifest: dict[str, Any]) -> None:
@@ -181,8 +207,9 @@ class Store:
             raise DataError(f"{path}: not a readable study manifest") from None
 
     def close(self) -> None:
-        """Close the results file and release the lock."""
+        """``fsync`` and close the results file, and release the lock."""
         if self._fd is not None:
+            self.sync()
             os.close(self._fd)
             self._fd = None
         if self._lock_fd is not None:

@@ -321,3 +321,80 @@ def test_crosscheck_audit_published_and_audit_tasks(tmp_path):
     run_study(again, str(tmp_path / "a2"), workers=1, progress=False)
     (bad,) = lines(tmp_path / "a2")
     assert bad["outcome"] == "rejected"
+
+
+def _runner_children() -> list[int]:
+    """Live (non-zombie) ``lmic.studies.runner`` children of this test process."""
+    me, out = os.getpid(), []
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", encoding="utf-8") as fh:
+                fields = fh.read().rsplit(")", 1)[1].split()
+            with open(f"/proc/{entry}/cmdline", "rb") as fh:
+                cmd = fh.read()
+        except OSError:
+            continue
+        if int(fields[1]) == me and fields[0] != "Z" and b"lmic.studies.runner" in cmd:
+            out.append(int(entry))
+    return out
+
+
+def test_local_runners_write_the_certificate_files_themselves(tmp_path):
+    """With a path from the driver the runner writes the certificate; without one it sends it back."""
+    study = load_study({**LYAP, "systems": {"random": {**STABLE(2, 3)}}})
+    with_path, without = (j.to_dict() for j in study.jobs)
+    target = tmp_path / "cert.json"
+    with_path["certificate_path"] = str(target)
+    ex = LocalExecutor(1)
+    try:
+        ex.submit(with_path, 60)
+        ex.submit(without, 60)
+        recs = {r["hash"]: r for r in ex.results()}
+    finally:
+        ex.close()
+    written, sent = recs[with_path["hash"]], recs[without["hash"]]
+    assert written["outcome"] == sent["outcome"] == lyapunov_truth(with_path["system"]) == "certified"
+    assert written.get("_certificate_written") is True and "_certificate" not in written
+    assert "_certificate_written" not in sent
+    (tmp_path / "sent.json").write_text(json.dumps(sent["_certificate"]), encoding="utf-8")
+    from lmic.certify.certificate import audit_certificate
+
+    for path in (target, tmp_path / "sent.json"):  # both documents are whole, valid certificates
+        res = audit_certificate(path)
+        assert res.ok and res.verdict == "certified", res.message
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temporary file left
+
+
+def test_results_are_fsynced_in_groups_and_at_close(tmp_path, monkeypatch):
+    """One fsync per interval (not per line), always one at close; sync_interval=0 syncs each line."""
+    import lmic.studies.store as store_mod
+
+    calls: list[int] = []
+    real = os.fsync
+    monkeypatch.setattr(store_mod.os, "fsync", lambda fd: (calls.append(fd), real(fd))[1])
+    grouped = store_mod.Store(tmp_path / "a", sync_interval=3600)
+    for k in range(10):
+        grouped.append({"hash": f"h{k}", "outcome": "certified"})
+    assert calls == []  # the lines are written (a killed process keeps them) ...
+    assert len(store_mod.read_results(tmp_path / "a" / "results.jsonl")) == 10
+    grouped.close()
+    assert len(calls) == 1  # ... and made durable once, at close
+    calls.clear()
+    each = store_mod.Store(tmp_path / "b", sync_interval=0)
+    for k in range(5):
+        each.append({"hash": f"h{k}", "outcome": "certified"})
+    each.close()
+    assert len(calls) == 5  # the close finds nothing left to sync
+
+
+def test_a_bad_study_stops_the_runners_started_early(tmp_path):
+    """`lmic batch` starts the local runners before it reads the study; bad input stops them again."""
+    from lmic.cli import main
+
+    assert _runner_children() == []
+    bad = write_study(tmp_path / "bad.yaml", {"lmic": 1, "theorem": "no.such.theorem", "systems": []})
+    assert main(["batch", str(bad), "-o", str(tmp_path / "out"), "--workers", "2"]) == 2
+    assert not (tmp_path / "out").exists()
+    assert _runner_children() == []
