@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from lmic.backends.lowering import has_strict  # one definition; re-exported here for the passes
 from lmic.certify.check import Tolerances, lmi_report
 from lmic.ir.problem import Problem
 from lmic.ir.svec import tril_size
@@ -33,19 +34,6 @@ class StrictInverse:
     margin: float | None = None
     scale_free: bool = False
     sense: str = "feasibility"
-
-
-def has_strict(problem: Problem) -> bool:
-    """True when some LMI or linear row is strict.
-
-    >>> import scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
-    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p>=0", 1, sp.csc_matrix([[0., 1.]]),
-    ...             strict=False)], LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
-    >>> has_strict(p)
-    False
-    """
-    return any(lmi.strict for lmi in problem.lmis) or any(problem.linear.strict)
 
 
 def is_scale_free(problem: Problem) -> bool:
