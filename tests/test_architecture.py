@@ -95,8 +95,6 @@ KNOWN_UPWARD: dict[tuple[str, str], str] = {
 }
 
 KNOWN_OVERSIZE: dict[str, str] = {
-    # issue #10: split by job (result types, bisection, grids)
-    "lmic.sweep": "issue #10",
     # issue #10: claim types, IR transforms, formatting, one function per audit route
     "lmic.published": "issue #10",
     "lmic.reproduce": "issue #10",

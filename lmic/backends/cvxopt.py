@@ -17,7 +17,7 @@ Examples
 from __future__ import annotations
 
 import time
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 import scipy.sparse as sp
@@ -52,6 +52,69 @@ def _lower_sym(M) -> np.ndarray:
     M = np.array(M, dtype=float)
     L = np.tril(M)
     return L + np.tril(M, -1).T
+
+
+# -- warm start (SolveOptions.warm_start) ------------------------------------------------------
+#: how far the previous iterates are pushed into the interior of their cones, relative to
+#: their size (CVXOPT requires strictly interior starting points)
+_WARM_SHIFT = 1e-3
+
+
+def _iterates(result: dict) -> dict[str, Any]:
+    """The primal and dual iterates of a ``solvers.sdp`` result as numpy arrays (or ``{}``)."""
+    keys = ("x", "sl", "y", "zl")
+    try:
+        out: dict[str, Any] = {k: np.array(result[k], dtype=float).ravel() for k in keys if result.get(k) is not None}
+        out["ss"] = [np.array(S, dtype=float) for S in result.get("ss") or []]
+        out["zs"] = [np.array(Z, dtype=float) for Z in result.get("zs") or []]
+    except (TypeError, ValueError):
+        return {}
+    return out
+
+
+def _interior(M: np.ndarray) -> np.ndarray:
+    """A symmetric block moved strictly inside the PSD cone (relative shift :data:`_WARM_SHIFT`)."""
+    S = _lower_sym(M)
+    w = np.linalg.eigvalsh(S)
+    scale = max(float(np.max(np.abs(w), initial=0.0)), 1.0)
+    return S + (max(0.0, -float(w[0])) + _WARM_SHIFT * scale) * np.eye(len(S))
+
+
+def _warm_start(options: SolveOptions, n: int, n_ge: int, n_eq: int, dims: list[int]) -> dict[str, Any]:
+    """``primalstart`` / ``dualstart`` of ``solvers.sdp`` from ``options.warm_start`` (a previous
+    CVXOPT solution of a problem with the same shape), moved strictly inside the cones; ``{}``
+    (cold start) when there is none or the shapes differ.
+
+    >>> _warm_start(SolveOptions(), 1, 0, 0, [2])
+    {}
+    """
+    import cvxopt
+
+    prev = getattr(options, "warm_start", None)
+    it = None if prev is None else prev.info.get("cvxopt_iterates")
+    if not isinstance(it, dict) or not it:
+        return {}
+    shapes_ok = (
+        np.shape(it.get("x")) == (n,)
+        and [np.shape(S) for S in it.get("ss", [])] == [(d, d) for d in dims]
+        and [np.shape(Z) for Z in it.get("zs", [])] == [(d, d) for d in dims]
+        and (n_ge == 0 or (np.shape(it.get("sl")) == (n_ge,) and np.shape(it.get("zl")) == (n_ge,)))
+        and (n_eq == 0 or np.shape(it.get("y")) == (n_eq,))
+    )
+    if not shapes_ok:
+        return {}
+    with np.errstate(all="ignore"):
+        ss, zs = [_interior(S) for S in it["ss"]], [_interior(Z) for Z in it["zs"]]
+    if not all(np.all(np.isfinite(M)) for M in ss + zs) or not np.all(np.isfinite(it["x"])):
+        return {}
+    primal: dict[str, Any] = {"x": cvxopt.matrix(it["x"]), "ss": [cvxopt.matrix(S) for S in ss]}
+    dual: dict[str, Any] = {"zs": [cvxopt.matrix(Z) for Z in zs]}
+    if n_ge:
+        lift = lambda v: np.maximum(v, 0.0) + _WARM_SHIFT * max(1.0, float(np.max(np.abs(v))))  # noqa: E731
+        primal["sl"], dual["zl"] = cvxopt.matrix(lift(it["sl"])), cvxopt.matrix(lift(it["zl"]))
+    if n_eq:
+        dual["y"] = cvxopt.matrix(it["y"])
+    return {"primalstart": primal, "dualstart": dual}
 
 
 class CVXOPTBackend(Backend):
@@ -130,14 +193,19 @@ class CVXOPTBackend(Backend):
         chosen = opts.pop("kktsolver", None)
         kkt_order = [chosen] if chosen else ["chol", "qr"]
         c_mat = cvxopt.matrix(np.asarray(c, dtype=float))
+        warm = _warm_start(options, n, len(ge), len(eq), [lmi.dim for lmi in problem.lmis])  # SolveOptions.warm_start
         for k, kktsolver in enumerate(kkt_order):
             last = k == len(kkt_order) - 1
             try:
-                result = solvers.sdp(c_mat, kktsolver=kktsolver, options=dict(opts), **kwargs)
+                result = solvers.sdp(c_mat, kktsolver=kktsolver, options=dict(opts), **kwargs, **warm)
             except (ValueError, ArithmeticError):
-                if last:
+                if warm:  # a starting point CVXOPT refuses: solve cold
+                    warm = {}
+                    result = solvers.sdp(c_mat, kktsolver=kktsolver, options=dict(opts), **kwargs)
+                elif last:
                     raise
-                continue
+                else:
+                    continue
             if str(result["status"]) != "unknown" or last:
                 break
         solve_s = time.perf_counter() - t0
@@ -149,7 +217,10 @@ class CVXOPTBackend(Backend):
             native_status=native,
             solve_s=solve_s,
             iterations=result.get("iterations"),
+            info={"warm_started": bool(warm)},
         )
+        # the native iterates, for the next solve of a problem of the same shape (warm start)
+        sol.info["cvxopt_iterates"] = _iterates(result)
 
         def duals() -> dict:
             y = np.zeros(len(lin))

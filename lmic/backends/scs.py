@@ -65,6 +65,25 @@ def scs_unvec(v: np.ndarray, d: int) -> np.ndarray:
     return tril_unvec(np.asarray(v, dtype=float) / svec_scale(d), d)
 
 
+def _warm_start(options: SolveOptions, shape: tuple[int, int]) -> dict[str, np.ndarray]:
+    """SCS's ``x``, ``y``, ``s`` initial guesses from ``options.warm_start`` (a previous SCS
+    solution of a problem with the same lowered shape ``(m, n)``), else ``{}`` (cold start).
+
+    >>> _warm_start(SolveOptions(), (2, 1))
+    {}
+    """
+    prev = getattr(options, "warm_start", None)
+    iterates = None if prev is None else prev.info.get("scs_iterates")
+    if not isinstance(iterates, dict):
+        return {}
+    m, n = shape
+    want = {"x": n, "y": m, "s": m}
+    out = {k: np.asarray(iterates.get(k), dtype=float) for k in want}
+    if any(v.shape != (want[k],) or not np.all(np.isfinite(v)) for k, v in out.items()):
+        return {}
+    return out
+
+
 class SCSBackend(Backend):
     """SCS (splitting conic solver) through its native API."""
 
@@ -119,7 +138,8 @@ class SCSBackend(Backend):
         settings = self._settings(options)
         t0 = time.perf_counter()
         solver = scs.SCS({"A": data.A, "b": data.b, "c": data.c}, cone, **settings)
-        result = solver.solve()
+        warm = _warm_start(options, data.A.shape)  # SolveOptions.warm_start (sweeps)
+        result = solver.solve(warm_start=True, **warm) if warm else solver.solve()
         solve_s = time.perf_counter() - t0
         info = result["info"]
         native = _STATUS_NAMES.get(int(info["status_val"]), str(info.get("status", "")))
@@ -131,8 +151,10 @@ class SCSBackend(Backend):
             native_status=raw_status,
             solve_s=solve_s,
             iterations=int(info.get("iter", 0)),
-            info={"solver_time_s": float(info.get("solve_time", 0.0)) / 1e3},
+            info={"solver_time_s": float(info.get("solve_time", 0.0)) / 1e3, "warm_started": bool(warm)},
         )
+        # the native iterates, for the next solve of a problem of the same shape (warm start)
+        sol.info["scs_iterates"] = {k: np.asarray(result[k], dtype=float) for k in ("x", "y", "s")}
         y = np.asarray(result["y"], dtype=float)
         if "time_limit" in raw_status:
             mark_time_limit(sol, options.time_limit, solve_s)

@@ -1,4 +1,4 @@
-"""``lmic solve --maximize`` / ``--sweep``: options, progress bar and printing (:mod:`lmic.sweep` computes).
+"""``lmic solve --maximize`` / ``--sweep``: options, progress bar and printing (:mod:`lmic.studies.sweep` computes).
 
 Examples
 --------
@@ -16,7 +16,16 @@ import sys
 from typing import Any
 
 from lmic.errors import LmicError
-from lmic.sweep import PointResult, SupResult, SweepResult, maximize, minimize, parse_grid, sweep, write_end_certificate
+from lmic.studies.sweep import (
+    PointResult,
+    SupResult,
+    SweepResult,
+    maximize,
+    minimize,
+    parse_grid,
+    sweep,
+    write_end_certificate,
+)
 
 __all__ = ["add_cli_options", "run_cli"]
 
