@@ -64,6 +64,7 @@ def maximize(
     max_evals: int = 100,
     progress: Progress | None = None,
     backoff: float | None = None,
+    method: str = "auto",
 ) -> SupResult:
     """Supremum of a scalar parameter by bisection on certified feasibility.
 
@@ -92,6 +93,10 @@ def maximize(
         Called with ``{"phase", "value", "point", "lower", "upper", "iteration", "total"}``.
     backoff : float, optional
         Relative backoff of the certified end's point (:func:`certified_end`; ``0`` off).
+    method : {"auto", "enclosure", "bisection"}
+        ``auto``: where the parameter enters affinely, one convex solve and its enclosure
+        (:mod:`lmic.studies.sweep.enclosed`; ``lo``/``hi`` are then not needed), else bisection;
+        ``bisection``: always bisect. ``SupResult.method`` says which ran, ``method_note`` why.
 
     Returns
     -------
@@ -105,8 +110,23 @@ def maximize(
     >>> round(r.lower, 1), next(p.proof for p in r.points if p.value == r.lower)  # doctest: +SKIP
     (51.5, 'certified (exact)')
     """
-    return _bisect(
-        theorem, system, param, 1.0, lo, hi, xtol, rtol, params, backend, options, exact, max_evals, progress, backoff
+    return _sup(
+        theorem,
+        system,
+        param,
+        1.0,
+        lo,
+        hi,
+        xtol,
+        rtol,
+        params,
+        backend,
+        options,
+        exact,
+        max_evals,
+        progress,
+        backoff,
+        method,
     )
 
 
@@ -126,6 +146,7 @@ def minimize(
     max_evals: int = 100,
     progress: Progress | None = None,
     backoff: float | None = None,
+    method: str = "auto",
 ) -> SupResult:
     """Infimum of a scalar parameter by bisection on certified feasibility (:func:`maximize` mirrored).
 
@@ -150,9 +171,89 @@ def minimize(
     >>> r.sense, r.upper                                               # doctest: +SKIP
     ('min', 1.0)
     """
-    return _bisect(
-        theorem, system, param, -1.0, lo, hi, xtol, rtol, params, backend, options, exact, max_evals, progress, backoff
+    return _sup(
+        theorem,
+        system,
+        param,
+        -1.0,
+        lo,
+        hi,
+        xtol,
+        rtol,
+        params,
+        backend,
+        options,
+        exact,
+        max_evals,
+        progress,
+        backoff,
+        method,
     )
+
+
+def _sup(
+    theorem: str,
+    system: Any,
+    param: str,
+    sign: float,
+    lo_v: float | None,
+    hi_v: float | None,
+    xtol: float,
+    rtol: float,
+    params: Mapping[str, Any] | None,
+    backend: Any,
+    options: Any,
+    exact: bool,
+    max_evals: int,
+    progress: Progress | None,
+    backoff: float | None,
+    method: str,
+) -> SupResult:
+    """The enclosure where it applies (``method``), else the bisection."""
+    if method not in METHODS:
+        raise LmicError(f"method '{method}' unknown; choose {', '.join(METHODS)}")
+    if not (xtol > 0 or rtol > 0) or xtol < 0 or rtol < 0:
+        raise LmicError("--xtol and --rtol must be non-negative and not both 0")
+    note = "bisection asked for"
+    if method != "bisection":
+        from lmic.studies.sweep.enclosed import enclose
+
+        res, why = enclose(
+            theorem,
+            system,
+            param,
+            sign,
+            params=params,
+            backend=backend,
+            options=options,
+            exact=exact,
+            xtol=xtol,
+            rtol=rtol,
+            backoff=backoff,
+        )
+        if res is not None:
+            res.method_note = f"'{param}' enters affinely: one convex solve, enclosed"
+            return res
+        note = f"no enclosure: {why}"
+    res = _bisect(
+        theorem,
+        system,
+        param,
+        sign,
+        lo_v,
+        hi_v,
+        xtol,
+        rtol,
+        params,
+        backend,
+        options,
+        exact,
+        max_evals,
+        progress,
+        backoff,
+    )
+    res.method_note = note
+    return res
 
 
 def _bisect(

@@ -221,6 +221,8 @@ class SupResult:
     method: str = "bisection"
     #: the enclosure of the supremum (``method == "enclosure"``, :func:`lmic.certify.enclosure.summary`)
     enclosure: dict[str, Any] | None = None
+    #: why the method was chosen (e.g. why the enclosure could not replace the bisection)
+    method_note: str = ""
 
     @property
     def certified(self) -> float | None:
@@ -309,6 +311,7 @@ class SupResult:
             "upper_proven": self.upper_proven,
             "bracket_proven": self.upper_kind in PROVEN_KINDS,
             "method": self.method,
+            "method_note": self.method_note,
             "enclosure": self.enclosure,
             "estimate": self.estimate,
             "width": self.width,
