@@ -130,7 +130,7 @@ class _CvxpyPoint:
         self.par.value = v
         self.n_solves += 1
         try:
-            self.prob.solve(solver=self.solver)
+            self.prob.solve(solver=self.solver, warm_start=True)
         except Exception:  # noqa: BLE001 - a failed solve is "not certified"
             return False
         if self.prob.status not in ("optimal", "optimal_inaccurate"):
@@ -158,11 +158,12 @@ def _cvxpy_bisect(point: _CvxpyPoint, good: float, bad: float, rtol: float, max_
 # -- the studies ------------------------------------------------------------------------------
 
 
-def run(study: str, method: str, n: int, solver: str, rtol: float) -> dict[str, Any]:
+def run(study: str, method: str, n: int, solver: str, rtol: float, lmic_backend: str | None = None) -> dict[str, Any]:
     """One timed run of ``study`` by ``method`` (``lmic`` or ``cvxpy``) at size ``n``."""
     from lmic.studies.sweep import maximize, minimize, sweep
 
-    backend = {"SCS": "scs", "CLARABEL": "clarabel", "CVXOPT": "cvxopt"}.get(solver, solver.lower())
+    backend = lmic_backend or solver.lower()
+    backend = None if backend == "auto" else backend
     t0 = time.perf_counter()
     if study == "sweep":
         system = random_qib_system(n)
@@ -201,6 +202,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--solver", default="CLARABEL", help="the same solver for both (CLARABEL, SCS, CVXOPT)")
     ap.add_argument("--studies", default="sweep,maximize,minimize")
     ap.add_argument("--rtol", type=float, default=1e-4)
+    ap.add_argument("--lmic-backend", default=None, help="lmic's backend (default: the same; 'auto': the policy)")
     args = ap.parse_args(argv)
     warnings.simplefilter("ignore")
     sizes = [int(s) for s in args.sizes.split(",")]
@@ -208,16 +210,21 @@ def main(argv: list[str] | None = None) -> int:
     rows: dict[tuple[str, int, str], list[dict[str, Any]]] = {}
     for study in studies:  # warm-up: imports, template analysis, CVXPY's first canonicalisation
         for method in ("lmic", "cvxpy"):
-            run(study, method, 4, args.solver, args.rtol)
+            run(study, method, 4, args.solver, args.rtol, args.lmic_backend)
     for k in range(args.repeat):
         for study in studies:
             for n in sizes:
                 order = ["lmic", "cvxpy"] if (k + n) % 2 == 0 else ["cvxpy", "lmic"]
                 for method in order:
-                    rows.setdefault((study, n, method), []).append(run(study, method, n, args.solver, args.rtol))
-    print(f"solver {args.solver}, {args.repeat} rounds (medians), rtol {args.rtol:g}")
+                    one = run(study, method, n, args.solver, args.rtol, args.lmic_backend)
+                    rows.setdefault((study, n, method), []).append(one)
     print(
-        f"{'study':<9} {'n':>3}  {'lmic s':>8} {'cvxpy s':>8} {'ratio':>6}  {'lmic value':>12} {'cvxpy value':>12}  evals l/c  how"
+        f"cvxpy solver {args.solver}, lmic backend {args.lmic_backend or args.solver.lower()}, "
+        f"{args.repeat} rounds (medians), rtol {args.rtol:g}"
+    )
+    print(
+        f"{'study':<9} {'n':>3}  {'lmic s':>8} {'cvxpy s':>8} {'ratio':>6}  {'lmic value':>12} "
+        f"{'cvxpy value':>12}  evals l/c  how"
     )
     for study in studies:
         for n in sizes:

@@ -10,11 +10,12 @@ variable (``gamma`` in ``[..., -gamma I]``), the supremum is itself the optimal 
 convex problem: it is solved once and enclosed (:mod:`lmic.studies.sweep.enclosed`) instead of
 bisected, unless ``method="bisection"``.
 
-For the supremum the parameter only has to be feasible, so the theorem's objective is dropped and
-the strict constraints get a fixed margin (``SolveOptions.margin``); the solver is given each LMI
-after a diagonal congruence ``D F(x) D`` with ``D = diag(F(x_ref))^-1/2`` taken at the last
-certified point ``x_ref`` (:mod:`lmic.reductions.precondition`). A congruence does not change
-which ``x`` are feasible, and the certificate is always computed on the original LMIs.
+For the supremum the parameter only has to be feasible, so the theorem's objective is dropped:
+each point is a feasibility problem, routed and reduced as one by the solve policy. Once a point
+needed it, the solver is given each LMI after a diagonal congruence ``D F(x) D`` with ``D =
+diag(F(x_ref))^-1/2`` taken at the last certified point ``x_ref``
+(:mod:`lmic.reductions.precondition`). A congruence does not change which ``x`` are feasible,
+and the certificate is always computed on the original LMIs.
 
 Bisection assumes that the feasible values form an interval that contains the lower end of the
 bracket (true for Lipschitz constants, delay bounds and similar parameters). Its report is

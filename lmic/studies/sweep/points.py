@@ -13,7 +13,8 @@ is recorded as ``infeasible-bounded``. Everything else is **undecided** and repo
 
 The decision itself is the one solve policy (:func:`lmic.policy.decide`): this module only
 chooses what the solver is given (the objective dropped for a bisection, kept for a grid), the
-reference point to precondition at (the last certified point), and the warm start (the
+reference point to precondition at (the last certified point, once a point needed a
+preconditioned problem), and the warm start (the
 neighbouring point's solution, :attr:`lmic.options.SolveOptions.warm_start`), and turns the
 policy's :class:`~lmic.outcome.Outcome` into a :class:`PointResult`.
 
@@ -47,11 +48,6 @@ __all__ = ["decide", "setup", "domain", "in_domain", "Evaluator", "scalar_derive
 
 def _feasibility(problem: Problem) -> Problem:
     return replace(problem, objective=Objective("feasibility", np.zeros(problem.n + 1)))
-
-
-def _zero_objective(problem: Problem) -> Problem:
-    """Same constraints, objective ``min 0``: strict constraints get the fixed margin."""
-    return replace(problem, objective=Objective("min", np.zeros(problem.n + 1)))
 
 
 def scalar_derived(cert: Any) -> dict[str, float]:
@@ -130,14 +126,15 @@ def decide(
     """
     from lmic.policy import decide as policy_decide
 
+    # a bisection point is a feasibility problem: the policy then routes it as one (SCS for
+    # large strict problems) and its strict reduction decides both ways in one attempt
     judge = problem if keep_objective else _feasibility(problem)
-    base = problem if keep_objective else _zero_objective(problem)
     t0 = time.perf_counter()
     out = policy_decide(
         judge,
         None if backend in (None, "auto") else backend,
         options,
-        solve_as=base,
+        solve_as=judge,
         reference=reference,
         rescue=exact,
     )
@@ -227,6 +224,12 @@ def in_domain(v: float, dom: tuple[float, float, bool, bool]) -> bool:
     return (v > lo or (lo_in and v == lo)) and (v < hi or (hi_in and v == hi))
 
 
+def _preconditioned(res: PointResult) -> bool:
+    """The point was decided on a preconditioned problem (``scaled`` / ``rescaled`` attempt)."""
+    last = res.attempts[-1] if res.attempts else ""
+    return " / scaled" in last or " / rescaled" in last
+
+
 def warm_options(options: Any, warm: Solution | None) -> Any:
     """``options`` with :attr:`~lmic.options.SolveOptions.warm_start` set to ``warm``.
 
@@ -267,6 +270,9 @@ class Evaluator:
         self.progress = progress
         self.points: list[PointResult] = []
         self.reference: np.ndarray | None = None
+        #: precondition at ``reference`` (only once a point needed it: the congruence costs the
+        #: warm start, and most sweeps do not need it)
+        self.precondition = False
         self.scale: float | None = None
         self.sense = "feasibility"
         #: the last solution with a point: the next solve's warm start (same shape: a re-bound plan)
@@ -284,7 +290,7 @@ class Evaluator:
             problem,
             self.backend,
             warm_options(self.options, self.warm),
-            reference=self.reference,
+            reference=self.reference if self.precondition else None,
             keep_objective=self.keep_objective,
             exact=self.exact,
             value=float(value),
@@ -296,6 +302,7 @@ class Evaluator:
         if res.outcome == "feasible" and res.x is not None:
             res.problem = problem
             self.reference = res.x
+            self.precondition = self.precondition or _preconditioned(res)
             norm = float(np.max(np.abs(res.x))) if res.x.size else 0.0
             self.scale = norm if self.scale is None else max(self.scale, norm)
         self.points.append(res)
