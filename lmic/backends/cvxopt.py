@@ -95,11 +95,11 @@ def _warm_start(options: SolveOptions, n: int, n_ge: int, n_eq: int, dims: list[
     if not isinstance(it, dict) or not it:
         return {}
     shapes_ok = (
-        np.shape(it.get("x")) == (n,)
+        np.shape(it.get("x", ())) == (n,)
         and [np.shape(S) for S in it.get("ss", [])] == [(d, d) for d in dims]
         and [np.shape(Z) for Z in it.get("zs", [])] == [(d, d) for d in dims]
-        and (n_ge == 0 or (np.shape(it.get("sl")) == (n_ge,) and np.shape(it.get("zl")) == (n_ge,)))
-        and (n_eq == 0 or np.shape(it.get("y")) == (n_eq,))
+        and (n_ge == 0 or (np.shape(it.get("sl", ())) == (n_ge,) and np.shape(it.get("zl", ())) == (n_ge,)))
+        and (n_eq == 0 or np.shape(it.get("y", ())) == (n_eq,))
     )
     if not shapes_ok:
         return {}

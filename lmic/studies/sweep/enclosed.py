@@ -298,19 +298,20 @@ def enclose(
         return None, f"the convex problem's point at {param} = {value:g} is not certified on the theorem"
     dual = enc.get("upper") if is_max else enc.get("lower")
     end = certified_end(pt, backend, options, backoff)
-    proven = dual is not None
-    other = float(dual) if proven else None
-    if proven and ((is_max and other < value) or (not is_max and other > value)):  # type: ignore[operator]
+    other = None if dual is None else float(dual)
+    if other is not None and ((is_max and other < value) or (not is_max and other > value)):
         return None, f"inconsistent enclosure ({other:g} against the certified {value:g})"
+    proven = other is not None
     tol = max(xtol, rtol * max(abs(value), abs(other) if other is not None else 0.0))
-    converged = proven and abs(other - value) <= tol  # type: ignore[operator]
+    gap = abs(other - value) if other is not None else math.inf
+    converged = gap <= tol
     what = "supremum" if is_max else "infimum"
     message = ""
     if not proven:
         message = f"no proven dual bound: the {what} is {'>=' if is_max else '<='} {value:g} ({enc.get('reason')})"
     elif not converged:
         message = (
-            f"the enclosure's gap {abs(other - value):.3g} is above the tolerance {tol:.3g} "  # type: ignore[operator]
+            f"the enclosure's gap {gap:.3g} is above the tolerance {tol:.3g} "
             "(an interior-point backend gives a tighter one)"
         )
     lower, upper = (value, other) if is_max else (other, value)
