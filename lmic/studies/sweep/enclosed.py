@@ -193,6 +193,7 @@ def lift(
     derived quantities and checks are dropped (the end's point is certified on the theorem's
     own problem, :func:`lmic.studies.sweep.ends.certified_end`).
 
+    >>> from lmic.ir.problem import LMI
     >>> P = lambda v: Problem([Variable("q", "scalar", (1, 1))],
     ...     [LMI("v - q > 0", 1, sp.csc_matrix([[v, -1.0]]))], LinearConstraints.empty(1),
     ...     Objective("feasibility", [0.0, 0.0]))
