@@ -297,6 +297,8 @@ def enclose(
     pt = _certify_at(ev, value, x[:-1]) if in_domain(value, dom) else None
     if pt is None:
         return None, f"the convex problem's point at {param} = {value:g} is not certified on the theorem"
+    pt.solve_s += float(res.timings.get("solve_s", 0.0))  # the convex problem's solve
+    pt.certify_s += float(res.timings.get("certify_s", 0.0)) + float(res.timings.get("enclosure_s", 0.0))
     dual = enc.get("upper") if is_max else enc.get("lower")
     end = certified_end(pt, backend, options, backoff)
     other = None if dual is None else float(dual)
