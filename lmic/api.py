@@ -26,7 +26,7 @@ import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -35,6 +35,9 @@ from lmic.backends.base import Backend, SolveOptions
 from lmic.errors import BackendError, LmicError
 from lmic.ir.problem import Problem
 from lmic.solution import Solution
+
+if TYPE_CHECKING:
+    from lmic.template.theorem import Theorem
 
 __all__ = ["Result", "solve", "load_target", "solve_problem", "certify_solution", "EXIT_CODES"]
 
@@ -126,12 +129,12 @@ class Result:
         )
 
     def _repr_html_(self) -> str:
-        from lmic.display import result_html
+        from lmic.formatting import result_html
 
         return result_html(self)
 
     def _repr_latex_(self) -> str:
-        from lmic.display import result_latex
+        from lmic.formatting import result_latex
 
         return result_latex(self)
 
@@ -183,7 +186,7 @@ class Result:
 
 
 def load_target(
-    target: str | os.PathLike[str] | Problem,
+    target: str | os.PathLike[str] | Problem | Theorem,
     system: Any = None,
     params: dict[str, Any] | None = None,
 ) -> tuple[Problem, str | None, float]:
@@ -302,7 +305,7 @@ def _jsonable(value: Any) -> Any:
 
 
 def solve(
-    target: str | os.PathLike[str] | Problem,
+    target: str | os.PathLike[str] | Problem | Theorem,
     system: Any = None,
     params: dict[str, Any] | None = None,
     backend: str | Backend | None = None,
@@ -349,8 +352,12 @@ def solve(
 
         system = as_system(target, system)
     problem, theorem, compile_s = load_target(target, system, params)
-    name = theorem if getattr(target, "build", None) is not None else target  # a Theorem object: its id
-    name = name if isinstance(name, str) else ("<problem>" if isinstance(name, Problem) else os.fspath(name))
+    if isinstance(target, Problem):
+        name = "<problem>"
+    elif isinstance(target, str | os.PathLike):
+        name = os.fspath(target)
+    else:  # a Theorem object: its id
+        name = theorem or target.id
     from lmic.policy import decide
 
     t0 = time.perf_counter()

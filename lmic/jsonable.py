@@ -17,25 +17,41 @@ import numpy as np
 __all__ = ["to_jsonable"]
 
 
-def to_jsonable(obj: Any) -> Any:
-    """numpy arrays and scalars -> lists and floats, recursively (non-finite floats -> None).
+def to_jsonable(obj: Any, *, nonfinite: str = "null") -> Any:
+    """numpy arrays and scalars -> lists and floats, recursively.
+
+    Parameters
+    ----------
+    obj : Any
+    nonfinite : {"null", "string"}
+        How a non-finite float is written: ``None`` (``"null"``, the default), or the strings
+        ``"nan"``, ``"inf"``, ``"-inf"`` (``"string"``, the form of certificate files, which keeps
+        the sign of an infinite margin).
 
     Examples
     --------
     >>> to_jsonable((np.float32(0.5), [np.nan], np.bool_(True)))
     [0.5, [None], True]
+    >>> to_jsonable({"m": -np.inf, "v": [np.nan]}, nonfinite="string")
+    {'m': '-inf', 'v': ['nan']}
     """
+    if nonfinite not in ("null", "string"):
+        raise ValueError(f"nonfinite must be 'null' or 'string', got {nonfinite!r}")
     if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
+        return {str(k): to_jsonable(v, nonfinite=nonfinite) for k, v in obj.items()}
     if isinstance(obj, list | tuple):
-        return [to_jsonable(v) for v in obj]
+        return [to_jsonable(v, nonfinite=nonfinite) for v in obj]
     if isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
+        return to_jsonable(obj.tolist(), nonfinite=nonfinite)
     if isinstance(obj, np.bool_):
         return bool(obj)
     if isinstance(obj, np.integer):
         return int(obj)
     if isinstance(obj, float | np.floating):
         f = float(obj)
-        return f if math.isfinite(f) else None
+        if math.isfinite(f):
+            return f
+        if nonfinite == "null":
+            return None
+        return "nan" if math.isnan(f) else ("inf" if f > 0 else "-inf")
     return obj

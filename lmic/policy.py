@@ -315,7 +315,7 @@ def decide(
     single = len(names) == 1 and not is_auto(backend)
     if single:
         be = _instance(names[0])
-        ok, why = be.supports(solve_as, explain=True)  # type: ignore[misc]
+        ok, why = be.supports(solve_as, explain=True)
         if not ok:
             raise BackendError(f"backend '{be.label}' cannot take this problem: {why}")
     run = _Run(problem, exact, rescue)

@@ -232,7 +232,7 @@ class CVXOPTBackend(Backend):
 
         if status in ("optimal", "inaccurate") and result.get("x") is not None:
             sol.x = np.array(result["x"]).ravel()
-            sol.objective = float(problem.objective.value(sol.x)) if problem.objective.sense != "feasibility" else None
+            sol.objective = problem.objective.value(sol.x) if problem.objective.sense != "feasibility" else None
             if result.get("zs") is not None or result.get("zl") is not None:
                 sol.duals = duals()
             if status == "inaccurate":

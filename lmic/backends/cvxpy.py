@@ -219,7 +219,7 @@ class CVXPYBackend(Backend):
         elif status in ("optimal", "inaccurate") and x.value is not None:
             sol.x = np.asarray(x.value, dtype=float)
             if problem.objective.sense != "feasibility":
-                sol.objective = float(problem.objective.value(sol.x))
+                sol.objective = problem.objective.value(sol.x)
             sol.duals = multipliers() or {}
         elif status == "infeasible":
             sol.farkas = multipliers()

@@ -171,7 +171,7 @@ class PICOSBackend(Backend):
         if status in ("optimal", "inaccurate") and value is not None:
             sol.x = np.array(value, dtype=float).ravel()
             if problem.objective.sense != "feasibility":
-                sol.objective = float(problem.objective.value(sol.x))
+                sol.objective = problem.objective.value(sol.x)
             sol.duals = multipliers() or {}
         elif status == "infeasible":
             sol.farkas = multipliers()

@@ -131,7 +131,7 @@ class SDPABackend(Backend):
         if status in ("optimal", "inaccurate"):
             sol.x = x
             if problem.objective.sense != "feasibility":
-                sol.objective = float(problem.objective.value(x))
+                sol.objective = problem.objective.value(x)
             sol.duals = mult
             if status == "inaccurate":
                 sol.message = f"SDPA stopped with phase {native}"

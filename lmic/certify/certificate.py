@@ -59,9 +59,10 @@ from typing import Any
 import numpy as np
 
 from lmic._version import __version__
-from lmic.certify.check import Certificate, Tolerances, _jsonable, certify
+from lmic.certify.check import Certificate, Tolerances, certify
 from lmic.errors import CertificateError, LmicError
 from lmic.ir.problem import Problem
+from lmic.jsonable import to_jsonable
 from lmic.solution import STATUSES, Solution
 
 __all__ = [
@@ -95,6 +96,11 @@ _PACKAGES = {
     "cvxpy": "cvxpy",
     "picos": "picos",
 }
+
+
+def _json(value: Any) -> Any:
+    """JSON form of a certificate field (non-finite floats as ``"nan"``, ``"inf"``, ``"-inf"``)."""
+    return to_jsonable(value, nonfinite="string")
 
 
 def ir_hash(problem: Problem) -> str:
@@ -228,7 +234,7 @@ def certificate_document(
         "lmic": __version__,
         "created": _dt.datetime.now(_dt.UTC).replace(microsecond=0).isoformat().replace("+00:00", "Z"),
         "theorem": theorem,
-        "params": _jsonable(meta.get("params") or {}),
+        "params": _json(meta.get("params") or {}),
         "system": sys_entry,
         "ir": {"sha256": ir_hash(problem), "embedded": embedded},
         "backend": {
@@ -246,7 +252,7 @@ def certificate_document(
         "solution": {
             "x": None if x is None else x.tolist(),
             "objective": None if solution.objective is None else float(solution.objective),
-            "variables": None if x is None else _jsonable(problem.unpack(x)),
+            "variables": None if x is None else _json(problem.unpack(x)),
             "farkas": _farkas_json(solution.farkas) if solution.status == "infeasible" else None,
         },
         "tolerances": dict(certificate.tolerances),
@@ -256,7 +262,7 @@ def certificate_document(
         doc["enclosure"] = enclosure
     if backoff is not None:  # -- backed-off point (lmic.backoff) --
         doc["backoff"] = backoff
-    doc = _jsonable(doc)
+    doc = _json(doc)
     doc["integrity"] = integrity_of(doc)
     return doc
 
@@ -651,7 +657,7 @@ class AuditResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form."""
-        return _jsonable(
+        return _json(
             {
                 "ok": self.ok,
                 "verdict": self.verdict,

@@ -273,7 +273,8 @@ def _repair(
         if now <= 1e-15 * scale or (len(history) >= 6 and now > 0.9 * history[-6]):
             break  # converged, or stalled (no interior point near: the proof will say so)
         history.append(now)
-        blocks, factors = [], []
+        blocks: list[np.ndarray] = []
+        factors: list[tuple[np.ndarray, np.ndarray, np.ndarray] | None] = []
         for lmi, Z, (a, b) in zip(problem.lmis, mats, ranges, strict=True):
             if not lmi.dim:
                 factors.append(None)
@@ -311,7 +312,8 @@ def _repair(
                 e = G.T @ np.linalg.solve(Gm, rho)
         except (np.linalg.LinAlgError, ValueError):
             e = scipy.linalg.lstsq(G, rho, lapack_driver="gelsy", check_finite=False)[0]
-        k, norms, Es = 0, [0.0], []
+        k, norms = 0, [0.0]
+        Es: list[np.ndarray | None] = []
         for f in factors:
             if f is None:
                 Es.append(None)
@@ -328,12 +330,12 @@ def _repair(
         norms += [abs(float(v)) for r, v in zip(rows, ey, strict=True) if ge[r]]
         alpha = 1.0 if max(norms) <= 0.5 else 0.5 / max(norms)
         new = []
-        for Z, f, E in zip(mats, factors, Es, strict=True):
-            if f is None:
+        for Z, f, Ef in zip(mats, factors, Es, strict=True):
+            if f is None or Ef is None:
                 new.append(Z)
             else:
                 U = f[0]
-                Zn = U @ (np.eye(U.shape[1]) + alpha * E) @ U.T + floor * np.eye(U.shape[0])
+                Zn = U @ (np.eye(U.shape[1]) + alpha * Ef) @ U.T + floor * np.eye(U.shape[0])
                 new.append(0.5 * (Zn + Zn.T))
         mats = new
         y = y.copy()
@@ -671,7 +673,7 @@ def dual_bound(
     J, ranges = _jacobian(problem)
     out: dict[str, Any] = {"proven": False, "reason": "no shift gave a provable dual point"}
     top = _scale(problem, mats0, y0)
-    attempts: list[tuple[str, float, list, np.ndarray]] = [("solver dual", e, mats0, y0) for e in SHIFTS]
+    attempts: list[tuple[str, float, list | None, np.ndarray | None]] = [("solver dual", e, mats0, y0) for e in SHIFTS]
     for k, (route, eps_rel, mz, yz) in enumerate(attempts):
         if k and time.perf_counter() - t0 > budget_s:
             out["reason"] = f"{out.get('reason')}; time budget {budget_s:g} s spent after {k} attempts"

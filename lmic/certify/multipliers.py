@@ -40,7 +40,7 @@ def parse_multipliers(
     """
     if not isinstance(record, dict):
         raise CertificateError(f"a {what} is a dict {{'lmis': [Z_i], 'linear': y}}")
-    mats_in = record.get("lmis")
+    mats_in: Any = record.get("lmis")  # untrusted: a list of matrices, None or anything else
     n_in = 0 if mats_in is None else len(mats_in)
     if n_in > len(problem.lmis) or (not missing_is_zero and n_in != len(problem.lmis)):
         raise CertificateError(f"the {what} has {n_in} LMI multipliers, the problem {len(problem.lmis)} LMIs")

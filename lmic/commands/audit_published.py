@@ -57,9 +57,9 @@ def _fmt(v: Any, digits: int = 4) -> str:
     if isinstance(v, float):
         return f"{v:.{digits}g}"
     if isinstance(v, list):
-        from lmic.published import _fmt_value
+        from lmic.formatting import inline_matrix
 
-        text = _fmt_value(v)
+        text = inline_matrix(v)
         return text if len(text) <= 60 else text[:57] + "..."
     return str(v)
 
@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.table import Table
 
     from lmic.commands._common import parse_params, print_json, solve_options
-    from lmic.published import audit_published
+    from lmic.studies.published import audit_published
 
     report = audit_published(
         args.theorem,

@@ -89,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     """Cross-check and print the table (or JSON)."""
     from lmic.backends.registry import get_backend
     from lmic.commands._common import check_executor_args, parse_params, print_json, solve_options
-    from lmic.crosscheck import DEFAULT_RTOL, crosscheck
+    from lmic.studies.crosscheck import DEFAULT_RTOL, crosscheck
 
     names = [b.strip() for b in args.backends.split(",") if b.strip()] if args.backends else None
     for name in names or []:

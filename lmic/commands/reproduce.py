@@ -62,7 +62,8 @@ def run(args: argparse.Namespace) -> int:
     from lmic.commands._common import check_executor_args, print_json, solve_options, write_atomic
 
     check_executor_args(args)
-    from lmic.reproduce import render_markdown, reproduce
+    from lmic.present.reproduction import render_markdown
+    from lmic.studies.reproduce import reproduce
 
     if args.output:
         from lmic.output import check_output_path

@@ -133,7 +133,7 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print_json(result.to_dict())
         return result.exit_code()
-    from lmic.commands._display import print_result
+    from lmic.present.text import print_result
 
     print_result(result, args.system, args.output)
     # -- optimal-value enclosure (lmic.certify.enclosure) --

@@ -13,6 +13,7 @@ Examples
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping
 from typing import Any
 
@@ -60,7 +61,7 @@ def plan_for(theorem: Theorem | str, params: Mapping[str, Any] | None = None) ->
 
 def compile_theorem(
     theorem: Theorem | str,
-    system: str | Mapping[str, Any] | System,
+    system: str | os.PathLike[str] | dict[str, Any] | System,
     params: Mapping[str, Any] | None = None,
 ) -> Problem:
     """Compile ``theorem`` for ``system`` (path, dict or System) with parameter overrides.
@@ -71,7 +72,7 @@ def compile_theorem(
         The IR; ``meta`` records the theorem, parameters and data hash (no timings, so that
         compiling the same inputs twice gives the same IR and the same hash).
     """
-    sysobj = load_system(system)  # type: ignore[arg-type]
+    sysobj = load_system(system)
     merged = dict(sysobj.params)
     merged.update(params or {})
     return bind(plan_for(theorem, merged), sysobj, params)

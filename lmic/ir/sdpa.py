@@ -278,12 +278,12 @@ def read_sdpa(path_or_text: str | os.PathLike[str]) -> Problem:
     sizes_l = head.numbers(nblocks, "block sizes", _int)
     dense_bytes = 0
     diag_rows = 0
-    for lineno, s in sizes_l:
+    for size_line, s in sizes_l:
         if s == 0:
-            raise head.fail(lineno, "a block size of 0")
+            raise head.fail(size_line, "a block size of 0")
         if abs(s) > (MAX_DIMENSION if s > 0 else MAX_VARIABLES):
             limit = MAX_DIMENSION if s > 0 else MAX_VARIABLES
-            raise head.fail(lineno, f"block size {s} exceeds the limit of {limit}")
+            raise head.fail(size_line, f"block size {s} exceeds the limit of {limit}")
         dense_bytes += 8 * s * s if s > 0 else 0
         diag_rows += -s if s < 0 else 0
     if diag_rows > MAX_VARIABLES:
@@ -300,10 +300,10 @@ def read_sdpa(path_or_text: str | os.PathLike[str]) -> Problem:
     start = head.pos
     body_lines = lines[start:]
     body = "\n".join(body_lines).translate(_SEPARATORS)
-    bad = _BAD_ENTRY.search(body)
-    if bad:
-        k = body.count("\n", 0, bad.start())
-        raise IRError(f"{source}: line {start + k + 1}: {_diagnose(bad.group(0))}")
+    bad_entry = _BAD_ENTRY.search(body)
+    if bad_entry:
+        k = body.count("\n", 0, bad_entry.start())
+        raise IRError(f"{source}: line {start + k + 1}: {_diagnose(bad_entry.group(0))}")
     toks = body.split()
     rows = len(toks) // 5
     if rows > MAX_NONZEROS:

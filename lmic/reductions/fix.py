@@ -4,6 +4,10 @@
 the problem in the remaining variables; :func:`apply` is the ``apply -> (problem, inverse)``
 form (the inverse puts a solution of the restricted problem back into the full ``x``).
 
+:func:`with_fixed_gains` is the same idea one level up, for a gain that is not a decision
+variable: the ``fixed_<gain>`` convention of the theorem plugins (``t.derive(..., fixes=V)``,
+:mod:`lmic.template.sugar`) -- the system with the printed gain as data and ``fixed_<gain>: 1``.
+
 Examples
 --------
 >>> import scipy.sparse as sp
@@ -28,8 +32,9 @@ import scipy.sparse as sp
 from lmic.errors import IRError
 from lmic.ir.problem import LinearConstraints, Objective, Problem, Variable
 from lmic.solution import Solution
+from lmic.system import System
 
-__all__ = ["apply", "fix_variables"]
+__all__ = ["apply", "fix_variables", "fixed_gain_flag", "with_fixed_gains"]
 
 
 def fix_variables(problem: Problem, values: Mapping[str, Any]) -> tuple[Problem, np.ndarray, np.ndarray]:
@@ -100,3 +105,41 @@ def apply(problem: Problem, values: Mapping[str, Any]) -> tuple[Problem, Callabl
         return sol
 
     return restricted, inverse
+
+
+def fixed_gain_flag(gain: str) -> str:
+    """The option a theorem declares for the audit variant of ``gain`` (``fixed_<gain>``).
+
+    >>> fixed_gain_flag("L")
+    'fixed_L'
+    """
+    return f"fixed_{gain}"
+
+
+def with_fixed_gains(
+    system: System,
+    gains: Mapping[str, Any],
+    params: Mapping[str, Any] | None = None,
+    *,
+    keep_published: bool = True,
+) -> System:
+    """``system`` with each gain ``K`` of ``gains`` as a data matrix and the flag ``fixed_K: 1``.
+
+    ``params`` override the system's parameters (the flags are set after them). The result is
+    what a theorem's audit variant (``fixed_K = 1``: ``K`` is data, the variable it came from is
+    eliminated) is compiled with.
+
+    Examples
+    --------
+    >>> s = with_fixed_gains(System({"A": np.eye(2)}, {"beta": 1.0}), {"L": [[1.0], [2.0]]})
+    >>> s.params, s.data["L"].shape
+    ({'beta': 1.0, 'fixed_L': '1'}, (2, 1))
+    """
+    data = dict(system.data)
+    for k, v in gains.items():
+        data[k] = np.atleast_2d(np.asarray(v, dtype=float))
+    merged: dict[str, Any] = dict(system.params)
+    merged.update(params or {})
+    merged.update({fixed_gain_flag(k): "1" for k in gains})
+    published = dict(system.published) if keep_published else {}
+    return System(data, merged, published, system.name, system.source, system.path, system.raw)

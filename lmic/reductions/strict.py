@@ -308,7 +308,7 @@ def _fixed_margin(problem: Problem, margin: float, normalise: bool = False) -> P
         lmis.append(lmi)
     lin = problem.linear
     A = lin.A.tolil(copy=True)
-    strict_rows = np.flatnonzero(np.asarray(lin.strict, dtype=bool)) if len(lin) else []
+    strict_rows = np.flatnonzero(np.asarray(lin.strict, dtype=bool)) if len(lin) else np.zeros(0, dtype=np.intp)
     for r in strict_rows:
         if normalise:  # a . x <= 1
             norm_rows.append(np.concatenate([[1.0], -lin.A[r].toarray().ravel()[1:]]))

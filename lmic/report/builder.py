@@ -22,15 +22,16 @@ from __future__ import annotations
 
 import base64
 import datetime as _dt
-import html
-import math
 import os
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from lmic import __version__
+from lmic._version import __version__
+from lmic.present.html import esc as _esc
+from lmic.present.latex import matrix_latex, number_latex
+from lmic.present.text import number_text
 
 __all__ = ["Report", "build_report", "render_html", "matrix_latex", "number_latex", "MAX_LATEX_SIZE"]
 
@@ -65,7 +66,7 @@ class Report:
         """Write the page atomically (nothing half-written)."""
         from lmic.output import write_output
 
-        write_output(path, lambda fh: fh.write(self.html))
+        write_output(path, self.html)
 
     def exit_code(self) -> int:
         """The solve's exit code (0 certified, 3 infeasible, 1 otherwise)."""
@@ -73,46 +74,6 @@ class Report:
 
 
 # -- formatting -------------------------------------------------------------------------------
-
-
-def _esc(value: Any) -> str:
-    return html.escape(str(value), quote=True)
-
-
-def number_latex(v: float, digits: int = 4) -> str:
-    """A number for LaTeX: 4 significant digits, powers of ten as ``\\cdot 10^{k}``.
-
-    >>> number_latex(0.0000123456), number_latex(12.0), number_latex(float("nan"))
-    ('1.235 \\\\cdot 10^{-5}', '12', '\\\\text{NaN}')
-    """
-    if not math.isfinite(v):
-        return r"\text{NaN}" if math.isnan(v) else (r"\infty" if v > 0 else r"-\infty")
-    text = f"{v:.{digits}g}"
-    if "e" in text:
-        mant, exp = text.split("e")
-        return f"{mant} \\cdot 10^{{{int(exp)}}}"
-    return text
-
-
-def number_text(v: Any, digits: int = 4) -> str:
-    """A number for an HTML table cell (``-`` for none)."""
-    if v is None:
-        return "-"
-    if isinstance(v, bool):
-        return "yes" if v else "no"
-    if isinstance(v, int | float | np.floating | np.integer):
-        f = float(v)
-        return f"{f:.{digits}g}" if math.isfinite(f) else str(f)
-    return str(v)
-
-
-def matrix_latex(value: Any) -> str:
-    """A scalar, vector or matrix as LaTeX (a ``bmatrix``)."""
-    arr = np.atleast_2d(np.asarray(value, dtype=float))
-    if arr.size == 1:
-        return number_latex(float(arr.reshape(-1)[0]))
-    rows = [" & ".join(number_latex(float(v)) for v in row) for row in arr]
-    return r"\begin{bmatrix}" + r" \\ ".join(rows) + r"\end{bmatrix}"
 
 
 def _is_numeric(value: Any) -> bool:
@@ -543,7 +504,7 @@ def build_report(
 
     xreport, xnote = None, ""
     if run_crosscheck:
-        from lmic.crosscheck import crosscheck
+        from lmic.studies.crosscheck import crosscheck
 
         # the system as given (a path or a mapping): crosscheck labels its report with it
         source = sysobj.path if sysobj.path else sysobj.raw

@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from lmic.simulate.families import Custom
+from lmic.simulate.lti import TimeSignal, as_signal, constant_signal
 from lmic.simulate.models import Observer
 
 __all__ = ["checks", "l2_ratio", "peak_frequency", "decay_rate", "TOLERANCE"]
@@ -128,29 +129,34 @@ def decay_rate(t: np.ndarray, err: np.ndarray) -> float:
 
 def _signals(
     obs: Custom, spec: Any, G: Callable[[float], np.ndarray] | None, time: str
-) -> list[tuple[str, Callable[[float], np.ndarray]]]:
+) -> list[tuple[str, TimeSignal]]:
+    """The test disturbances, each a vectorised :class:`~lmic.simulate.lti.TimeSignal`."""
     nw = obs.w_dim
     dt, T = spec.dt, spec.horizon
     ones = np.ones(nw) / np.sqrt(nw)
-    out: list[tuple[str, Callable[[float], np.ndarray]]] = []
+    out: list[tuple[str, TimeSignal]] = []
     own = obs.disturbance(spec)
     if spec.extra.get("w"):
-        out.append(("the section's disturbance", own))
+        out.append(("the section's disturbance", as_signal(own, nw)))
     if time == "discrete":
-        out.append(("unit pulse at k = 0", lambda t: ones * (abs(t) < 0.5 * dt)))
+        out.append(("unit pulse at k = 0", TimeSignal(nw, lambda ts: (np.abs(ts) < 0.5 * dt)[:, None] * ones)))
     else:
-        out.append(("pulse on [0, 10 dt)", lambda t: ones * (t < 10 * dt)))
-    out.append(("step", lambda t: ones))
+        out.append(("pulse on [0, 10 dt)", TimeSignal(nw, lambda ts: (ts < 10 * dt)[:, None] * ones)))
+    out.append(("step", constant_signal(ones)))
     steps = max(1, int(round(T / dt)))
     noise = np.random.default_rng(0).standard_normal((steps + 2, nw))
-    out.append(("white noise (seed 0)", lambda t: noise[min(int(round(t / dt)), steps + 1)]))
+
+    def white(ts: np.ndarray) -> np.ndarray:
+        return noise[np.minimum(np.rint(ts / dt).astype(int), steps + 1)]
+
+    out.append(("white noise (seed 0)", TimeSignal(nw, white)))
     if G is not None:
         om, v, sig = peak_frequency(G, time, dt, T)
         amp, ph = np.abs(v), np.angle(v)
-        k_of = (lambda t: t / dt) if time == "discrete" else (lambda t: t)
+        scale = 1.0 / dt if time == "discrete" else 1.0  # discrete time: omega is per step
         unit = "rad/step" if time == "discrete" else "rad/s"
         label = f"worst-case sinusoid (omega = {om:.4g} {unit}, sigma_max = {sig:.4g})"
-        out.append((label, lambda t: amp * np.cos(om * k_of(t) + ph)))
+        out.append((label, TimeSignal(nw, lambda ts: amp * np.cos(om * scale * ts[:, None] + ph))))
     return out
 
 
@@ -196,7 +202,7 @@ def checks(obs: Observer, spec: Any, fn: Any) -> list[dict[str, Any]]:
     beta = obs.mats.get("decay")
     if beta is not None:
         b = float(np.asarray(beta).ravel()[0])
-        res = obs.custom_run(spec, fn, w=lambda t: np.zeros(obs.w_dim), linear=True, nominal=True)
+        res = obs.custom_run(spec, fn, w=constant_signal(np.zeros(obs.w_dim)), linear=True, nominal=True)
         err = np.linalg.norm(res["x"] - res["xhat"], axis=1)
         steps = res["t"] / spec.dt
         rate = decay_rate(steps, err)

@@ -117,8 +117,8 @@ class Observer(ABC):
         self.names = {r: names.get(r, r) for r in mats}
         self.mats = {r: _matrix(v, r, self.names[r]) for r, v in mats.items()}
         A, C = self.mats["A"], self.mats["C"]
-        self.n = A.shape[0]
-        self.p = C.shape[0]
+        self.n: int = A.shape[0]
+        self.p: int = C.shape[0]
         self._shape("A", (self.n, self.n))
         self._shape("C", (self.p, self.n))
         self.B = self.mats.get("B")

@@ -10,7 +10,7 @@ violation in red.
 Examples
 --------
 >>> import numpy as np
->>> from lmic.simulate.run import Trajectory
+>>> from lmic.simulate.trajectory import Trajectory
 >>> t = np.linspace(0, 1, 11)
 >>> traj = Trajectory(t, np.c_[np.cos(t), np.sin(t)], np.c_[np.cos(t), np.sin(t) * (1 - np.exp(-t))],
 ...                   "luenberger", "continuous")
@@ -23,10 +23,11 @@ from __future__ import annotations
 
 import io
 import math
+from typing import Any
 
 import numpy as np
 
-from lmic.simulate.run import Trajectory
+from lmic.simulate.trajectory import Trajectory
 
 __all__ = ["figure", "plot_png"]
 
@@ -58,7 +59,7 @@ def figure(traj: Trajectory, title: str = "") -> object:
         left=0.08, right=0.985, top=1 - 0.75 / height, bottom=(0.5 + foot) / height, hspace=0.32, wspace=0.2
     )
     discrete = traj.time == "discrete"
-    style = {"marker": ".", "markersize": 3} if discrete and traj.t.size <= 200 else {}
+    style: dict[str, Any] = {"marker": ".", "markersize": 3} if discrete and traj.t.size <= 200 else {}
     dt = float(traj.t[1] - traj.t[0]) if traj.t.size > 1 else 1.0
     xlabel = ("sample k" if abs(dt - 1.0) < 1e-12 else f"t = k T (s), T = {dt:g} s") if discrete else "t (s)"
     first = None

@@ -67,8 +67,8 @@ def reproduce_parallel(
     -------
     ReproductionReport
     """
-    from lmic.reproduce import ReproductionReport, RowResult, default_examples_dir, load_expectations
     from lmic.studies.executors import make_executor
+    from lmic.studies.reproduce import ReproductionReport, RowResult, default_examples_dir, load_expectations
 
     t0 = time.perf_counter()
     folder = Path(examples) if examples is not None else default_examples_dir()
@@ -202,8 +202,8 @@ def crosscheck_parallel(
 
     from lmic.api import load_target
     from lmic.backends.registry import available_backend_names
-    from lmic.crosscheck import DEFAULT_RTOL, assemble, error_row, target_label
     from lmic.errors import LmicError
+    from lmic.studies.crosscheck import DEFAULT_RTOL, assemble, error_row, target_label
     from lmic.studies.executors import make_executor
 
     problem, _theorem, _ = load_target(target, system, params)

@@ -379,7 +379,7 @@ def load_study(src: str | os.PathLike[str] | dict[str, Any], label: str | None =
             raise DataError(f"{where}: task audit reads certificate files, not random plants")
         systems = [(None, None, f.name, str(f.resolve())) for f in files]
     else:
-        from lmic.reproduce import theorem_of
+        from lmic.studies.reproduce import theorem_of
 
         for f in files:
             system = load_system(f)

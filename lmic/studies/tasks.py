@@ -139,7 +139,7 @@ def _solve(job: dict[str, Any], sysobj: Any, opts: Any) -> dict[str, Any]:
 
 
 def _crosscheck(job: dict[str, Any], sysobj: Any, opts: Any) -> dict[str, Any]:
-    from lmic.crosscheck import crosscheck
+    from lmic.studies.crosscheck import crosscheck
 
     rep = crosscheck(job["theorem"], sysobj, params=job["params"] or None, backends=job.get("backends"), options=opts)
     return {
@@ -183,7 +183,7 @@ def _maximize(job: dict[str, Any], sysobj: Any, opts: Any) -> dict[str, Any]:
 
 
 def _audit_published(job: dict[str, Any], sysobj: Any, opts: Any) -> dict[str, Any]:
-    from lmic.published import audit_published
+    from lmic.studies.published import audit_published
 
     kwargs = {"backend": job["backend"]} if job.get("backend") else {}  # else the API's own default
     rep = audit_published(job["theorem"], sysobj, params=job["params"] or None, options=opts, **kwargs)
@@ -211,7 +211,7 @@ def _audit(job: dict[str, Any]) -> dict[str, Any]:
 
 def run_reproduce_file(job: dict[str, Any]) -> dict[str, Any]:
     """The worker side: reproduce one example file; rows as JSON (``RowResult.to_dict``)."""
-    from lmic.reproduce import reproduce
+    from lmic.studies.reproduce import reproduce
 
     options = None
     if job.get("options"):
@@ -245,8 +245,8 @@ def run_crosscheck_backend(job: dict[str, Any]) -> dict[str, Any]:
     ('certified', 'certified')
     """
     from lmic.api import load_target
-    from lmic.crosscheck import backend_row
     from lmic.options import SolveOptions
+    from lmic.studies.crosscheck import backend_row
 
     options = SolveOptions()
     for key, value in (job.get("options") or {}).items():

@@ -5,6 +5,10 @@ dimension symbols, data matrices with symbolic shapes, parameters, structural op
 data-derived constants, decision variables, LMIs, scalar constraints, an objective, derived
 quantities (back-substitution) and checks.
 
+The declaration dataclasses live in :mod:`lmic.template.decls`, the authoring sugar (the
+``fixes=`` audit variant, the one-call Luenberger observer) in :mod:`lmic.template.sugar`;
+this module keeps :class:`Template` and re-exports the declarations.
+
 Examples
 --------
 >>> from lmic.template import Template, block, STAR, I
@@ -22,16 +26,37 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 import sympy
 
 from lmic.errors import DataError, TemplateError
+from lmic.template import sugar as _sugar
 from lmic.template.blocks import STAR, Block, LmiSpec
-from lmic.template.checks import CheckSpec, hurwitz, schur_stable
+from lmic.template.checks import CheckSpec
 from lmic.template.convert import as_expr
+from lmic.template.decls import (
+    DOMAINS as _DOMAINS,
+)
+from lmic.template.decls import (
+    SIGNS as _SIGNS,
+)
+from lmic.template.decls import (
+    CheckDecl,
+    ConstDecl,
+    ConstraintDecl,
+    DataDecl,
+    DerivedDecl,
+    LmiDecl,
+    ObserverDecl,
+    OptionDecl,
+    ParamDecl,
+    RequireDecl,
+    VarDecl,
+    normalise_option,
+    template_hash,
+)
 
 __all__ = [
     "Template",
@@ -47,148 +72,8 @@ __all__ = [
     "CheckDecl",
     "ObserverDecl",
     "RequireDecl",
+    "template_hash",
 ]
-
-_SIGNS = ("free", "positive", "nonnegative", "negative", "nonpositive")
-_DOMAINS = {
-    "positive": sympy.Interval.open(0, sympy.oo),
-    "nonnegative": sympy.Interval(0, sympy.oo),
-    "negative": sympy.Interval.open(-sympy.oo, 0),
-    "nonpositive": sympy.Interval(-sympy.oo, 0),
-    "unit": sympy.Interval(0, 1),
-    "real": sympy.Interval(-sympy.oo, sympy.oo),
-    "integer": sympy.S.Integers,
-    "natural": sympy.S.Naturals,
-    "natural0": sympy.S.Naturals0,
-}
-
-
-@dataclass
-class DataDecl:
-    """A data matrix: name, sympy symbol, symbolic shape, tags, optional default."""
-
-    name: str
-    symbol: sympy.MatrixSymbol
-    shape: tuple[Any, Any]
-    symmetric: bool = False
-    positive_definite: bool = False
-    default: Any = None
-    doc: str = ""
-
-
-@dataclass
-class ParamDecl:
-    """A scalar user parameter with a default and a domain."""
-
-    name: str
-    symbol: sympy.Symbol
-    default: float | None = None
-    domain: sympy.Set = field(default_factory=lambda: _DOMAINS["real"])
-    doc: str = ""
-
-
-@dataclass
-class OptionDecl:
-    """A structural choice (e.g. ``psi1 = printed | corrected``) fixed before analysis."""
-
-    name: str
-    choices: tuple[str, ...]
-    default: str
-    value: str
-    doc: str = ""
-
-
-@dataclass
-class ConstDecl:
-    """A data-derived constant computed numerically before compiling."""
-
-    name: str
-    symbol: Any
-    fn: Callable[[Mapping[str, Any]], Any]
-    shape: tuple[Any, Any] | None = None
-    doc: str = ""
-
-
-@dataclass
-class VarDecl:
-    """A decision variable."""
-
-    name: str
-    kind: str
-    shape: tuple[Any, Any]
-    symbol: Any
-    blocks: tuple[Any, ...] = ()
-    sign: str = "free"
-    doc: str = ""
-
-
-@dataclass
-class LmiDecl:
-    """A block LMI with its name."""
-
-    name: str
-    spec: LmiSpec
-    doc: str = ""
-
-
-@dataclass
-class ConstraintDecl:
-    """A scalar linear constraint (a sympy relational)."""
-
-    name: str
-    relation: sympy.core.relational.Relational
-    doc: str = ""
-
-
-@dataclass
-class DerivedDecl:
-    """A derived quantity (back-substitution formula)."""
-
-    name: str
-    expr: Any
-    symbol: Any
-    doc: str = ""
-
-
-@dataclass
-class RequireDecl:
-    """A hypothesis of the theorem on its data, checked before compiling."""
-
-    name: str
-    predicate: Callable[[Mapping[str, Any]], bool]
-    doc: str = ""
-
-
-@dataclass
-class ObserverDecl:
-    """How the designed observer runs, for simulation: a model name and role -> IR name."""
-
-    model: str
-    time: str
-    roles: dict[str, str]
-    doc: str = ""
-
-
-@dataclass
-class CheckDecl:
-    """A check on derived quantities."""
-
-    name: str
-    spec: CheckSpec
-    doc: str = ""
-
-
-def normalise_option(value: Any) -> str:
-    """Option values as strings; numbers written in a system file (``1``, ``1.0``) become ``"1"``.
-
-    >>> normalise_option(1.0), normalise_option("printed"), normalise_option(0.5)
-    ('1', 'printed', '0.5')
-    """
-    if isinstance(value, bool):
-        return "1" if value else "0"
-    if isinstance(value, int | float):
-        return str(int(value)) if float(value).is_integer() else repr(float(value))
-    return str(value)
 
 
 class Template:
@@ -415,87 +300,10 @@ class Template:
         return sym
 
     def _fixed_variant(self, name: str, expr: Any, var: Any) -> Any:
-        vname = getattr(var, "name", None)
-        decl = next((v for v in self.variables if v.name == vname and v.symbol == var), None)
-        if decl is None or decl.kind == "scalar":
-            raise TemplateError(f"{self.theorem_id}: derive '{name}': fixes= must be a matrix decision variable")
-        if not isinstance(expr, sympy.MatrixExpr):
-            raise TemplateError(f"{self.theorem_id}: derive '{name}': fixes= needs a matrix expression")
-        flag = self.flag(f"fixed_{name}", doc=f"1: {name} is given as data (audit); {vname} is eliminated")
-        if not flag:
-            return None
-        D = self.data(name, *expr.shape, doc=f"the {name} to audit (fixed_{name} = 1)")
-        solved = _solve_for(expr, var, D, self._symmetric_names(), self.theorem_id, name)
-        self._replace(var, solved)
-        self.variables.remove(decl)
-        return D
+        return _sugar.fixed_variant(self, name, expr, var)
 
-    def _symmetric_names(self) -> set[str]:
-        out = {v.name for v in self.variables if v.kind in ("symmetric", "diagonal", "blockdiag")}
-        return out | {d.name for d in self.data_decls if d.symmetric}
-
-    def _replace(self, var: Any, value: Any) -> None:
-        """Substitute ``var -> value`` in every declaration made so far."""
-        sub = {var: value}
-
-        def rep(e: Any) -> Any:
-            return e.xreplace(sub) if isinstance(e, sympy.Basic) else e
-
-        def rep_block(b: Block) -> Block:
-            return Block([[e if e is STAR else rep(e) for e in row] for row in b.rows])
-
-        self.lmis = [replace(d, spec=LmiSpec(rep_block(d.spec.block), d.spec.relation)) for d in self.lmis]
-        self.constraints = [replace(c, relation=rep(c.relation)) for c in self.constraints]
-        self.objective = (self.objective[0], rep(self.objective[1]))
-        self.derived = [replace(d, expr=rep(d.expr)) for d in self.derived]
-        self.checks = [
-            replace(
-                c,
-                spec=replace(
-                    c.spec, expr=rep_block(c.spec.expr) if isinstance(c.spec.expr, Block) else rep(c.spec.expr)
-                ),
-            )
-            for c in self.checks
-        ]
-
-    def luenberger(
-        self,
-        A: Any,
-        C: Any,
-        L: Any,
-        time: str = "discrete",
-        *,
-        name: str = "L",
-        fixes: Any = None,
-        doc: str = "",
-        **roles: Any,
-    ) -> Any:
-        """The observer ``x^+ = A x^ + f + L (y - C x^)`` in one call: derive, check, observer.
-
-        ``L`` is an expression (derived as ``name``, with the audit variant ``fixed_<name>`` when
-        ``fixes`` names the eliminated variable) or an existing data / derived symbol. Adds the
-        check ``A - L C Schur stable`` (``time="discrete"``) or ``A - L C Hurwitz``
-        (``"continuous"``) and declares the Luenberger observer for ``lmic simulate``. Returns
-        the gain symbol. Extra keyword ``roles`` go to :meth:`observer` (e.g. ``B="B"``).
-
-        >>> t = Template("x"); n, p = t.dims("n p")
-        >>> A, C = t.data("A", n, n), t.data("C", p, n)
-        >>> P = t.symmetric("P", n, pd=True); R = t.full("R", p, n)
-        >>> L = t.luenberger(A, C, L=P.inv() * R.T, fixes=R)
-        >>> t.derived[0].name, t.checks[0].name, t.observer_decl.model, t.options[0].name
-        ('L', 'A - L C Schur stable', 'luenberger', 'fixed_L')
-        """
-        if time not in ("discrete", "continuous"):
-            raise TemplateError(f"{self.theorem_id}: luenberger time must be discrete or continuous")
-        if not (isinstance(L, sympy.MatrixSymbol) and self.role(L.name) in ("data", "derived")):
-            L = self.derive(name, L, doc=doc or f"observer gain {name} = {L}", fixes=fixes)
-        gain = getattr(L, "name", name)
-        if time == "discrete":
-            self.check(f"A - {gain} C Schur stable", schur_stable(A - L * C))
-        else:
-            self.check(f"A - {gain} C Hurwitz", hurwitz(A - L * C))
-        self.observer("luenberger", time, A=A, C=C, L=L, **roles)
-        return L
+    #: ``t.luenberger(A, C, L, ...)``: the observer in one call (:func:`lmic.template.sugar.luenberger`)
+    luenberger = _sugar.luenberger
 
     def check(self, name: str, spec: CheckSpec, doc: str = "") -> None:
         """A check of the derived quantities (see :mod:`lmic.template.checks`)."""
@@ -680,57 +488,3 @@ class Template:
     def option_values(self) -> dict[str, str]:
         """The option values this build used."""
         return {o.name: o.value for o in self.options}
-
-
-def template_hash(parts: Mapping[str, str]) -> str:
-    """SHA-256 of a :meth:`Template.fingerprint` (the hash a certificate records).
-
-    >>> len(template_hash({"LMI (1)": "0123456789abcdef"}))
-    64
-    """
-    return hashlib.sha256(json.dumps(dict(sorted(parts.items()))).encode()).hexdigest()
-
-
-def _transpose(e: Any, symmetric: set[str]) -> Any:
-    """``e^T`` with symmetric symbols left as they are (``(P D)^T = D^T P`` for symmetric P)."""
-    if isinstance(e, sympy.MatMul):
-        coeff, mats = e.as_coeff_matrices()
-        out = [_transpose(m, symmetric) for m in reversed(mats)]
-        prod = out[0]
-        for m in out[1:]:
-            prod = prod * m
-        return coeff * prod if coeff != 1 else prod
-    if isinstance(e, sympy.MatrixSymbol) and e.name in symmetric:
-        return e
-    if isinstance(e, sympy.Transpose):
-        return e.arg
-    if isinstance(e, sympy.Inverse):
-        return _transpose(e.arg, symmetric).inv()
-    return e.T
-
-
-def _solve_for(expr: Any, var: Any, value: Any, symmetric: set[str], tid: str, name: str) -> Any:
-    """Solve ``value = expr`` for the matrix variable ``var`` (expr a product with one ``var``)."""
-    fail = f"{tid}: derive '{name}': cannot solve {name} = {expr} for {var.name} (fixes=)"
-    coeff, mats = expr.as_coeff_matrices() if isinstance(expr, sympy.MatMul) else (sympy.Integer(1), [expr])
-    where = [k for k, f in enumerate(mats) if var in f.free_symbols]
-    if len(where) != 1 or not (mats[where[0]] == var or mats[where[0]] == var.T):
-        raise TemplateError(fail + f": it must appear once, as {var.name} or {var.name}^T, in a product")
-    k = where[0]
-
-    def inv(f: Any) -> Any:
-        if isinstance(f, sympy.Inverse):
-            return f.arg
-        if not f.is_square:
-            raise TemplateError(fail + f": the factor {f} is not square")
-        return f.inv()
-
-    factors = [inv(f) for f in reversed(mats[:k])] + [value] + [inv(f) for f in reversed(mats[k + 1 :])]
-    solved = factors[0]
-    for f in factors[1:]:
-        solved = solved * f
-    if coeff != 1:
-        solved = (1 / coeff) * solved
-    if mats[k] != var:
-        solved = _transpose(solved, symmetric)
-    return solved

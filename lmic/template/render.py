@@ -12,13 +12,16 @@ True
 from __future__ import annotations
 
 import re
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import sympy
 
+from lmic.formatting import esc
 from lmic.template.blocks import STAR
 from lmic.template.builder import LmiDecl, Template
-from lmic.template.theorem import Theorem
+
+if TYPE_CHECKING:
+    from lmic.template.theorem import Theorem
 
 __all__ = [
     "lmi_latex",
@@ -30,6 +33,8 @@ __all__ = [
     "latex",
     "text",
     "domain_text",
+    "theorem_html",
+    "theorem_latex_block",
 ]
 
 _LATEX_REL = {"<": r"\prec", "<=": r"\preceq", ">": r"\succ", ">=": r"\succeq"}
@@ -207,3 +212,35 @@ def describe(thm: Theorem, t: Template) -> dict[str, Any]:
         "derived": [{"name": d.name, "expr": text(d.expr), "doc": d.doc} for d in t.derived],
         "checks": [{"name": c.name, "kind": c.spec.kind} for c in t.checks],
     }
+
+
+def theorem_latex_block(thm: Theorem, options: dict[str, Any] | None = None) -> str:
+    r"""The theorem's LMIs as a display-math LaTeX string (its Jupyter ``_repr_latex_``).
+
+    >>> from lmic.registry import get_theorem
+    >>> theorem_latex_block(get_theorem("thesis.lyapunov")).startswith("$$\\begin{align*}")
+    True
+    """
+    return "$$" + theorem_latex(thm, thm.template(options)) + "$$"
+
+
+def theorem_html(thm: Theorem, options: dict[str, Any] | None = None) -> str:
+    """HTML: id, title, citation, declarations, and the LMIs as MathJax-ready LaTeX (its ``_repr_html_``).
+
+    >>> from lmic.registry import get_theorem
+    >>> "<table" in theorem_html(get_theorem("qib.thm1"))
+    True
+    """
+    d = describe(thm, thm.template(options))
+    rows = "".join(
+        f"<tr><td>{esc(v['name'])}</td><td>{esc(v['kind'])}</td><td>{esc(v['shape'])}</td></tr>" for v in d["variables"]
+    )
+    data = ", ".join(f"{esc(x['name'])} ({esc(x['shape'])})" for x in d["data"])
+    params = ", ".join(esc(p["name"]) for p in d["params"]) or "none"
+    lmis = "".join(f"<li><b>{esc(x['name'])}</b>: $${esc(x['latex'])}$$</li>" for x in d["lmis"])
+    return (
+        f"<div class='lmic-theorem'><h4>{esc(thm.id)} — {esc(thm.title)}</h4>"
+        f"<p><i>{esc(thm.citation)}</i></p><p>data: {data}; parameters: {params}</p>"
+        f"<table><tr><th>variable</th><th>kind</th><th>shape</th></tr>{rows}</table>"
+        f"<ul>{lmis}</ul></div>"
+    )

@@ -176,12 +176,12 @@ class Theorem:
         return theorem_latex(self, self.template(options))
 
     def _repr_html_(self) -> str:
-        from lmic.display import theorem_html
+        from lmic.template.render import theorem_html
 
         return theorem_html(self)
 
     def _repr_latex_(self) -> str:
-        from lmic.display import theorem_latex_block
+        from lmic.template.render import theorem_latex_block
 
         return theorem_latex_block(self)
 

@@ -120,7 +120,8 @@ def _block_tree(b: Block, dims: Mapping[sympy.Symbol, int]) -> dict:
             for ent, axis, idx in ((b.entry(i, j), 0, i), (b.entry(j, i), 1, i)):
                 if isinstance(ent, sympy.MatrixExpr) and rows_n[idx] is None:
                     rows_n[idx] = _dim(ent.shape[axis], dims)
-    if any(r is None for r in rows_n):
+    sizes = [r for r in rows_n if r is not None]
+    if len(sizes) != k:
         raise TemplateError("a block row has no matrix entry to size it")
     out = []
     for i in range(k):
@@ -131,9 +132,9 @@ def _block_tree(b: Block, dims: Mapping[sympy.Symbol, int]) -> dict:
                 mirror = b.entry(j, i)
                 if mirror is STAR:
                     raise TemplateError(f"block ({i + 1},{j + 1}) and its mirror are both '*'")
-                row.append(_op("transpose", _entry_tree(mirror, rows_n[j], rows_n[i], j == i, dims)))
+                row.append(_op("transpose", _entry_tree(mirror, sizes[j], sizes[i], j == i, dims)))
             else:
-                row.append(_entry_tree(ent, rows_n[i], rows_n[j], i == j, dims))
+                row.append(_entry_tree(ent, sizes[i], sizes[j], i == j, dims))
         out.append(row)
     return {"block": out}
 

@@ -30,10 +30,13 @@ Typo resolutions:
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import sympy
 
 from lmic.errors import DataError
-from lmic.template import STAR, I, block, schur_stable
+from lmic.template import STAR, I, Template, block, schur_stable
 
 __all__ = ["build_delay_hinf", "declare_tau0"]
 
@@ -42,7 +45,7 @@ def _is_integer(x: float) -> bool:
     return float(x).is_integer()
 
 
-def declare_tau0(t):
+def declare_tau0(t: Template) -> sympy.Expr:
     """Parameters ``tau1``, ``tau2`` and ``tau0`` and the constant ``tau0_eff`` used by the LMIs.
 
     A system gives the delay bounds ``tau1 <= tau(k) <= tau2`` (then ``tau0 = tau2 - tau1 + 1``)
@@ -59,7 +62,7 @@ def declare_tau0(t):
         doc="tau0 = tau2 - tau1 + 1 given directly (0: computed from tau1, tau2)",
     )
 
-    def tau0_fn(v):
+    def tau0_fn(v: Mapping[str, Any]) -> float:
         tau1, tau2, tau0 = v["tau1"], v["tau2"], v["tau0"]
         for key, val in (("tau1", tau1), ("tau2", tau2), ("tau0", tau0)):
             if not _is_integer(val):
@@ -78,7 +81,7 @@ def declare_tau0(t):
     return t.const("tau0_eff", tau0_fn, doc="tau0 = tau2 - tau1 + 1 (or tau0 as given)")
 
 
-def build_delay_hinf(t, *, paper: str, pareto: bool) -> None:
+def build_delay_hinf(t: Template, *, paper: str, pareto: bool) -> None:
     """Declare the Paper A / Paper B delay H-infinity observer theorem on template ``t``.
 
     Parameters

@@ -9,7 +9,7 @@ Paper B and documented in :mod:`lmic_observers._delay_hinf`.
 
 from __future__ import annotations
 
-from lmic.template import theorem
+from lmic.template import Template, theorem
 from lmic_observers._delay_hinf import build_delay_hinf
 
 __all__ = ["delay_a_thm3_1", "delay_a_thm3_2", "THEOREMS"]
@@ -30,7 +30,7 @@ _NOTES = (
     system_class="discrete time, Lipschitz f, time-varying state delay, norm-bounded uncertainty",
     notes=_NOTES + " eta is listed among the scalars but the objective is min alpha + eps1: eta is given.",
 )
-def delay_a_thm3_1(t):
+def delay_a_thm3_1(t: Template) -> None:
     """Paper A, Theorem 3.1 (Section 3), LMIs (15)-(16).
 
     ``[Psi1, Omega; *, Psi2] < 0`` and ``Psi3 < 0`` (``-eta^2 I`` in its (1,1) block), with
@@ -52,7 +52,7 @@ def delay_a_thm3_1(t):
     notes=_NOTES + " lambda in [0, 1] is user-chosen. The published gamma* = 0.335 is not reproducible "
     "eta* = 2.3787 at the published P1, P2, Upsilon is.",
 )
-def delay_a_thm3_2(t):
+def delay_a_thm3_2(t: Template) -> None:
     """Paper A, Theorem 3.2 (Section 3), LMIs (15) and (43).
 
     ``[Psi1, Omega; *, Psi2] < 0`` and (43) (``Psi3`` with ``-rho I``, ``rho = eta^2``);

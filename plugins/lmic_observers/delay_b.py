@@ -12,7 +12,7 @@ blocks, typo resolutions and the ``psi1 = printed | corrected`` option:
 
 from __future__ import annotations
 
-from lmic.template import theorem
+from lmic.template import Template, theorem
 from lmic_observers._delay_hinf import build_delay_hinf
 
 __all__ = ["delay_b_thm3_1", "delay_b_thm4_1", "THEOREMS"]
@@ -34,7 +34,7 @@ _NOTES = (
     system_class="discrete time, Lipschitz f, state and output delays, norm-bounded uncertainty",
     notes=_NOTES + " The statement omits eta and eps3 from its scalars: eta is given.",
 )
-def delay_b_thm3_1(t):
+def delay_b_thm3_1(t: Template) -> None:
     """Paper B, Theorem 3.1 (Section 3), LMIs (16)-(17).
 
     As Paper A Theorem 3.1 with ``Omega(2,6) = Ad^T P1 - Cd^T Upsilon^T`` and
@@ -55,7 +55,7 @@ def delay_b_thm3_1(t):
     notes=_NOTES + " Tables 1-4 reproduce only approximately (about 10-20 %); the "
     "claims 'tau0 >= 6 (Ex 1) / >= 5 (Ex 2) infeasible' do not hold for the printed LMIs.",
 )
-def delay_b_thm4_1(t):
+def delay_b_thm4_1(t: Template) -> None:
     """Paper B, Theorem 4.1 (Section 4), LMIs (16) and (48).
 
     ``[Psi1, Omega; *, Psi2] < 0`` (Theorem 3.1 blocks) and (48) (``Psi3`` with ``-rho I``);

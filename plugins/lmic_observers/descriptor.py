@@ -36,8 +36,9 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+import sympy
 
-from lmic.template import STAR, I, block, hurwitz, negative_definite, theorem
+from lmic.template import STAR, Block, I, Template, block, hurwitz, negative_definite, theorem
 from lmic.template.numeric import null_projector, pinv, rank
 
 CITATION = (
@@ -120,7 +121,9 @@ def _beta2(values: Mapping[str, Any]) -> np.ndarray:
     return null_projector(values["T"])[:, q1:]
 
 
-def reduced_order_constants(t, n, h, p, q1, with_D: bool = True):
+def reduced_order_constants(
+    t: Template, n: sympy.Symbol, h: sympy.Symbol, p: sympy.Symbol, q1: sympy.Symbol, with_D: bool = True
+) -> dict[str, sympy.MatrixExpr]:
     """Declare the data of the R -> M construction and its constants; return them by name.
 
     Declares the dimensions' data ``A, B, C, F, G, D1, D2, R`` (and ``D`` when ``with_D``) and
@@ -154,7 +157,13 @@ def reduced_order_constants(t, n, h, p, q1, with_D: bool = True):
     return s
 
 
-def reduced_order_blocks(s, P, Ybar1, Y2, nonlinear_gain):
+def reduced_order_blocks(
+    s: Mapping[str, sympy.MatrixExpr],
+    P: sympy.MatrixExpr,
+    Ybar1: sympy.MatrixExpr,
+    Y2: sympy.MatrixExpr,
+    nonlinear_gain: sympy.MatrixExpr,
+) -> tuple[sympy.MatrixExpr, ...]:
     """The entries a11, a12, a13, a14, a34 of (40)/(38)/(41) in the variables P, Ybar1, Y2.
 
     ``nonlinear_gain`` is ``M D`` (Paper D) or ``M`` (Paper E).
@@ -169,7 +178,9 @@ def reduced_order_blocks(s, P, Ybar1, Y2, nonlinear_gain):
     return a11, a12, a13, a14, a34
 
 
-def reduced_order_gains(t, s, P, Ybar1, Y2):
+def reduced_order_gains(
+    t: Template, s: Mapping[str, sympy.MatrixExpr], P: sympy.MatrixExpr, Ybar1: sympy.MatrixExpr, Y2: sympy.MatrixExpr
+) -> tuple[sympy.MatrixExpr, ...]:
     """Back-substitution (39)/(37): Y1, N, L, Gf (= M B), J, E; returns N, L, J, E."""
     M, Ab, a1, a2, b1, b2 = (s[k] for k in ("M", "Abar", "alpha1", "alpha2", "beta1", "beta2"))
     Y1 = t.derive("Y1", P.inv() * Ybar1, doc="Y1 = P^-1 Ybar1")
@@ -181,7 +192,19 @@ def reduced_order_gains(t, s, P, Ybar1, Y2):
     return N, L, J, E
 
 
-def hinf_block(P, Gamma, N, L, J, E, nonlinear_gain, MD1, D2, c, mu_sq):
+def hinf_block(
+    P: sympy.MatrixExpr,
+    Gamma: sympy.MatrixExpr,
+    N: sympy.MatrixExpr,
+    L: sympy.MatrixExpr,
+    J: sympy.MatrixExpr,
+    E: sympy.MatrixExpr,
+    nonlinear_gain: sympy.MatrixExpr,
+    MD1: sympy.MatrixExpr,
+    D2: sympy.MatrixExpr,
+    c: sympy.Expr,
+    mu_sq: sympy.Expr,
+) -> Block:
     """Phi of (20)-(21) (Paper D) / (16)-(17) (Paper E) with ``c = 1 + gamma^2``."""
     return block(
         [
@@ -204,7 +227,7 @@ def hinf_block(P, Gamma, N, L, J, E, nonlinear_gain, MD1, D2, c, mu_sq):
     system_class=SYSTEM_CLASS,
     notes="Bilinear in (P, N); an LMI in (P, Gamma) for given gains.",
 )
-def descriptor_thm3_1(t):
+def descriptor_thm3_1(t: Template) -> None:
     """Theorem 3.1 (Section 3), inequalities (14).
 
     ``Gamma - I < 0``, ``[N^T P + P N + gamma^2 J^T J, P M D; *, -Gamma] < 0``, ``P > 0``: the
@@ -234,7 +257,7 @@ def descriptor_thm3_1(t):
     notes="Nonlinear in the gains; an LMI in (P, Gamma) for fixed N, L, M, J, E. The proof's eq "
     "(25) prints the cross term as a product; it is a sum (no effect on (20)).",
 )
-def descriptor_thm3_2(t):
+def descriptor_thm3_2(t: Template) -> None:
     """Theorem 3.2 (Section 3), inequalities (20)-(21).
 
     ``Gamma - I < 0``, ``P > 0``, ``Phi = [a11, a12, a13; *, -Gamma, 0; *, 0, a33] < 0`` with
@@ -275,7 +298,7 @@ def descriptor_thm3_2(t):
     "(printed with a stray D: 'P M D Abar alpha2 D2'), a34 with beta2 (printed 'beta'); the rank "
     "conditions (31)-(32) read n + h (printed n). The filter gain G = M B is the derived 'Gf'.",
 )
-def descriptor_thm3_3(t):
+def descriptor_thm3_3(t: Template) -> None:
     """Theorem 3.3 (Section 3), LMI (40)-(41), gains (39).
 
     ``Gamma - I < 0``, ``P > 0`` and (block sizes q1, q, nw, n + h)

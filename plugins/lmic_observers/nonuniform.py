@@ -16,7 +16,7 @@ substituted, so the LMIs are in ``(P, N1, N2, N3)`` only.
 
 from __future__ import annotations
 
-from lmic.template import STAR, I, block, hurwitz, theorem
+from lmic.template import STAR, I, Template, block, hurwitz, theorem
 
 __all__ = ["THEOREMS"]
 
@@ -32,7 +32,7 @@ __all__ = ["THEOREMS"]
     notes="(9a) is extracted column-first; its printed (2,1) block lost a transpose (C^T L~^T). "
     "Every block re-derived from the proof. fixed_L: 1 audits a given gain (L~ = P L).",
 )
-def nonuniform_thm1(t):
+def nonuniform_thm1(t: Template) -> None:
     """Theorem 1 (Section II, Main result): LMIs (9a) and (9b), with ``d = delta_bar``, ``P > 0``:
 
     ``(9a) [(1+d)(PA + A^T P) + g^2 H^T H - P - N1 - N1^T, (1+d) L~C + P - d A^T P + N1 - N2^T,

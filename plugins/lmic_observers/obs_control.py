@@ -32,7 +32,11 @@ margin -1.6e-5, SCS's "optimal" must be rejected) and feasible at alpha = 0.06 w
 
 from __future__ import annotations
 
-from lmic.template import STAR, I, block, hurwitz, negative_definite, theorem
+from typing import Any
+
+import sympy
+
+from lmic.template import STAR, Block, I, Template, block, hurwitz, negative_definite, theorem
 
 CITATION = (
     "Delshad, Gustafsson, Karimi & Zemouche, 'Observer-based control design for a class of "
@@ -45,7 +49,7 @@ SYSTEM_CLASS = (
 )
 
 
-def _plant(t):
+def _plant(t: Template) -> tuple[tuple[sympy.Symbol, ...], tuple[sympy.MatrixExpr, ...]]:
     n, m, p, q, qE = t.dims("n m p q qE")
     A = t.data("A", n, n, doc="state matrix")
     B = t.data("B", n, m, doc="control input matrix")
@@ -55,7 +59,7 @@ def _plant(t):
     return (n, m, p, q, qE), (A, B, C, D, E)
 
 
-def _scalars(t):
+def _scalars(t: Template) -> tuple[sympy.Symbol, ...]:
     doc = "positive Young-inequality weight"
     epsc1 = t.param("epsc1", domain="positive", doc=doc + " (controller, f)")
     epsc2 = t.param("epsc2", domain="positive", doc=doc + " (controller, mu)")
@@ -67,7 +71,7 @@ def _scalars(t):
     return epsc1, epsc2, epso1, epso2, gamma, alpha, beta
 
 
-def _nine(P, Q, K, L, mats, scalars, c):
+def _nine(P: Any, Q: Any, K: Any, L: Any, mats: tuple[Any, ...], scalars: tuple[Any, ...], c: Any) -> Block:
     """The BMI (9) ``[Omega11, P B K; *, Omega22]`` (for checks: P, Q, K, L are numbers)."""
     A, B, C, D, E = mats
     epsc1, epsc2, epso1, epso2, gamma, _, _ = scalars
@@ -91,7 +95,7 @@ def _nine(P, Q, K, L, mats, scalars, c):
     "gives eps_o2 + eps_c2 (option c_variant = corrected, default, or printed). (10)-(11) "
     "(Omega11 < 0, Omega22 < 0) are implied by (9).",
 )
-def obs_control_thm3_1(t):
+def obs_control_thm3_1(t: Template) -> None:
     """Theorem 3.1 (Section 3), inequalities (9)-(11), in Schur form.
 
     ``[He(P(A - B K)) + c I, P B K, P D, P E, 0, 0; *, He(Q(A - L C)) + epso1 gamma^2 I, 0, 0,
@@ -153,7 +157,7 @@ def obs_control_thm3_1(t):
     "Lbar. The certificate evaluates the BMI (9) of Theorem 3.1 at P = Gamma^-1 and the "
     "recovered K, L.",
 )
-def obs_control_thm3_2(t):
+def obs_control_thm3_2(t: Template) -> None:
     """Theorem 3.2 (Section 3), LMI (21)-(22).
 
     Block sizes n, n, n, q, qE, n, n:

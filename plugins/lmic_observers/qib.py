@@ -17,17 +17,21 @@ Fixed gains (audits): ``fixed_L: 1`` (full order, ``R = L^T P`` substituted) and
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
+from typing import Any
+
 import numpy as np
+import sympy
 
 from lmic.errors import DataError
-from lmic.template import STAR, I, block, schur_stable, theorem
+from lmic.template import STAR, I, Template, block, schur_stable, theorem
 
 __all__ = ["THEOREMS", "reduced_coordinates"]
 
 CITATION = "Wang, Song & Zhang (2015), Adv. Difference Equ. 2015:307"
 
 
-def _full_order(t):
+def _full_order(t: Template) -> tuple[Any, ...]:
     """Data, ``P > 0``, ``R``, ``omega`` and ``X = A^T P - C^T R`` of LMIs (7) and (13)."""
     n, p = t.dims("n p")
     A = t.data("A", n, n, doc="state matrix")
@@ -48,7 +52,7 @@ def _full_order(t):
     notes="Checked against the proof of Theorem 1 (Section 3); L = P^-1 R^T (R = L^T P). "
     "The LMI is homogeneous in (P, R, omega). fixed_L: 1 audits a given gain.",
 )
-def qib_thm1(t):
+def qib_thm1(t: Template) -> None:
     """Theorem 1 (Section 3, Full-order observer design), LMI (7).
 
     ``[-P + 2 w beta I, A^T P - C^T R + w gamma I, A^T P - C^T R; *, P - 2 w I, 0; *, *, -P] < 0``
@@ -86,7 +90,7 @@ def qib_thm1(t):
     notes="Theorem 1 with beta = lambda^2, gamma = 0 and omega renamed (2 omega -> omega). "
     "Homogeneous. fixed_L: 1 audits a given gain.",
 )
-def qib_cor1(t):
+def qib_cor1(t: Template) -> None:
     """Corollary 1 (Section 3), LMI (13).
 
     ``[-P + w lambda^2 I, A^T P - C^T R, A^T P - C^T R; *, P - w I, 0; *, *, -P] < 0``,
@@ -121,8 +125,8 @@ def reduced_coordinates(H: np.ndarray, C: np.ndarray, where: str = "") -> tuple[
     return Tinv[:, :k], Tinv[:, k:]
 
 
-def _check_nm(tid):
-    def rule(v):
+def _check_nm(tid: str) -> Callable[[Mapping[str, Any]], float]:
+    def rule(v: Mapping[str, Any]) -> float:
         reduced_coordinates(v["H"], v["C"], f"theorem {tid}: ")  # [H; C] nonsingular
         T = np.vstack([v["H"], v["C"]])
         NM = np.hstack([v["N"], v["M"]])
@@ -137,7 +141,7 @@ def _check_nm(tid):
     return rule
 
 
-def _reduced_order(t, beta, gamma):
+def _reduced_order(t: Template, beta: sympy.Symbol, gamma: sympy.Symbol | None) -> None:
     """Theorem 2 / Corollary 2: (26) with P = alpha I, or (21) with K fixed (``fixed_K: 1``).
 
     ``gamma`` is ``None`` for Corollary 2 (the (1,2) block is 0).
@@ -201,7 +205,7 @@ def _reduced_order(t, beta, gamma):
     notes="(21) is bilinear (P K); Remark 2's P = alpha I gives the LMI (26) in (K, omega). "
     "fixed_K: 1 gives (21) in (P, omega) for a given K. The published K is infeasible.",
 )
-def qib_thm2(t):
+def qib_thm2(t: Template) -> None:
     """Theorem 2 (Section 4, Reduced-order observer design), LMI (21), and Remark 2, LMI (26).
 
     Reduced coordinates (14)-(15): ``z = H x``, ``[H; C]^-1 = [N M]``, ``A_Z = H A N``,
@@ -240,7 +244,7 @@ def qib_thm2(t):
     notes="Theorem 2 with beta = lambda^2, gamma = 0 (the factor 2 of 2 omega stays). "
     "P = alpha I as in Remark 2; fixed_K: 1 gives (27) in (P, omega).",
 )
-def qib_cor2(t):
+def qib_cor2(t: Template) -> None:
     """Corollary 2 (Section 4), LMI (27):
 
     ``[-N^T P N + 2 w lambda^2 N^T N, 0, (A_Z - K C_Z)^T N^T P; *, -2 w I, (H - K C)^T N^T P;

@@ -14,11 +14,14 @@ change of variables ``G = P L`` is substituted, so the LMIs are in ``P`` (and th
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 import sympy
 
 from lmic.errors import DataError
-from lmic.template import STAR, I, block, greater_than, schur_stable, theorem
+from lmic.template import STAR, I, Template, block, greater_than, schur_stable, theorem
 from lmic.template.numeric import lambda_max, lambda_min
 
 __all__ = ["THEOREMS", "psi1_value"]
@@ -48,7 +51,9 @@ def psi1_value(Q: np.ndarray, gamma_d: float) -> float:
     return float((-lmax + np.sqrt(lmax**2 + lmin**2 / gamma_d**2)) / (gamma_d + 2.0))
 
 
-def _gain(t, n, p, P, fixed: bool):
+def _gain(
+    t: Template, n: sympy.Symbol, p: sympy.Symbol, P: sympy.MatrixExpr, fixed: bool
+) -> tuple[sympy.MatrixExpr, sympy.MatrixExpr | None]:
     """``G`` as a decision variable, or ``P L`` with ``L`` given (``fixed_L = 1``)."""
     if fixed:
         L = t.data("L", n, p, doc="the observer gain to audit (fixed_L = 1)")
@@ -56,7 +61,7 @@ def _gain(t, n, p, P, fixed: bool):
     return t.full("G", n, p, doc="G = P L"), None
 
 
-def _observer(t):
+def _observer(t: Template) -> tuple[sympy.Symbol, sympy.Symbol, sympy.MatrixExpr, sympy.MatrixExpr]:
     """Dimensions and the discrete-time data ``Ad``, ``Cd`` of Theorems 1, 2 and 4."""
     n, p = t.dims("n p")
     Ad = t.data("Ad", n, n, doc="discrete-time state matrix")
@@ -64,12 +69,29 @@ def _observer(t):
     return n, p, Ad, Cd
 
 
-def _lmi6(t, n, P, Q, Ad, Cd, G, eps, name):
+def _lmi6(
+    t: Template,
+    n: sympy.Symbol,
+    P: sympy.MatrixExpr,
+    Q: sympy.MatrixExpr,
+    Ad: sympy.MatrixExpr,
+    Cd: sympy.MatrixExpr,
+    G: sympy.MatrixExpr,
+    eps: sympy.Expr,
+    name: str,
+) -> None:
     """LMI (6) = (32) = (71): ``[P - Q - eps I, Ad^T P - Cd^T G^T; *, P] > 0``."""
     t.lmi(name, block([[P - Q - eps * I(n), Ad.T * P - Cd.T * G.T], [STAR, P]]) > 0)
 
 
-def _finish_gain(t, P, G, L_data, Ad, Cd):
+def _finish_gain(
+    t: Template,
+    P: sympy.MatrixExpr,
+    G: sympy.MatrixExpr,
+    L_data: sympy.MatrixExpr | None,
+    Ad: sympy.MatrixExpr,
+    Cd: sympy.MatrixExpr,
+) -> sympy.MatrixExpr:
     """``L = P^-1 G`` (or the given L) and the check ``Ad - L Cd`` Schur stable."""
     L = L_data if L_data is not None else t.derive("L", P.inv() * G, doc="observer gain L = P^-1 G (9)")
     t.check("Ad - L Cd Schur stable", schur_stable(Ad - L * Cd))
@@ -87,7 +109,7 @@ def _finish_gain(t, P, G, L_data, Ad, Cd):
     notes="Psi1 (8) is printed as a stacked fraction: it is the positive root of (30). "
     "Q is a fixed design matrix; fixed_L: 1 audits a given gain (G = P L).",
 )
-def sampled_euler_thm1(t):
+def sampled_euler_thm1(t: Template) -> None:
     """Theorem 1 (Section 3, discrete-time systems): LMIs (6), (7), Psi1 (8).
 
     ``(6) [P - Q - eps I, Ad^T P - Cd^T G^T; *, P] > 0``, ``(7) [Psi1 I, P; *, Psi1 I] > 0``
@@ -117,7 +139,16 @@ def sampled_euler_thm1(t):
     _finish_gain(t, P, G, L_data, Ad, Cd)
 
 
-def _thm2_body(t, n, Ad, Cd, Q, P, G, L_data):
+def _thm2_body(
+    t: Template,
+    n: sympy.Symbol,
+    Ad: sympy.MatrixExpr,
+    Cd: sympy.MatrixExpr,
+    Q: sympy.MatrixExpr,
+    P: sympy.MatrixExpr,
+    G: sympy.MatrixExpr,
+    L_data: sympy.MatrixExpr | None,
+) -> sympy.Symbol:
     """LMIs (32)-(34) and ``min xi``; returns xi."""
     lmin_q = t.const("lambda_min_Q", lambda v: lambda_min(v["Q"]), doc="lambda_min(Q)")
     lmax_q = t.const("lambda_max_Q", lambda v: lambda_max(v["Q"]), doc="lambda_max(Q)")
@@ -143,7 +174,7 @@ def _thm2_body(t, n, Ad, Cd, Q, P, G, L_data):
     notes="For Q = q I the LMIs are homogeneous in (P, G, eps, q): xi* does not depend on q. "
     "gamma_d (optional) is the actual Lipschitz constant, for Remark 2's margin.",
 )
-def sampled_euler_thm2(t):
+def sampled_euler_thm2(t: Template) -> None:
     """Theorem 2 (Section 3): ``min xi`` subject to (32) = (6) and
     ``(33) [Psi2 I, P; *, Psi2 I] > 0`` with ``Psi2 = (lmin(Q) xi - lmax(Q)) / 3`` (34),
     ``xi > 1``, ``P > 0``, ``eps > 0``; ``gamma_d* = 1/xi*`` (36), ``L = P^-1 G`` (35).
@@ -169,7 +200,7 @@ def sampled_euler_thm2(t):
     t.check("gamma_d < gamma_d* (Remark 2)", greater_than(delta, 0.0))
 
 
-def _theorem3_q_rule(v):
+def _theorem3_q_rule(v: Mapping[str, Any]) -> float:
     """``lambda_min(Q) = T`` is part of Theorem 3's statement."""
     lmin_q, T = lambda_min(v["Q"]), v["T"]
     if abs(lmin_q - T) > 1e-9 * max(1.0, T):
@@ -190,7 +221,7 @@ def _theorem3_q_rule(v):
     system_class="continuous time Lipschitz (gamma_c), Euler model Ad = I + T A",
     notes="Q defaults to T I (Remark 3, the best choice); lambda_min(Q) = T is enforced.",
 )
-def sampled_euler_thm3(t):
+def sampled_euler_thm3(t: Template) -> None:
     """Theorem 3 (Section 4, sampled-data systems): Theorem 2 applied to the Euler model (47)-(49),
     ``Ad = I + T A`` (48), ``Cd = C``, ``F_T = T f`` so ``gamma_d = T gamma_c``, with the
     extra requirement ``lambda_min(Q) = T``. Derived ``gamma_c* = gamma_d*/T``;
@@ -243,7 +274,7 @@ def sampled_euler_thm3(t):
     notes="(73) as printed is infeasible for every instance: its constant (1,1) block Lambda2 "
     "always has a positive eigenvalue. coupling: Bd (default) | I.",
 )
-def sampled_euler_thm4(t):
+def sampled_euler_thm4(t: Template) -> None:
     """Theorem 4 (Section 5, H-infinity synthesis): ``min zeta`` subject to (71) = (6), (72) = (7) with
     Psi1 from (8), and
 

@@ -14,8 +14,14 @@ Families of results here:
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import sympy
+
 from lmic.errors import DataError
-from lmic.template import STAR, I, block, hurwitz, negative_definite, schur_stable, theorem
+from lmic.template import STAR, I, Template, block, hurwitz, negative_definite, schur_stable, theorem
 from lmic.template.checks import less_than
 from lmic.template.numeric import null_projector, pinv, rank
 from lmic.template.totree import norm2
@@ -44,7 +50,7 @@ _DECOUPLING_TOL = 1e-8
     system_class="continuous time, linear",
     notes="The example (2.14) uses the non-strict A^T P + P A <= 0; choose it with nonstrict: 1.",
 )
-def thesis_lyapunov(t):
+def thesis_lyapunov(t: Template) -> None:
     """Thesis eq. (2.9): ``P > 0``, ``A^T P + P A < 0`` (or ``<= 0`` with ``nonstrict = 1``)."""
     (n,) = t.dims("n")
     A = t.data("A", n, n, doc="state matrix")
@@ -61,7 +67,7 @@ def thesis_lyapunov(t):
 # -- chapter 3: Luenberger observers, L = P^-1 Lbar ----------------------------------------
 
 
-def _luenberger_data(t):
+def _luenberger_data(t: Template) -> tuple[sympy.Symbol, sympy.Symbol, sympy.MatrixExpr, sympy.MatrixExpr]:
     """Dimensions and data shared by Theorem 3.2.1, Theorem 3.2.2 and Corollary (3.19)."""
     n, m, p = t.dims("n m p")
     A = t.data("A", n, n, doc="state matrix")
@@ -80,7 +86,7 @@ def _luenberger_data(t):
     notes="The example's plant is that of Example 1.1.1 (the text says 'Example 1.2.1'). "
     "The statement says 'matrices L and P'; the LMI variable is Lbar = P L.",
 )
-def thesis_thm3_2_1(t):
+def thesis_thm3_2_1(t: Template) -> None:
     """Thesis Theorem 3.2.1 (Section 3.2.1, linear case), LMI (3.11).
 
     ``P > 0``, ``A^T P + P A - C^T Lbar^T - Lbar C < 0``; the observer gain is
@@ -106,7 +112,7 @@ def thesis_thm3_2_1(t):
     notes="The statement says 'matrices L and P'; the LMI variable is Lbar = P L. "
     "Example 3.2.2: infeasible at gamma = 3.33 (as the thesis says); sup gamma = 0.9997.",
 )
-def thesis_thm3_2_2(t):
+def thesis_thm3_2_2(t: Template) -> None:
     """Thesis Theorem 3.2.2 (Section 3.2.2, nonlinear case), LMI (3.14).
 
     ``[A^T P + P A - C^T Lbar^T - Lbar C + gamma^2 I, P; *, -I] < 0`` with ``P > 0``;
@@ -145,7 +151,7 @@ def thesis_thm3_2_2(t):
     system_class="continuous time, |f(x1) - f(x2)| <= |G (x1 - x2)|",
     notes="Example 3.2.2 does not print G; G = [0 0 3.33 0] is forced by f = [0,0,0,-3.33 sin x3].",
 )
-def thesis_cor3_19(t):
+def thesis_cor3_19(t: Template) -> None:
     """Thesis Corollary [69] (Section 3.2.2), LMI (3.19).
 
     ``[A^T P + P A - C^T Lbar^T - Lbar C + G^T G, P; *, -I] < 0`` with ``P > 0``;
@@ -170,7 +176,9 @@ def thesis_cor3_19(t):
 # -- chapter 4: unknown-input observers, E = U + Y V ----------------------------------------
 
 
-def _uio_constants(t, n, p, C, Dui, key):
+def _uio_constants(
+    t: Template, n: sympy.Symbol, p: sympy.Symbol, C: sympy.MatrixExpr, Dui: sympy.MatrixExpr, key: str
+) -> tuple[sympy.MatrixExpr, sympy.MatrixExpr]:
     """``U = -Dui (C Dui)^+`` and the exact projector ``V = I - (C Dui)(C Dui)^+`` (4.23).
 
     ``Dui`` is the unknown-input matrix (``key`` its data name). ``C Dui`` must have full column
@@ -178,7 +186,7 @@ def _uio_constants(t, n, p, C, Dui, key):
     """
     tid = t.theorem_id
 
-    def u_fn(v):
+    def u_fn(v: Mapping[str, Any]) -> np.ndarray:
         CD = v["C"] @ v[key]
         h = CD.shape[1]
         if rank(CD) < h:
@@ -198,7 +206,19 @@ def _uio_constants(t, n, p, C, Dui, key):
     return U, V
 
 
-def _uio_gains(t, n, p, A, B, C, P, Ybar, Kbar, U, V):
+def _uio_gains(
+    t: Template,
+    n: sympy.Symbol,
+    p: sympy.Symbol,
+    A: sympy.MatrixExpr,
+    B: sympy.MatrixExpr,
+    C: sympy.MatrixExpr,
+    P: sympy.MatrixExpr,
+    Ybar: sympy.MatrixExpr,
+    Kbar: sympy.MatrixExpr,
+    U: sympy.MatrixExpr,
+    V: sympy.MatrixExpr,
+) -> tuple[sympy.MatrixExpr, sympy.MatrixExpr]:
     """Back-substitution (4.26)/(4.36): ``Y, K, E, M, N, L, G``."""
     # fixes=: the audit variants fixed_Y / fixed_K take printed Y, K as data (Ybar = P Y, Kbar = P K)
     Y = t.derive("Y", P.inv() * Ybar, doc="Y = P^-1 Ybar", fixes=Ybar)
@@ -211,7 +231,7 @@ def _uio_gains(t, n, p, A, B, C, P, Ybar, Kbar, U, V):
     return M, N
 
 
-def _decoupling_check(t, M, Dui, key):
+def _decoupling_check(t: Template, M: sympy.MatrixExpr, Dui: sympy.MatrixExpr, key: str) -> None:
     """``M Dui = 0`` (structural: holds exactly when ``C Dui`` has full column rank)."""
     t.check(
         f"M {key} = 0",
@@ -220,7 +240,7 @@ def _decoupling_check(t, M, Dui, key):
     )
 
 
-def _ct_uio(t, nonlinear):
+def _ct_uio(t: Template, nonlinear: bool) -> None:
     n, m, p, h = t.dims("n m p h")
     A = t.data("A", n, n, doc="state matrix")
     B = t.data("B", n, m, doc="known-input matrix (G = M B)")
@@ -262,7 +282,7 @@ def _ct_uio(t, nonlinear):
     notes="The statement lists Ybar and P only; Kbar is a decision variable too. P > 0 is added "
     "explicitly. U, V of (4.23) use the Moore-Penrose inverse and an exact SVD projector.",
 )
-def thesis_thm4_1_2(t):
+def thesis_thm4_1_2(t: Template) -> None:
     """Thesis Theorem 4.1.2 (Section 4.1.2, unknown inputs issue), LMI (4.24)-(4.25).
 
     ``[d11, d12; *, -I] < 0`` with
@@ -285,7 +305,7 @@ def thesis_thm4_1_2(t):
     notes="Typo: (4.28) prints (VCA)^T Ybar and C^T Kbar; dimensions force Ybar^T and Kbar^T "
     "(the transposes are restored). Example 4.1.3 does not print D; D = e1 is forced by U, V.",
 )
-def thesis_thm4_1_2_linear(t):
+def thesis_thm4_1_2_linear(t: Template) -> None:
     """Thesis Remark after Theorem 4.1.2 (Section 4.1.2), LMI (4.28), f = 0.
 
     ``((I+UC)A)^T P + P (I+UC)A + (VCA)^T Ybar^T + Ybar (VCA) - C^T Kbar^T - Kbar C < 0`` and
@@ -307,7 +327,7 @@ def thesis_thm4_1_2_linear(t):
     notes="Same as Paper C Theorem 3.2. U, V are built from D1 (the unknown-input matrix). "
     "Example 4.1.4 prints U with a spurious transpose. With D = D1 the LMI is feasible for every gamma.",
 )
-def thesis_thm4_1_3(t):
+def thesis_thm4_1_3(t: Template) -> None:
     """Thesis Theorem 4.1.3 (Section 4.1.2), LMI (4.34)-(4.35) (= Paper C Theorem 3.2).
 
     ``[-P + gamma^2 I, 0, d13; *, -I_q, d23; *, *, -P] < 0`` with

@@ -33,7 +33,9 @@ import sympy
 
 from lmic.template import (
     STAR,
+    Block,
     I,
+    Template,
     block,
     lambda_max,
     less_than,
@@ -73,7 +75,7 @@ def _V(values: Mapping[str, Any]) -> np.ndarray:
     return null_projector(_cd1(values))
 
 
-def _uio_data(t):
+def _uio_data(t: Template) -> tuple[tuple[sympy.Symbol, ...], tuple[sympy.MatrixExpr, ...], tuple[Any, Any]]:
     """Dimensions, data and the constants U, V shared by Theorems 3.2 and 4.1."""
     n, m, p, q, h = t.dims("n m p q h")
     A = t.data("A", n, n, doc="state matrix")
@@ -86,14 +88,25 @@ def _uio_data(t):
     return (n, p, q), (A, B, C, D, D1), (U, V)
 
 
-def _deltas(A, C, D, U, V, P, Ybar, Kbar):
+def _deltas(
+    A: Any, C: Any, D: Any, U: Any, V: Any, P: Any, Ybar: Any, Kbar: Any
+) -> tuple[sympy.MatrixExpr, sympy.MatrixExpr]:
     """``delta13 = N^T P`` and ``delta23 = (M D)^T P`` in the new variables (21)/(26)."""
     d13 = A.T * P + (U * C * A).T * P + (V * C * A).T * Ybar.T - C.T * Kbar.T
     d23 = D.T * P + (U * C * D).T * P + (V * C * D).T * Ybar.T
     return d13, d23
 
 
-def _gains(t, n, p, mats, consts, P, Ybar, Kbar):
+def _gains(
+    t: Template,
+    n: sympy.Symbol,
+    p: sympy.Symbol,
+    mats: tuple[Any, ...],
+    consts: tuple[Any, Any],
+    P: sympy.MatrixExpr,
+    Ybar: sympy.MatrixExpr,
+    Kbar: sympy.MatrixExpr,
+) -> tuple[sympy.MatrixExpr, sympy.MatrixExpr]:
     """Back-substitution (22)/(27); returns the symbols of N and M."""
     A, B, C, D, D1 = mats
     U, V = consts
@@ -112,7 +125,7 @@ def _gains(t, n, p, mats, consts, P, Ybar, Kbar):
     return N, M
 
 
-def _nine(n, q, P, N, M, D, gamma_sq):
+def _nine(n: Any, q: Any, P: Any, N: Any, M: Any, D: Any, gamma_sq: Any) -> Block:
     """Inequality (9) written with N, M, P: ``[-P + g^2 I, 0, N^T P; *, -I, D^T M^T P; *, *, -P]``."""
     return block(
         [
@@ -133,7 +146,7 @@ def _nine(n, q, P, N, M, D, gamma_sq):
     notes="Bilinear in (N, M, P); an LMI in P once N and M are given. The proof's eq (15) has a "
     "sign typo (-P^-1) that does not affect (9).",
 )
-def uio_dt_thm3_1(t):
+def uio_dt_thm3_1(t: Template) -> None:
     """Theorem 3.1 (Section 3), inequality (9).
 
     ``[-P + gamma^2 I, 0, N^T P; *, -I_q, D^T M^T P; *, *, -P] < 0`` with ``P > 0`` (the
@@ -168,7 +181,7 @@ def uio_dt_thm3_1(t):
     "'Ybar and P'; Kbar is a decision variable too (it appears in delta13 and K = P^-1 Kbar). "
     "Thesis Thm 4.1.3 is the same LMI.",
 )
-def uio_dt_thm3_2(t):
+def uio_dt_thm3_2(t: Template) -> None:
     """Theorem 3.2 (Section 3), LMI (20)-(21), gains (22).
 
     ``[-P + gamma^2 I, 0, d13; *, -I_q, d23; *, *, -P] < 0`` with
@@ -209,7 +222,7 @@ def uio_dt_thm3_2(t):
     "adds rho <= 1/gamma^2 (gamma_max >= gamma), so 'feasible at gamma' is exactly Theorem 3.2 "
     "at gamma; gamma = 0 (default) leaves rho free.",
 )
-def uio_dt_thm4_1(t):
+def uio_dt_thm4_1(t: Template) -> None:
     """Theorem 4.1 (Section 4), LMI (25)-(26), gamma_max (28), gains (27).
 
     ``min rho`` subject to ``[-P, 0, d13, I; *, -I_q, d23, 0; *, *, -P, 0; *, *, *, -rho I] < 0``

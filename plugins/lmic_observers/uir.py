@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import sympy
 
-from lmic.template import STAR, I, block, hurwitz, less_than, negative_definite, theorem
+from lmic.template import STAR, I, Template, block, hurwitz, less_than, negative_definite, theorem
 from lmic_observers.descriptor import (
     hinf_block,
     reduced_order_blocks,
@@ -62,7 +62,7 @@ SYSTEM_CLASS = (
     system_class=SYSTEM_CLASS,
     notes="Bilinear in (P, N); an LMI in (P, Gamma) for given gains. Paper D Thm 3.1 with D = I.",
 )
-def uir_thm3_1(t):
+def uir_thm3_1(t: Template) -> None:
     """Theorem 3.1 (Section 3), inequalities (11).
 
     ``Gamma - I < 0``, ``[N^T P + P N + gamma^2 J^T J, P M; *, -Gamma] < 0``, ``P > 0``.
@@ -92,7 +92,7 @@ def uir_thm3_1(t):
     system_class=SYSTEM_CLASS,
     notes="Paper D Thm 3.2 with D = I (a12 = P M).",
 )
-def uir_thm3_2(t):
+def uir_thm3_2(t: Template) -> None:
     """Theorem 3.2 (Section 3), inequalities (16)-(17).
 
     ``Gamma - I < 0``, ``P > 0``, ``[a11, P M, a13; *, -Gamma, 0; *, 0, a33] < 0`` with
@@ -117,7 +117,7 @@ def uir_thm3_2(t):
     t.observer("filter_error", "continuous", N=N, J=J, L=L, M=M, E=E, D1=D1, D2=D2, gamma=mu)
 
 
-def _robust(t, multiobjective: bool):
+def _robust(t: Template, multiobjective: bool) -> None:
     """Theorems 4.1 (``multiobjective=False``) and 5.1: the LMI (38)/(41), objective, checks."""
     n, h, p, q1 = t.dims("n h p q1")
     s = reduced_order_constants(t, n, h, p, q1, with_D=False)
@@ -196,7 +196,7 @@ def _robust(t, multiobjective: bool):
     "condition (40) 0 < rho < 1/(1+gamma0^2) is imposed by default (rho_bound = 1); with "
     "rho_bound = 0 it is only checked on the result.",
 )
-def uir_thm4_1(t):
+def uir_thm4_1(t: Template) -> None:
     """Theorem 4.1 (Section 4), LMI (38)-(39), side condition (40).
 
     ``min rho`` subject to ``Gamma - I < 0``, ``P > 0``, ``(1 + gamma0^2) rho < 1`` (40) and
@@ -220,7 +220,7 @@ def uir_thm4_1(t):
     "structural N is unstable; F(1,:) = [1 0] reproduces the printed N, L but (41) still needs "
     "rho >~ 913.",
 )
-def uir_thm5_1(t):
+def uir_thm5_1(t: Template) -> None:
     """Theorem 5.1 (Section 5), LMI (41)-(42).
 
     As Theorem 4.1 with ``a33 = -mubar I`` (``mubar = mu^2`` a decision variable) and objective

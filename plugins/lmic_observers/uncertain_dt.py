@@ -15,11 +15,14 @@ substituted, so the LMIs are in ``(P1, P2, alpha, eps1, eps2)`` only.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 import sympy
 
 from lmic.errors import DataError
-from lmic.template import STAR, I, block, schur_stable, theorem
+from lmic.template import STAR, I, Template, block, schur_stable, theorem
 
 __all__ = ["THEOREMS", "vec_embedding"]
 
@@ -38,7 +41,7 @@ CITATION = (
     system_class="discrete time, Lipschitz, norm-bounded uncertainty (analysis of a plant)",
     notes="Block sizes (15): n, n, n, n, r; (16): nw, n, n. Checked against the proof.",
 )
-def uncertain_dt_lemma3(t):
+def uncertain_dt_lemma3(t: Template) -> None:
     """Lemma 3 (Section III, H-infinity synthesis): for ``x(k+1) = (A + M1 F N) x + Phi + B w``, ``z = H x``,
 
     ``(15) [Lambda1, I, A^T P, 0, 0; *, -alpha I, 0, 0, 0; *, *, -P/2, P, P M1;
@@ -81,7 +84,7 @@ def uncertain_dt_lemma3(t):
     t.derive("gamma_star", 1 / sympy.sqrt(alpha * (1 + eps1)), doc="gamma* = 1/sqrt(alpha (1 + eps1)) (22)")
 
 
-def _filter_data(t):
+def _filter_data(t: Template) -> dict[str, Any]:
     """Data, parameters and gain variables shared by Theorem 1 and Corollary 1."""
     n, p, nw, nz, r, s = t.dims("n p nw nz r s")
     d = {
@@ -113,7 +116,7 @@ def _filter_data(t):
     return d
 
 
-def _filter_lmis(t, d, psi1_rows, eps1, eps2):
+def _filter_lmis(t: Template, d: dict[str, Any], psi1_rows: list[Any], eps1: sympy.Expr, eps2: sympy.Expr) -> None:
     """``[Psi1 Omega; * Psi2] < 0`` and Xi1 (24) of Theorem 1, given Psi1's block rows.
 
     ``psi1_rows`` is the k x k upper triangle of Psi1 (k = 3 printed, 4 corrected) with the
@@ -152,7 +155,7 @@ def _filter_lmis(t, d, psi1_rows, eps1, eps2):
     )
 
 
-def _gain_and_check(t, d):
+def _gain_and_check(t: Template, d: dict[str, Any]) -> None:
     L = d["L"] if d["L"] is not None else t.derive("L", d["P1"].inv() * d["G"], doc="L = P1^-1 G (26)")
     t.check("A - L C Schur stable", schur_stable(d["A"] - L * d["C"]))
     t.observer(
@@ -171,7 +174,7 @@ def _gain_and_check(t, d):
     notes="psi1: printed (default) | corrected (alpha^-1 I on both e and x, see docstring). "
     "The published (eps1, alpha) = (0.7715, 2.9982) is infeasible; the optimum is gamma* = 0.3405.",
 )
-def uncertain_dt_thm1(t):
+def uncertain_dt_thm1(t: Template) -> None:
     """Theorem 1 (Section III): ``min alpha + eps1`` subject to
     ``[Psi1, Omega; *, Psi2] < 0`` and ``Xi1 < 0`` (24), ``P1, P2 > 0``, scalars > 0:
 
@@ -250,7 +253,7 @@ def vec_embedding(Cw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return E, F
 
 
-def _positive_weights(v):
+def _positive_weights(v: Mapping[str, Any]) -> tuple[np.ndarray, np.ndarray]:
     Cw = v["Cw"]
     if not np.all(Cw > 0):
         raise DataError("theorem uncertain_dt.cor1: data 'Cw' (the weights c_ij) must be element-wise > 0")
@@ -267,7 +270,7 @@ def _positive_weights(v):
     notes="Acal > 0 read element-wise (the paper's notation II-A); positivity: elementwise | none. "
     "As printed, the certified matrix is Gamma*^T (Gamma_star_T).",
 )
-def uncertain_dt_cor1(t):
+def uncertain_dt_cor1(t: Template) -> None:
     """Corollary 1 (Section IV.B, element-wise robustness): Theorem 1 with
     ``Psi1 = [H^T H - e^{-2 beta} P1, 0, Acal; *, eps2 N^T N - P2, 0; *, *, -I]`` (Xi1, Psi2,
     Omega unchanged), ``Acal = [alpha_ij] > 0``, objective ``min eps1 - sum_ij c_ij alpha_ij``

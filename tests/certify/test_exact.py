@@ -189,7 +189,7 @@ def test_exact_disproof_of_a_strict_lmi_rejects(monkeypatch):
         LinearConstraints.empty(1),
         Objective("feasibility", np.zeros(2)),
     )
-    import lmic.certify.check as check
+    import lmic.certify.margins as check
 
     monkeypatch.setattr(check, "_U", -1.0)  # pretend float64 had no round-off at all
     x = np.array([1.0 - 2.0**-52])

@@ -169,15 +169,32 @@ def test_thm2_remark2_is_infeasible_and_published_k_is_least_infeasible(backend)
         assert np.allclose(r.variables["K"], system(THM2)["published"]["K"], atol=2e-3)
 
 
-def test_thm2_infeasible_for_every_alpha_and_the_proof():
-    for alpha in (1e-3, 1.0, 1e3):
-        r = solve("qib.thm2", system(THM2), {"alpha": alpha})
-        # never certified; global only where the exact proof (or homogeneity) makes it so
-        scope = r.certificate.farkas["scope"]
-        want = "infeasible-certified" if scope["scope"] == "global" else "infeasible-bounded"
-        assert r.verdict == want and scope["scope"] in ("global", "bounded")
-        if want == "infeasible-certified":
-            assert r.certificate.exact["proven"] or scope["basis"] == "homogeneous"
+@pytest.mark.parametrize(
+    "alpha",
+    [
+        1e-3,
+        1.0,
+        pytest.param(
+            1e3,
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="known gap (coordinator): at alpha = 1e3 lmic ends with a bounded ray "
+                "(infeasible-bounded), no exact proof, although (26) scaled by 1e-3 is the alpha = 1 problem",
+            ),
+        ),
+    ],
+)
+def test_thm2_is_proven_infeasible_for_every_alpha(alpha):
+    # (26) is homogeneous in (alpha, omega): scaling both scales the LMI, so (26) is infeasible
+    # for every alpha when it is for one (the proof below). In the decision variables (K, omega)
+    # it has constant blocks (alpha is given), so only an exact proof makes the ray global:
+    # the one outcome is infeasible-certified on an exact proof.
+    r = solve("qib.thm2", system(THM2), {"alpha": alpha})
+    assert r.verdict == "infeasible-certified"
+    assert r.outcome.evidence.kind == "exact-proof" and r.certificate.exact["proven"]
+
+
+def test_thm2_infeasibility_proof():
     prob = compile_theorem("qib.thm2", system(THM2))
     # C_Z's second column is 0, A_Z's is [1; 1]: ||A_Z - K C_Z|| >= sqrt(2) for every K
     assert np.allclose(prob.data["C_Z"][:, 1], 0.0)

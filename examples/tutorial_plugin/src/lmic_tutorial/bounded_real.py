@@ -15,7 +15,7 @@ just above it).
 
 from __future__ import annotations
 
-from lmic.template import STAR, I, block, hurwitz, theorem
+from lmic.template import STAR, I, Template, block, hurwitz, theorem
 
 
 @theorem(
@@ -26,7 +26,7 @@ from lmic.template import STAR, I, block, hurwitz, theorem
     objective="minimise gamma (the H-infinity norm of (A, B, C, D))",
     system_class="continuous time, linear, stable",
 )
-def bounded_real(t):
+def bounded_real(t: Template) -> None:
     """Bounded-real lemma (Boyd et al. 1994, sec. 6.3.2); ``gamma`` = H-infinity norm bound."""
     n, m, q = t.dims("n m q")
     A = t.data("A", n, n, doc="state matrix (Hurwitz)")

@@ -16,7 +16,7 @@ or hand-tuned gain) and ``R = L^T P`` is substituted, so the same theorem certif
 
 from __future__ import annotations
 
-from lmic.template import STAR, block, theorem
+from lmic.template import STAR, Template, block, theorem
 
 
 @theorem(
@@ -27,7 +27,7 @@ from lmic.template import STAR, block, theorem
     objective="feasibility; L = P^-1 R^T",
     system_class="discrete time, linear",
 )
-def observer(t):
+def observer(t: Template) -> None:
     """Lyapunov LMI for ``A - L C``; ``L = P^-1 R^T`` (``fixed_L: 1`` audits a given L)."""
     n, p = t.dims("n p")
     A = t.data("A", n, n, doc="state matrix")

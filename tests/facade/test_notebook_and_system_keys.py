@@ -88,7 +88,7 @@ def test_uncertain_dt_cor1_weights_default_to_ones():
     path = "examples/uncertain_dt.cor1.example-plant.yaml"
     from pathlib import Path
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     system = load_system(root / path)
     assert np.array_equal(system.data["Cw"], np.ones((3, 3)))  # the file spells the default out
     without = {"data": {k: v for k, v in system.data.items() if k != "Cw"}, "params": system.params}

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from lmic.crosscheck import crosscheck, status_class
+from lmic.studies.crosscheck import crosscheck, status_class
 from lmic.testing.conformance import CASES
 
 
@@ -60,10 +60,10 @@ def test_progress_callback_and_strict_columns():
 def test_crosscheck_accepts_a_loaded_system_object():
     from pathlib import Path
 
-    from lmic.crosscheck import crosscheck
+    from lmic.studies.crosscheck import crosscheck
     from lmic.system import load_system
 
-    path = Path(__file__).resolve().parents[1] / "examples" / "qib.thm1.flexible-joint.yaml"
+    path = Path(__file__).resolve().parents[2] / "examples" / "qib.thm1.flexible-joint.yaml"
     report = crosscheck("qib.thm1", load_system(path), backends=["clarabel", "cvxopt"])
     assert report.agree
     assert report.target.endswith("qib.thm1.flexible-joint.yaml")

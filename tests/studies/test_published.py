@@ -1,4 +1,4 @@
-"""lmic.published: audits of what the papers print, checked against the catalogues' reference values."""
+"""lmic.studies.published: audits of what the papers print, checked against the catalogues' reference values."""
 
 from __future__ import annotations
 
@@ -13,10 +13,10 @@ from lmic.certify import certify
 from lmic.compile import compile_theorem
 from lmic.errors import DataError
 from lmic.ir.problem import LMI, LinearConstraints, NamedExpr, Objective, Problem, Variable
-from lmic.published import audit_published, fix_variables, recover_variables
 from lmic.solution import Solution
+from lmic.studies.published import audit_published, fix_variables, recover_variables
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EX = ROOT / "examples"
 
 

@@ -11,7 +11,7 @@ from referencing import Registry, Resource
 
 from lmic.schemas import load_schema
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _validator():

@@ -13,7 +13,7 @@ from lmic.errors import BackendUnavailable, LmicError
 from lmic.ir.problem import Problem
 from lmic.testing.conformance import CASES, lyapunov_problem
 
-QIB = Path(__file__).resolve().parents[1] / "examples" / "qib.thm1.flexible-joint.yaml"
+QIB = Path(__file__).resolve().parents[2] / "examples" / "qib.thm1.flexible-joint.yaml"
 
 
 def test_problem_target_certified():
@@ -24,8 +24,16 @@ def test_problem_target_certified():
 
 
 def test_infeasible_exit_code():
-    r = solve(CASES["lyapunov_unstable"].build())
-    assert r.status == "infeasible" and r.exit_code() == 3
+    # the truth, in closed form: A has the eigenvalue 0.5 > 0, so no P > 0 has A'P + PA < 0
+    # (Lyapunov). The LMIs have no constant term (homogeneous), so a verified strict Farkas ray
+    # proves it at every scale: the verdict is infeasible-certified, and its exit code is 3.
+    A = np.array([[0.5, 1.0, 0.0], [0.0, -1.0, 1.0], [0.0, 0.0, -2.0]])
+    assert max(np.linalg.eigvals(A).real) == pytest.approx(0.5)
+    r = solve(lyapunov_problem(A))
+    assert r.status == "infeasible"
+    assert r.verdict == "infeasible-certified"
+    assert r.outcome.evidence.kind == "global-ray"
+    assert r.exit_code() == 3
 
 
 def test_unbounded_is_a_failed_solve():

@@ -1,4 +1,4 @@
-"""lmic.reproduce: the expectations file, a subset run, and the committed docs/reproduction.md."""
+"""lmic.studies.reproduce: the expectations file, a subset run, and the committed docs/reproduction.md."""
 
 from __future__ import annotations
 
@@ -9,9 +9,10 @@ import pytest
 import yaml
 
 from lmic.errors import DataError
-from lmic.reproduce import Row, load_expectations, render_markdown, reproduce, theorem_of
+from lmic.present.reproduction import render_markdown
+from lmic.studies.reproduce import Row, load_expectations, reproduce, theorem_of
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 EX = ROOT / "examples"
 SPEC = load_expectations(EX / "reproduction.yaml")
 FILES = sorted(p.name for p in EX.glob("*.yaml") if p.name != "reproduction.yaml")

@@ -1,0 +1,133 @@
+"""What a Farkas certificate proves about the ORIGINAL problem: global or bounded (:func:`scope`).
+
+The rules (exact proof or homogeneous problem: global; otherwise "no solution with
+``||x||_inf <= R``") are in the docstring of :mod:`lmic.certify.farkas`. Split out of it; it
+re-exports :func:`scope` and :func:`is_homogeneous`.
+
+Examples
+--------
+>>> import scipy.sparse as sp
+>>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+>>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+>>> is_homogeneous(p)
+True
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from lmic.ir.problem import Problem
+
+__all__ = ["scope", "is_homogeneous"]
+
+
+def is_homogeneous(problem: Problem) -> bool:
+    """True when every LMI has ``F0 = 0`` and every linear row ``a0 = 0`` (a conic feasible set).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> is_homogeneous(p)
+    True
+    """
+    for lmi in problem.lmis:
+        col0 = lmi.coeffs.tocsc()[:, 0]
+        if col0.nnz and np.any(col0.toarray()):
+            return False
+    if len(problem.linear):
+        a0 = problem.linear.A.tocsc()[:, 0]
+        if a0.nnz and np.any(a0.toarray()):
+            return False
+    return True
+
+
+def scope(problem: Problem, verification: dict[str, Any] | None, exact: dict[str, Any] | None = None) -> dict[str, Any]:
+    """What a Farkas certificate proves about the original problem: global, bounded or nothing.
+
+    Rules in the module docstring ("Global or bounded").
+
+    Parameters
+    ----------
+    problem : Problem
+        The original problem (never a reduction of it).
+    verification : dict or None
+        :func:`verify_farkas`'s report.
+    exact : dict or None
+        :func:`prove_infeasible`'s report, when an exact proof was tried.
+
+    Returns
+    -------
+    dict
+        ``scope`` (``"global"``, ``"bounded"`` or ``None``), ``radius`` (bounded: no solution with
+        ``||x||_inf <= radius``; ``inf`` for global), ``basis`` (``"exact"``, ``"homogeneous"``,
+        ``"float"``), ``rho`` (homogeneous: relative-margin bound) and ``statement`` (one line).
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.certify.farkas_ray import verify_farkas
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))],
+    ...             [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]])), LMI("-p > 0", 1, sp.csc_matrix([[0., -1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> f = {"lmis": [np.eye(1), np.eye(1)]}
+    >>> scope(p, verify_farkas(p, f))["scope"]
+    'global'
+    >>> q = Problem([Variable("p", "scalar", (1, 1))],
+    ...             [LMI("p >= 0", 1, sp.csc_matrix([[0., 1.]]), strict=False),
+    ...              LMI("-1 - p >= 0", 1, sp.csc_matrix([[-1., -1.0000001]]), strict=False)],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> s = scope(q, verify_farkas(q, {"lmis": [np.eye(1), np.eye(1)]}, repair=False))
+    >>> s["scope"], round(s["radius"])
+    ('bounded', 10000000)
+    """
+    if exact is not None and exact.get("proven"):
+        return {
+            "scope": "global",
+            "radius": math.inf,
+            "basis": "exact",
+            "rho": None,
+            "statement": f"infeasible: exact rational Farkas certificate ({exact.get('kind')})",
+        }
+    v = verification or {}
+    if not v.get("verified"):
+        return {"scope": None, "radius": None, "basis": None, "rho": None, "statement": "no verified certificate"}
+    g0, tau = float(v.get("g0") or 0.0), float(v.get("tau") or 0.0)
+    radius = float(v.get("radius") or 0.0)
+    if v.get("kind") == "strict" and tau > 0 and is_homogeneous(problem):
+        mb = v.get("margin_bound")
+        rho = float(mb) if mb is not None else None
+        return {
+            "scope": "global",
+            "radius": math.inf,
+            "basis": "homogeneous",
+            "rho": rho,
+            "statement": (
+                "infeasible: homogeneous (scale-free) problem; at any scale no point has relative "
+                f"margin above {rho:.3g} (strict Farkas certificate)"
+            ),
+        }
+    if g0 < 0 and radius > 0:
+        return {
+            "scope": "bounded",
+            "radius": radius,
+            "basis": "float",
+            "rho": None,
+            "statement": (
+                f"no solution with ||x||_inf <= {radius:.6g} (float Farkas certificate, residual "
+                f"{float(v.get('rel_residual') or 0.0):.2g}); a larger solution is not excluded"
+            ),
+        }
+    return {
+        "scope": None,
+        "radius": None,
+        "basis": "float",
+        "rho": None,
+        "statement": "the certificate bounds the margin only (separation >= 0): no infeasibility shown",
+    }

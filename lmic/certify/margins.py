@@ -1,0 +1,230 @@
+"""The float rules of the certifier for LMIs and linear rows: margins relative to the term scale.
+
+:func:`lmi_report` evaluates one LMI ``F(x)`` at a point and judges it (strict, non-strict, or
+non-strict after an ``inaccurate`` solver status); :func:`linear_reports` does the same for the
+linear rows. The rules and their thresholds are those of :mod:`lmic.certify.check` (whose
+docstring explains the term scale). Split out of :mod:`lmic.certify.check`, which re-exports
+:func:`lmi_report`.
+
+Examples
+--------
+>>> import numpy as np, scipy.sparse as sp
+>>> from lmic.ir.problem import LMI
+>>> lmi_report(LMI("p > 0", 1, sp.csc_matrix([[0., 1.]])), np.array([-1.0]), Tolerances())["ok"]
+False
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from lmic.certify.result import Tolerances
+from lmic.ir.problem import LMI, Problem
+from lmic.ir.svec import tril_unvec
+
+__all__ = ["lmi_report", "linear_reports", "lmi_reason", "linear_reason", "UNIT_ROUNDOFF"]
+
+#: unit round-off of float64
+UNIT_ROUNDOFF = float(np.finfo(float).eps) / 2.0
+_U = UNIT_ROUNDOFF  # the float error bounds below read it (tests patch it)
+
+
+def _g(v: float) -> str:
+    return f"{v:.3g}"
+
+
+def _spectral_norm_nonneg(M: np.ndarray) -> float:
+    """Spectral norm of a symmetric entrywise non-negative matrix (its Perron root)."""
+    if M.size == 0:
+        return 0.0
+    if M.shape[0] == 1:
+        return float(M[0, 0])
+    return float(max(np.linalg.eigvalsh(M)[-1], 0.0))
+
+
+def lmi_report(lmi: LMI, x: np.ndarray, tol: Tolerances, *, inaccurate: bool = False) -> dict:
+    """Evaluate one LMI at ``x`` and judge it (the rules of the module docstring).
+
+    Parameters
+    ----------
+    lmi : LMI
+    x : numpy.ndarray
+    tol : Tolerances
+    inaccurate : bool
+        The solver reported ``inaccurate``: no tolerance for non-strict LMIs.
+
+    Returns
+    -------
+    dict
+        ``name, dim, strict, min_eig, max_eig, max_abs, scale, min_margin, rel_margin,
+        float_err`` (the float64 error bound of ``lambda_min``), ``threshold, ok`` and ``note``.
+
+    Examples
+    --------
+    >>> import scipy.sparse as sp
+    >>> r = lmi_report(LMI("p > 0", 1, sp.csc_matrix([[0., 1.]])), np.array([3.0]), Tolerances())
+    >>> r["min_eig"], r["rel_margin"], r["ok"]
+    (3.0, 1.0, True)
+    """
+    C = lmi.coeffs.tocsr()
+    xx = np.concatenate([[1.0], np.asarray(x, dtype=float)])
+    d = lmi.dim
+    F = tril_unvec(C @ xx, d)
+    absC = abs(C)
+    T = _spectral_norm_nonneg(tril_unvec(absC @ np.abs(xx), d))
+    coef_scale = _spectral_norm_nonneg(tril_unvec(absC @ np.ones_like(xx), d))
+    k = int(np.max(np.diff(C.indptr))) if C.nnz else 0
+    err_rel = 10.0 * (k + d + 2) * _U
+    out: dict[str, Any] = {"name": lmi.name, "dim": d, "strict": bool(lmi.strict)}
+    if d == 0:  # an empty LMI holds vacuously
+        inf = float("inf")
+        out.update(
+            min_eig=inf,
+            max_eig=-inf,
+            max_abs=0.0,
+            scale=0.0,
+            min_margin=inf,
+            rel_margin=inf,
+            float_err=0.0,
+            threshold=None,
+            ok=True,
+            note="empty LMI",
+        )
+        return _decided_by_float(out)
+    if not np.all(np.isfinite(F)):
+        out.update(
+            min_eig=float("nan"),
+            max_eig=float("nan"),
+            max_abs=float("nan"),
+            scale=T,
+            min_margin=float("nan"),
+            rel_margin=float("nan"),
+            float_err=float("nan"),
+            threshold=None,
+            ok=False,
+            note="F(x) is not finite",
+        )
+        return _decided_by_float(out)
+    eig = np.linalg.eigvalsh(F)
+    lmin, lmax = float(eig[0]), float(eig[-1])
+    rel = lmin / T if T > 0 else float("-inf") if lmin < 0 else 0.0
+    out.update(
+        min_eig=lmin,
+        max_eig=lmax,
+        max_abs=float(max(abs(lmin), abs(lmax))),
+        scale=T,
+        min_margin=lmin,
+        rel_margin=rel,
+        float_err=err_rel * T,
+    )
+    zero = T == 0.0 or (coef_scale > 0 and T <= tol.zero_rel * coef_scale)
+    if lmi.strict:
+        thr = max(tol.strict_rel, err_rel) * T
+        ok = (not zero) and lmin > thr
+        note = "the point is ~0 for this LMI (every term vanishes)" if zero else ""
+    elif inaccurate:
+        thr = -err_rel * T
+        ok = lmin >= thr
+        note = "solver status 'inaccurate': no tolerance granted"
+    else:
+        thr = -tol.rel * T
+        ok = lmin >= thr
+        note = "" if lmin >= 0 else "holds within tolerance"
+    out.update(threshold=thr, ok=bool(ok), note=note)
+    return _decided_by_float(out)
+
+
+def _decided_by_float(entry: dict[str, Any]) -> dict[str, Any]:
+    """Record the float decision (``float_ok``); the exact proof may decide later."""
+    entry.update(float_ok=bool(entry["ok"]), exact=None, decided_by="float")
+    return entry
+
+
+def lmi_reason(r: dict, optimisation: bool = False) -> str:
+    if r["note"].startswith("the point is ~0"):
+        return (
+            f"LMI '{r['name']}' is not certified: the point is ~0 for it "
+            f"(term scale {_g(r['scale'])}), a homogeneous LMI says nothing there"
+        )
+    if not math.isfinite(r["min_eig"]):
+        return f"LMI '{r['name']}' could not be evaluated: F(x) is not finite"
+    if r["strict"] and abs(r["min_eig"]) <= r["float_err"]:
+        return (
+            f"LMI '{r['name']}' not certified: lambda_min = {_g(r['min_eig'])} "
+            f"(relative {_g(r['rel_margin'])}) is zero to float64 accuracy, needs > 0 (strict)"
+        )
+    need = "> 0 (strict)" if r["strict"] else f">= {_g(r['threshold'])}"
+    if r["strict"] and r["min_eig"] > 0:
+        # a positive margin the float evaluation cannot vouch for: not a violation
+        return (
+            f"LMI '{r['name']}' holds with margin {r['min_eig']:.1e} (relative {_g(r['rel_margin'])}), below the "
+            f"certification threshold {_g(r['threshold'])} (relative {_g(r['threshold'] / r['scale'])}): "
+            + _margin_hint(r, optimisation)
+        )
+    return f"LMI '{r['name']}' violated: lambda_min = {_g(r['min_eig'])} (relative {_g(r['rel_margin'])}), needs {need}"
+
+
+def _margin_hint(r: dict, optimisation: bool) -> str:
+    """The likely cause of a positive margin below the threshold, and the option that helps."""
+    if optimisation:
+        return (
+            "the optimum of a strict problem is an infimum on the boundary (unattained infimum or "
+            "degenerate optimum); --backoff gives a certified point inside, within a relative "
+            "objective tolerance; --exact may prove the margin exactly"
+        )
+    if r["rel_margin"] < 1e-9:
+        return (
+            f"scaling: the margin is {_g(r['rel_margin'])} of the matrix scale {_g(r['scale'])}; "
+            "impose a larger one with --margin, prove it with --exact, or try another backend"
+        )
+    return "impose a larger margin with --margin, prove it with --exact, or try another backend"
+
+
+def linear_reports(problem: Problem, x: np.ndarray, tol: Tolerances, inaccurate: bool) -> list:
+    lin = problem.linear
+    if len(lin) == 0:
+        return []
+    A = lin.A.tocsr()
+    xx = np.concatenate([[1.0], x])
+    res = np.asarray(A @ xx).ravel()
+    scale = np.asarray(abs(A) @ np.abs(xx)).ravel()
+    k = np.diff(A.indptr)
+    out = []
+    for i in range(len(lin)):
+        r, s = float(res[i]), float(scale[i])
+        err = 10.0 * (int(k[i]) + 2) * _U * s
+        kind, strict = lin.kinds[i], bool(lin.strict[i])
+        allowed = err if inaccurate else max(tol.rel * s, err)
+        if kind == "eq":
+            ok, thr = abs(r) <= allowed, allowed
+        elif strict:
+            thr = max(tol.strict_rel * s, err)
+            ok = r > thr and s > 0
+        else:
+            thr = -allowed
+            ok = r >= thr
+        out.append(
+            {
+                "name": lin.names[i],
+                "kind": kind,
+                "strict": strict,
+                "residual": r,
+                "scale": s,
+                "rel_residual": (r / s if s > 0 else 0.0),
+                "threshold": thr,
+                "ok": bool(ok and math.isfinite(r)),
+            }
+        )
+        _decided_by_float(out[-1])
+    return out
+
+
+def linear_reason(r: dict) -> str:
+    if r["kind"] == "eq":
+        res, allowed = _g(r["residual"]), _g(r["threshold"])
+        return f"equality '{r['name']}' violated: residual {res} (allowed {allowed})"
+    rel = "> " + _g(r["threshold"]) if r["strict"] else ">= " + _g(r["threshold"])
+    return f"inequality '{r['name']}' violated: value {_g(r['residual'])}, needs {rel}"

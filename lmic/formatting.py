@@ -1,0 +1,215 @@
+r"""Numbers and matrices as text, LaTeX and HTML: the formatting primitives every layer may use.
+
+These are the low-level pieces of :mod:`lmic.present` (which builds the CLI tables, the report and
+the Jupyter displays on them). They sit in the base layer because objects of lower layers render
+themselves with them: a :class:`~lmic.template.theorem.Theorem` (template layer) and an
+:class:`lmic.api.Result` (studies layer) in Jupyter, a reproduction row's value text.
+
+Examples
+--------
+>>> format_value([[1.0, 2.0]]), value_text([[1.0, 0.5], [2.0, 3.0]]), number_text(None)
+('[1 2]', '[1 0.5; 2 3]', '-')
+>>> print(matrix_latex([[1.0, 0.5], [-2.0, 1.5e-7]]))
+\begin{bmatrix}1 & 0.5 \\ -2 & 1.5 \cdot 10^{-7}\end{bmatrix}
+"""
+
+from __future__ import annotations
+
+import html
+import math
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "esc",
+    "number_html",
+    "number_text",
+    "number_latex",
+    "matrix_latex",
+    "format_value",
+    "inline_matrix",
+    "value_text",
+    "result_html",
+    "result_latex",
+    "VERDICT_COLOURS",
+]
+
+#: verdict -> colour of its badge in HTML
+VERDICT_COLOURS = {
+    "certified": "#1a7f37",
+    "infeasible-certified": "#0550ae",
+    "rejected": "#cf222e",
+    "unverified": "#9a6700",
+}
+
+
+def esc(value: Any) -> str:
+    """``str(value)`` escaped for HTML (quotes too).
+
+    >>> esc("<a & 'b'>")
+    '&lt;a &amp; &#x27;b&#x27;&gt;'
+    """
+    return html.escape(str(value), quote=True)
+
+
+def number_html(v: Any) -> str:
+    """A table cell in HTML: ``—`` for none, floats to 6 significant digits, anything else escaped.
+
+    >>> number_html(None), number_html(1 / 3), number_html("a<b")
+    ('—', '0.333333', 'a&lt;b')
+    """
+    if v is None:
+        return "—"
+    if isinstance(v, float | np.floating):
+        return f"{float(v):.6g}"
+    return esc(v)
+
+
+def number_text(v: Any, digits: int = 4) -> str:
+    """A number as plain text: ``-`` for none, ``yes``/``no`` for booleans, ``digits`` significant digits.
+
+    >>> number_text(2 / 3), number_text(True), number_text(float("inf")), number_text("x")
+    ('0.6667', 'yes', 'inf', 'x')
+    """
+    if v is None:
+        return "-"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    if isinstance(v, int | float | np.floating | np.integer):
+        f = float(v)
+        return f"{f:.{digits}g}" if math.isfinite(f) else str(f)
+    return str(v)
+
+
+def number_latex(v: float, digits: int = 4) -> str:
+    """A number for LaTeX: ``digits`` significant digits, powers of ten as ``\\cdot 10^{k}``.
+
+    >>> number_latex(0.0000123456), number_latex(12.0), number_latex(float("nan"))
+    ('1.235 \\\\cdot 10^{-5}', '12', '\\\\text{NaN}')
+    """
+    if not math.isfinite(v):
+        return r"\text{NaN}" if math.isnan(v) else (r"\infty" if v > 0 else r"-\infty")
+    text = f"{v:.{digits}g}"
+    if "e" in text:
+        mant, exp = text.split("e")
+        return f"{mant} \\cdot 10^{{{int(exp)}}}"
+    return text
+
+
+def matrix_latex(value: Any, digits: int = 4) -> str:
+    """A scalar, vector or matrix as LaTeX (a ``bmatrix``; a scalar alone as a number).
+
+    >>> matrix_latex(0.5), matrix_latex([[1.0, 2.0]])
+    ('0.5', '\\\\begin{bmatrix}1 & 2\\\\end{bmatrix}')
+    """
+    arr = np.atleast_2d(np.asarray(value, dtype=float))
+    if arr.size == 1:
+        return number_latex(float(arr.reshape(-1)[0]), digits)
+    rows = [" & ".join(number_latex(float(v), digits) for v in row) for row in arr]
+    return r"\begin{bmatrix}" + r" \\ ".join(rows) + r"\end{bmatrix}"
+
+
+def format_value(value: Any, digits: int = 6) -> str:
+    """A number or a matrix for a terminal table: one line per row (``-`` for none).
+
+    >>> format_value(0.5), format_value([[1.0, 2.0], [3.0, 4.0]])
+    ('0.5', '[1 2]\\n[3 4]')
+    """
+    if value is None:
+        return "-"
+    if isinstance(value, str):
+        return value
+    arr = np.atleast_2d(np.asarray(value, dtype=float))
+    if arr.size == 1:
+        return f"{arr.item():.{digits}g}"
+    rows = ["[" + " ".join(f"{v:.{digits}g}" for v in row) + "]" for row in arr]
+    return "\n".join(rows)
+
+
+def inline_matrix(value: Any, digits: int = 4) -> str:
+    """A matrix on one line, rows separated by ``;``.
+
+    >>> inline_matrix([[1.0, 0.25], [2.0, 3.0]]), inline_matrix([1.0, 2.0])
+    ('[1 0.25; 2 3]', '[1 2]')
+    """
+    arr = np.atleast_2d(np.asarray(value, dtype=float))
+    return "[" + "; ".join(" ".join(f"{float(e):.{digits}g}" for e in row) for row in arr) + "]"
+
+
+def value_text(value: Any, digits: int = 4, scalar_digits: int | None = None) -> str:
+    """A short text for a value: a number (``scalar_digits``, default ``digits``), a matrix on one line, or ``str``.
+
+    >>> value_text(None), value_text(True), value_text(1 / 3), value_text(1 / 3, scalar_digits=6)
+    ('-', 'True', '0.3333', '0.333333')
+    >>> value_text([[1.0, 0.5]]), value_text("n/a")
+    ('[1 0.5]', 'n/a')
+    """
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return str(value)
+    if isinstance(value, int | float | np.floating | np.integer):
+        return f"{float(value):.{scalar_digits or digits}g}"
+    if isinstance(value, list | tuple | np.ndarray):
+        return inline_matrix(value, digits)
+    return str(value)
+
+
+# -- a result's own rendering (Jupyter reprs of lmic.api.Result) --------------------------------
+def result_html(result: Any) -> str:
+    """HTML of a solve result: verdict (coloured), status, objective, margins per LMI, checks, gains.
+
+    ``result`` is any object with ``certificate_dict()``, ``derived``, ``target``, ``backend``,
+    ``status`` and ``objective`` (an :class:`lmic.api.Result`).
+
+    >>> from types import SimpleNamespace as NS
+    >>> r = NS(certificate_dict=lambda: {"verdict": "certified"}, derived={"L": [[1.0]]},
+    ...        target="t", backend="b", status="optimal", objective=None)
+    >>> "certified" in result_html(r) and "L = $$1$$" in result_html(r)
+    True
+    """
+    cert = result.certificate_dict()
+    verdict = cert.get("label") or cert.get("verdict", "unverified")
+    colour = VERDICT_COLOURS.get(cert.get("verdict", "unverified"), "#57606a")
+    lmi_rows = "".join(
+        f"<tr><td>{esc(m.get('name'))}</td><td>{number_html(m.get('min_margin'))}</td>"
+        f"<td>{number_html(m.get('rel_margin'))}</td><td>{'✓' if m.get('ok') else '✗'}</td></tr>"
+        for m in cert.get("lmis", [])
+    )
+    check_rows = "".join(
+        f"<tr><td>{esc(c.get('name'))}</td><td>{number_html(c.get('value'))}</td>"
+        f"<td>{'✓' if c.get('ok') else '✗'}</td></tr>"
+        for c in cert.get("checks", [])
+    )
+    gains = "".join(
+        f"<li>{esc(k)} = $${matrix_latex(v)}$$</li>"
+        for k, v in (result.derived or {}).items()
+        if v is not None and not isinstance(v, str)
+    )
+    objective = "" if result.objective is None else f", objective {number_html(result.objective)}"
+    return (
+        f"<div class='lmic-result'><p><b>{esc(result.target)}</b> on {esc(result.backend)}: "
+        f"status {esc(result.status)}{objective} — "
+        f"<span style='color:{colour};font-weight:bold'>{esc(verdict)}</span></p>"
+        f"<table><tr><th>LMI</th><th>min margin</th><th>relative</th><th>ok</th></tr>{lmi_rows}</table>"
+        + (f"<table><tr><th>check</th><th>value</th><th>ok</th></tr>{check_rows}</table>" if check_rows else "")
+        + (f"<ul>{gains}</ul>" if gains else "")
+        + "</div>"
+    )
+
+
+def result_latex(result: Any) -> str:
+    r"""LaTeX of a solve result: the verdict and every derived quantity.
+
+    >>> from types import SimpleNamespace as NS
+    >>> r = NS(certificate_dict=lambda: {"verdict": "certified"}, derived={"L": 2.0}, target="t", status="optimal")
+    >>> result_latex(r)
+    '$\\text{t: optimal, certified},\\quad L = 2$'
+    """
+    cert = result.certificate_dict()
+    parts = [rf"\text{{{result.target}: {result.status}, {cert.get('verdict', 'unverified')}}}"]
+    for k, v in (result.derived or {}).items():
+        if v is not None and not isinstance(v, str):
+            parts.append(f"{k} = {matrix_latex(v)}")
+    return "$" + r",\quad ".join(parts) + "$"

@@ -1,0 +1,285 @@
+"""Cross-check one problem on several backends: each backend's decision, and do they conflict?
+
+The problem is compiled (or loaded) once; each backend, alone, runs the one solve policy
+(:func:`lmic.policy.decide` with that backend: its strategies and exact rescue, no other
+backend) and gets an outcome verdict (:mod:`lmic.outcome`). One row per backend.
+
+* A *decision* is ``certified``, ``infeasible-certified`` or ``infeasible-bounded``.
+* ``rejected`` and ``undecided`` rows (and backends that cannot run) are *failures*: listed and
+  counted, never a disagreement.
+* Two decisions *conflict* when one certifies a point and another proves the problem infeasible
+  (globally, or within a radius the certified point lies in), or when two certified optima
+  differ by more than ``rtol`` (relative).
+* ``agree``: at least one decision and no conflict. Exit code 0 then, 1 on a conflict or when
+  no backend decided.
+
+Examples
+--------
+>>> from lmic.testing.conformance import CASES
+>>> report = crosscheck(CASES["max_sense"].build(), backends=["clarabel", "cvxopt"])
+>>> report.agree, [r["decision"] for r in report.results], report.failures
+(True, ['certified', 'certified'], 0)
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from lmic.api import Result, load_target, solve
+from lmic.backends.base import SolveOptions
+from lmic.errors import LmicError
+from lmic.ir.problem import Problem
+
+__all__ = [
+    "CrosscheckReport",
+    "crosscheck",
+    "backend_row",
+    "error_row",
+    "assemble",
+    "target_label",
+    "status_class",
+    "conflicts",
+    "DEFAULT_RTOL",
+    "DECISIONS",
+    "Progress",
+]
+
+#: verdicts that are decisions (the others are failures)
+DECISIONS = ("certified", "infeasible-certified", "infeasible-bounded")
+
+#: ``progress(done, total, backend, row)``: called before each backend (``row`` is ``None``) and
+#: after it (``row`` is its result row)
+Progress = Callable[[int, int, str, "dict[str, Any] | None"], None]
+
+#: default tolerance on the relative objective gap (first-order solvers meet ~1e-3 here)
+DEFAULT_RTOL = 1e-3
+
+
+def status_class(status: str) -> str:
+    """``optimal`` and ``feasible`` are one class; every other status is its own.
+
+    >>> status_class("feasible"), status_class("infeasible")
+    ('solved', 'infeasible')
+    """
+    return "solved" if status in ("optimal", "feasible") else status
+
+
+@dataclass
+class CrosscheckReport:
+    """Per-backend rows, whether the decisions agree, conflicts, failures, largest objective gap."""
+
+    target: str
+    results: list[dict[str, Any]]
+    agree: bool
+    max_rel_objective_gap: float | None
+    rtol: float = DEFAULT_RTOL
+    runs: list[Result] = field(default_factory=list, repr=False)
+    conflicts: list[str] = field(default_factory=list)
+
+    @property
+    def decisions(self) -> int:
+        """Rows with a decision (:data:`DECISIONS`)."""
+        return sum(1 for r in self.results if r["decision"] in DECISIONS)
+
+    @property
+    def failures(self) -> int:
+        """Rows without a decision (rejected, undecided, could not run)."""
+        return len(self.results) - self.decisions
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``lmic crosscheck --json`` object."""
+        return {
+            "target": self.target,
+            "results": self.results,
+            "agree": self.agree,
+            "decisions": self.decisions,
+            "failures": self.failures,
+            "conflicts": self.conflicts,
+            "max_rel_objective_gap": self.max_rel_objective_gap,
+            "rtol": self.rtol,
+            "exit_code": self.exit_code(),
+        }
+
+    def exit_code(self) -> int:
+        """0: at least one decision and no conflict; 1: a conflict, or no backend decided."""
+        return 0 if self.agree else 1
+
+
+def conflicts(rows: list[dict[str, Any]], sense: str, rtol: float) -> tuple[list[str], float | None]:
+    """The conflicts between the rows' decisions, and the largest relative gap of certified optima.
+
+    >>> rows = [{"backend": "a", "decision": "certified", "objective": 1.0, "x_norm": 1.0},
+    ...         {"backend": "b", "decision": "infeasible-bounded", "radius": 10.0, "objective": None}]
+    >>> print(conflicts(rows, "feasibility", 1e-3)[0][0])
+    a certifies a point with ||x||_inf = 1 but b proves no solution with ||x||_inf <= 10
+    """
+    found: list[str] = []
+    points = [r for r in rows if r["decision"] == "certified"]
+    for r in points:
+        for q in rows:
+            if q["decision"] == "infeasible-certified":
+                found.append(f"{r['backend']} certifies a point but {q['backend']} proves the problem infeasible")
+            elif q["decision"] == "infeasible-bounded" and r.get("x_norm") is not None:
+                if q.get("radius") is not None and r["x_norm"] <= q["radius"]:
+                    found.append(
+                        f"{r['backend']} certifies a point with ||x||_inf = {r['x_norm']:.3g} but "
+                        f"{q['backend']} proves no solution with ||x||_inf <= {q['radius']:.3g}"
+                    )
+    gap = None
+    optima = [r["objective"] for r in points if r.get("objective") is not None]
+    if sense != "feasibility" and len(optima) >= 2:
+        lo, hi = min(optima), max(optima)
+        gap = (hi - lo) / max(1.0, max(abs(lo), abs(hi)))
+        if gap > rtol:
+            found.append(f"certified optima differ by {gap:.3g} (relative) > rtol {rtol:g}")
+    return found, gap
+
+
+def crosscheck(
+    target: str | os.PathLike[str] | Problem,
+    system: Any = None,
+    params: dict[str, Any] | None = None,
+    backends: list[str] | None = None,
+    options: SolveOptions | None = None,
+    rtol: float = DEFAULT_RTOL,
+    progress: Progress | None = None,
+) -> CrosscheckReport:
+    """Solve ``target`` on every backend in ``backends`` (default: every available one).
+
+    Each backend's failure (unavailable, cannot take the problem) is a row with decision
+    ``undecided`` and the reason, not an exception, so one missing solver does not hide the
+    others. Every row has ``backend, decision`` (its outcome verdict), ``status``,
+    ``objective`` (certified rows), ``radius`` (bounded rows), ``x_norm``, ``min_margin`` (the
+    certifier's smallest LMI margin), ``strategy`` and ``margin`` (how strict LMIs were
+    reduced), ``solve_s``, ``attempts`` and ``message``. ``progress`` (see :data:`Progress`) is
+    told about each backend before and after it runs (``lmic crosscheck`` draws a progress bar
+    with it).
+
+    Examples
+    --------
+    >>> from lmic.testing.conformance import CASES
+    >>> seen = []
+    >>> r = crosscheck(CASES["lyapunov_stable"].build(), backends=["clarabel", "scs"],
+    ...                progress=lambda done, total, name, row: seen.append((done, name, row is None)))
+    >>> seen
+    [(0, 'clarabel', True), (1, 'clarabel', False), (1, 'scs', True), (2, 'scs', False)]
+    >>> [(row["strategy"], row["decision"]) for row in r.results]
+    [('max-margin', 'certified'), ('fixed-margin', 'certified')]
+    """
+    from lmic.backends.registry import available_backend_names
+
+    problem, _theorem, _ = load_target(target, system, params)
+    names = backends or available_backend_names()
+    if not names:
+        raise LmicError("no backend to cross-check with")
+    rows: list[dict[str, Any]] = []
+    runs: list[Result] = []
+    for k, name in enumerate(names):
+        if progress is not None:
+            progress(k, len(names), name, None)
+        row, res = backend_row(problem, name, options)
+        if res is not None:
+            runs.append(res)
+        rows.append(row)
+        if progress is not None:
+            progress(k + 1, len(names), name, row)
+    return assemble(target_label(target, system), rows, problem.objective.sense, rtol, runs)
+
+
+def error_row(name: str, message: str, status: str = "error") -> dict[str, Any]:
+    """The row of a backend that could not run (decision ``undecided``, the reason as message).
+
+    >>> r = error_row("mosek", "not installed")
+    >>> r["decision"], r["status"], r["message"]
+    ('undecided', 'error', 'not installed')
+    """
+    return {
+        "backend": name,
+        "decision": "undecided",
+        "status": status,
+        "objective": None,
+        "verdict": "undecided",
+        "radius": None,
+        "x_norm": None,
+        "min_margin": None,
+        "strategy": None,
+        "margin": None,
+        "solve_s": 0.0,
+        "attempts": [],
+        "message": " ".join(str(message).split()),
+    }
+
+
+def backend_row(
+    problem: Problem, name: str, options: SolveOptions | None = None
+) -> tuple[dict[str, Any], Result | None]:
+    """Decide ``problem`` with backend ``name`` alone: its crosscheck row, and the result if it ran.
+
+    This is one job of a cross-check (:func:`crosscheck` runs it for each backend in turn;
+    ``lmic crosscheck --executor`` runs it in a worker, :func:`lmic.studies.parallel.crosscheck_parallel`).
+
+    Examples
+    --------
+    >>> from lmic.testing.conformance import CASES
+    >>> row, res = backend_row(CASES["lyapunov_stable"].build(), "clarabel")
+    >>> row["backend"], row["decision"], res.verdict
+    ('clarabel', 'certified', 'certified')
+    """
+    try:
+        res = solve(problem, backend=name, options=options)
+    except LmicError as err:
+        return error_row(name, str(err)), None
+    x = res.solution.x
+    decision = res.verdict
+    row = {
+        "backend": res.backend,
+        "decision": decision,
+        "status": res.status,
+        "objective": res.objective if decision == "certified" else None,
+        "verdict": decision,
+        "radius": res.outcome.evidence.radius if decision == "infeasible-bounded" else None,
+        "x_norm": float(np.max(np.abs(x))) if decision == "certified" and x is not None and len(x) else None,
+        "min_margin": res.min_margin,
+        "strategy": res.solution.strategy,
+        "margin": res.solution.margin,
+        "solve_s": res.timings["solve_s"],
+        "attempts": res.attempts,
+        "message": res.solution.message if decision not in DECISIONS else "",
+    }
+    if decision not in DECISIONS:
+        row["message"] = res.outcome.reason or res.solution.message
+    return row, res
+
+
+def target_label(target: Any, system: Any = None) -> str:
+    """How a report names what was cross-checked (target, then the system file if any).
+
+    >>> target_label("qib.thm1", "plant.yaml")
+    'qib.thm1 plant.yaml'
+    """
+    label = target if isinstance(target, str) else ("<problem>" if isinstance(target, Problem) else os.fspath(target))
+    if system is not None:
+        if isinstance(system, str | os.PathLike):
+            label = f"{label} {os.fspath(system)}"
+        else:  # a dict, a System or a plant object
+            label = f"{label} {getattr(system, 'path', None) or '<system>'}"
+    return str(label)
+
+
+def assemble(
+    label: str, rows: list[dict[str, Any]], sense: str, rtol: float = DEFAULT_RTOL, runs: list[Result] | None = None
+) -> CrosscheckReport:
+    """The report of a cross-check from its rows (in backend order): conflicts, agreement, gap.
+
+    >>> rows = [{"backend": "a", "decision": "certified", "objective": 1.0, "x_norm": 1.0}]
+    >>> assemble("p", rows, "feasibility").agree
+    True
+    """
+    found, gap = conflicts(rows, sense, rtol)
+    agree = not found and any(r["decision"] in DECISIONS for r in rows)
+    return CrosscheckReport(label, rows, agree, gap, rtol, list(runs or []), found)
