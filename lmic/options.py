@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from lmic.errors import LmicError
+from lmic.solution import Solution
 
 __all__ = ["SolveOptions"]
 
@@ -50,6 +51,13 @@ class SolveOptions:
         the mean eigenvalue under the trace normalisation (default ``1e-4``).
     extra : dict
         Solver-specific settings passed through unchanged.
+    warm_start : Solution or None
+        A previous :class:`~lmic.solution.Solution` of a problem with the same shape (e.g. the
+        neighbouring point of a sweep, the same plan re-bound): its native iterates are the
+        solver's initial guess. Backends that can (SCS: ``x``, ``y``, ``s``; CVXOPT: primal
+        and dual starting points) use it when the shapes match and ignore it otherwise, as do
+        backends that cannot warm-start. It changes where the solver starts, never what is
+        certified.
 
     Every field is checked when it is set (at construction and on assignment): a tolerance in
     ``(0, 1)``, a positive finite time limit and margin, a positive integer ``max_iter``;
@@ -76,6 +84,7 @@ class SolveOptions:
     strict: str = "auto"
     relative_margin: float = 1e-4
     extra: dict[str, Any] = field(default_factory=dict)
+    warm_start: Solution | None = None
 
     def __setattr__(self, name: str, value: Any) -> None:
         # every assignment is checked, at construction and later (the CLI sets fields one by one)
@@ -139,7 +148,14 @@ def _check_relative_margin(value: Any) -> float:
     return value
 
 
+def _check_warm_start(value: Any) -> Solution | None:
+    if value is not None and not isinstance(value, Solution):
+        raise LmicError(f"warm_start must be a Solution or None, got {type(value).__name__}")
+    return value
+
+
 _OPTION_CHECKS: dict[str, Callable[[Any], Any]] = {
+    "warm_start": _check_warm_start,
     "tol": _check_tol,
     "time_limit": _check_time_limit,
     "max_iter": _check_max_iter,

@@ -2,7 +2,7 @@
 
 Every entry point uses :func:`decide`: ``lmic solve`` and :func:`lmic.api.solve`, each
 ``lmic crosscheck`` column (with one backend), ``--maximize`` / ``--sweep``
-(:func:`lmic.sweep.decide`), ``audit-published``, ``reproduce`` and ``report``.
+(:func:`lmic.studies.sweep.decide`), ``audit-published``, ``reproduce`` and ``report``.
 
 What it does
 ------------

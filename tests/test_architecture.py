@@ -77,10 +77,7 @@ KNOWN_CYCLES: dict[frozenset[str], str] = {}
 
 KNOWN_UPWARD: dict[tuple[str, str], str] = {}
 
-KNOWN_OVERSIZE: dict[str, str] = {
-    # issue #10: split by job (result types, bisection, grids)
-    "lmic.sweep": "issue #10",
-}
+KNOWN_OVERSIZE: dict[str, str] = {}
 
 
 # -- the checker ---------------------------------------------------------------------------------

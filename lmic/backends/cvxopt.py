@@ -27,6 +27,7 @@ from lmic.backends.lowering import LMIForm
 from lmic.backends.results import NativeResult
 from lmic.ir.problem import Problem
 from lmic.options import SolveOptions
+from lmic.solution import Solution
 
 __all__ = ["CVXOPTBackend", "to_cvxopt_sparse"]
 
@@ -56,6 +57,68 @@ def _lower_sym(M) -> np.ndarray:
     return L + np.tril(M, -1).T
 
 
+# -- warm start (SolveOptions.warm_start) ------------------------------------------------------
+#: how far the previous iterates are pushed into the interior of their cones, relative to
+#: their size (CVXOPT requires strictly interior starting points)
+_WARM_SHIFT = 1e-3
+
+
+def _iterates(result: dict) -> dict[str, Any]:
+    """The primal and dual iterates of a ``solvers.sdp`` result as numpy arrays (or ``{}``)."""
+    keys = ("x", "sl", "y", "zl")
+    try:
+        out: dict[str, Any] = {k: np.array(result[k], dtype=float).ravel() for k in keys if result.get(k) is not None}
+        out["ss"] = [np.array(S, dtype=float) for S in result.get("ss") or []]
+        out["zs"] = [np.array(Z, dtype=float) for Z in result.get("zs") or []]
+    except (TypeError, ValueError):
+        return {}
+    return out
+
+
+def _interior(M: np.ndarray) -> np.ndarray:
+    """A symmetric block moved strictly inside the PSD cone (relative shift :data:`_WARM_SHIFT`)."""
+    S = _lower_sym(M)
+    w = np.linalg.eigvalsh(S)
+    scale = max(float(np.max(np.abs(w), initial=0.0)), 1.0)
+    return S + (max(0.0, -float(w[0])) + _WARM_SHIFT * scale) * np.eye(len(S))
+
+
+def _warm_start(prev: Solution | None, n: int, n_ge: int, n_eq: int, dims: list[int]) -> dict[str, Any]:
+    """``primalstart`` / ``dualstart`` of ``solvers.sdp`` from ``prev`` (``SolveOptions.warm_start``:
+    a previous CVXOPT solution of a problem with the same shape), moved strictly inside the
+    cones; ``{}`` (cold start) when there is none or the shapes differ.
+
+    >>> _warm_start(None, 1, 0, 0, [2])
+    {}
+    """
+    import cvxopt
+
+    it = None if prev is None else prev.info.get("cvxopt_iterates")
+    if not isinstance(it, dict) or not it:
+        return {}
+    shapes_ok = (
+        np.shape(it.get("x", ())) == (n,)
+        and [np.shape(S) for S in it.get("ss", [])] == [(d, d) for d in dims]
+        and [np.shape(Z) for Z in it.get("zs", [])] == [(d, d) for d in dims]
+        and (n_ge == 0 or (np.shape(it.get("sl", ())) == (n_ge,) and np.shape(it.get("zl", ())) == (n_ge,)))
+        and (n_eq == 0 or np.shape(it.get("y", ())) == (n_eq,))
+    )
+    if not shapes_ok:
+        return {}
+    with np.errstate(all="ignore"):
+        ss, zs = [_interior(S) for S in it["ss"]], [_interior(Z) for Z in it["zs"]]
+    if not all(np.all(np.isfinite(M)) for M in ss + zs) or not np.all(np.isfinite(it["x"])):
+        return {}
+    primal: dict[str, Any] = {"x": cvxopt.matrix(it["x"]), "ss": [cvxopt.matrix(S) for S in ss]}
+    dual: dict[str, Any] = {"zs": [cvxopt.matrix(Z) for Z in zs]}
+    if n_ge:
+        lift = lambda v: np.maximum(v, 0.0) + _WARM_SHIFT * max(1.0, float(np.max(np.abs(v))))  # noqa: E731
+        primal["sl"], dual["zl"] = cvxopt.matrix(lift(it["sl"])), cvxopt.matrix(lift(it["zl"]))
+    if n_eq:
+        dual["y"] = cvxopt.matrix(it["y"])
+    return {"primalstart": primal, "dualstart": dual}
+
+
 class CVXOPTBackend(Backend):
     """CVXOPT's primal-dual interior-point SDP solver (``solvers.sdp``), LMI form."""
 
@@ -83,6 +146,8 @@ class CVXOPTBackend(Backend):
         if options.max_iter is not None:
             opts["maxiters"] = int(options.max_iter)
         opts.update(options.extra)
+        if options.warm_start is not None:  # taken out again by call(): not a solvers.sdp option
+            opts["_warm_start"] = options.warm_start
         return opts
 
     def call(self, problem: Problem, settings: dict[str, Any]) -> NativeResult:
@@ -105,12 +170,24 @@ class CVXOPTBackend(Backend):
         # 'unknown' where 'qr' solves (KKT_ORDER): 'chol' first, 'qr' when 'chol' fails (unless
         # extra={"kktsolver": ...} chooses one)
         opts = dict(settings)
+        warm_from = opts.pop("_warm_start", None)  # SolveOptions.warm_start, see settings()
         chosen = opts.pop("kktsolver", None)
         c = cvxopt.matrix(data.c)
+        warm = _warm_start(warm_from, len(data.c), len(data.ge), len(data.eq), [lmi.dim for lmi in problem.lmis])
+
+        def run(kkt: str) -> Any:
+            nonlocal warm
+            if warm:
+                try:
+                    return solvers.sdp(c, kktsolver=kkt, options=dict(opts), **kwargs, **warm)
+                except (ValueError, ArithmeticError):  # a starting point CVXOPT refuses: solve cold
+                    warm = {}
+            return solvers.sdp(c, kktsolver=kkt, options=dict(opts), **kwargs)
+
         t0 = time.perf_counter()
         result, _ = in_turn(
             [chosen] if chosen else KKT_ORDER,
-            lambda kkt: solvers.sdp(c, kktsolver=kkt, options=dict(opts), **kwargs),
+            run,
             lambda r: str(r["status"]) == "unknown",
         )
         solve_s = time.perf_counter() - t0
@@ -131,4 +208,6 @@ class CVXOPTBackend(Backend):
             solve_s=solve_s,
             iterations=result.get("iterations"),
             message=message,
+            # the native iterates, for the next solve of a problem of the same shape (warm start)
+            info={"warm_started": bool(warm), "cvxopt_iterates": _iterates(result)},
         )

@@ -30,6 +30,7 @@ from lmic.backends.results import NativeResult
 from lmic.ir.problem import Problem
 from lmic.ir.svec import svec_scale, tril_size
 from lmic.options import SolveOptions
+from lmic.solution import Solution
 
 __all__ = ["SCSBackend", "scs_vec", "scs_unvec"]
 
@@ -73,6 +74,24 @@ def scs_unvec(v: np.ndarray, d: int) -> np.ndarray:
 
 #: SCS's s-form lowering (apply: ConicData; invert: IR multipliers)
 FORM = SForm(scs_vec)
+
+
+def _warm_start(prev: Solution | None, shape: tuple[int, int]) -> dict[str, np.ndarray]:
+    """SCS's ``x``, ``y``, ``s`` initial guesses from ``prev`` (``SolveOptions.warm_start``: a
+    previous SCS solution of a problem with the same lowered shape ``(m, n)``), else ``{}``.
+
+    >>> _warm_start(None, (2, 1))
+    {}
+    """
+    iterates = None if prev is None else prev.info.get("scs_iterates")
+    if not isinstance(iterates, dict):
+        return {}
+    m, n = shape
+    want = {"x": n, "y": m, "s": m}
+    out = {k: np.asarray(iterates.get(k), dtype=float) for k in want}
+    if any(v.shape != (want[k],) or not np.all(np.isfinite(v)) for k, v in out.items()):
+        return {}
+    return out
 
 
 class SCSBackend(Backend):
@@ -119,11 +138,16 @@ class SCSBackend(Backend):
         if options.time_limit is not None:
             s["time_limit_secs"] = float(options.time_limit)
         s.update(options.extra)
+        if options.warm_start is not None:  # taken out again by call(): not an scs.SCS keyword
+            s["_warm_start"] = options.warm_start
         return s
 
     def call(self, problem: Problem, settings: dict[str, Any]) -> NativeResult:
-        """Lower to ``A x + s = b``, run ``scs.SCS``, invert ``y`` (the dual or the ray)."""
+        """Lower to ``A x + s = b``, run ``scs.SCS`` (warm-started from ``SolveOptions.warm_start``
+        when its iterates fit), invert ``y`` (the dual or the ray)."""
         import scs
+
+        settings = dict(settings)
 
         data = FORM.apply(problem)
         cone: dict[str, Any] = {}
@@ -134,7 +158,10 @@ class SCSBackend(Backend):
         if data.psd:
             cone["s"] = list(data.psd)
         t0 = time.perf_counter()
-        result = scs.SCS({"A": data.A, "b": data.b, "c": data.c}, cone, **settings).solve()
+        warm_from = settings.pop("_warm_start", None)  # SolveOptions.warm_start (sweeps), see settings()
+        solver = scs.SCS({"A": data.A, "b": data.b, "c": data.c}, cone, **settings)
+        warm = _warm_start(warm_from, data.A.shape)
+        result = solver.solve(warm_start=True, **warm) if warm else solver.solve()
         solve_s = time.perf_counter() - t0
         info = result["info"]
         shown = str(info.get("status", ""))
@@ -147,6 +174,11 @@ class SCSBackend(Backend):
             duals=FORM.invert(data, np.asarray(result["y"], dtype=float), len(problem.linear)),
             solve_s=solve_s,
             iterations=int(info.get("iter", 0)),
-            info={"solver_time_s": float(info.get("solve_time", 0.0)) / 1e3},
+            info={
+                "solver_time_s": float(info.get("solve_time", 0.0)) / 1e3,
+                "warm_started": bool(warm),
+                # the native iterates, for the next solve of a problem of the same shape
+                "scs_iterates": {k: np.asarray(result[k], dtype=float) for k in ("x", "y", "s")},
+            },
             shown=shown or native,
         )

@@ -1,4 +1,4 @@
-"""``lmic solve --maximize`` / ``--sweep``: options, progress bar and printing (:mod:`lmic.sweep` computes).
+"""``lmic solve --maximize`` / ``--sweep``: options, progress bar and printing (:mod:`lmic.studies.sweep` computes).
 
 Examples
 --------
@@ -17,8 +17,8 @@ from typing import TYPE_CHECKING, Any
 
 from lmic.errors import LmicError
 
-if TYPE_CHECKING:  # lmic.sweep (numpy, solvers) is imported by run_cli: the parser stays light
-    from lmic.sweep import PointResult, SupResult, SweepResult
+if TYPE_CHECKING:  # lmic.studies.sweep (numpy, solvers) is imported by run_cli: the parser stays light
+    from lmic.studies.sweep import PointResult, SupResult, SweepResult
 
 __all__ = ["add_cli_options", "run_cli"]
 
@@ -47,6 +47,13 @@ def add_cli_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--xtol", type=float, default=1e-6, help="absolute tolerance on PARAM (default 1e-6)")
     g.add_argument("--rtol", type=float, default=1e-5, help="relative tolerance on PARAM (default 1e-5)")
     g.add_argument("--max-evals", type=int, default=100, help="at most this many points (default 100)")
+    g.add_argument(
+        "--method",
+        choices=("auto", "enclosure", "bisection"),
+        default="auto",
+        help="auto (default): where PARAM enters the LMIs affinely, one convex solve and the enclosure of its "
+        "optimum; else bisection",
+    )
     g.add_argument(
         "--sweep",
         metavar="PARAM=a:b:n",
@@ -110,7 +117,7 @@ class _Bar:
 def run_cli(args: argparse.Namespace) -> int:
     """Run ``lmic solve THEOREM SYSTEM --maximize P`` or ``--sweep P=a:b:n``; return the exit code."""
     from lmic.commands._common import parse_params, print_json, solve_options
-    from lmic.sweep import maximize, minimize, parse_grid, sweep, write_end_certificate
+    from lmic.studies.sweep import maximize, minimize, parse_grid, sweep, write_end_certificate
 
     if sum(bool(a) for a in (args.maximize, args.minimize, args.sweep)) > 1:
         raise LmicError("give one of --maximize, --minimize, --sweep")
@@ -141,6 +148,7 @@ def run_cli(args: argparse.Namespace) -> int:
                 max_evals=args.max_evals,
                 progress=bar,
                 backoff=getattr(args, "backoff", None),
+                method=getattr(args, "method", "auto"),
             )
         written = None
         if getattr(args, "output", None):
@@ -183,14 +191,21 @@ def _print_sup(r: SupResult, written: str | None = None) -> None:
         out.width = 160
     is_max = r.sense == "max"
     op = "sup" if is_max else "inf"
-    out.print(f"theorem    {r.theorem}   {op} {r.param} (bisection on certified feasibility, backend {r.backend})")
+    how_found = (
+        "one convex solve, enclosure of its optimum"
+        if r.method == "enclosure"
+        else "bisection on certified feasibility"
+    )
+    out.print(f"theorem    {r.theorem}   {op} {r.param} ({how_found}, backend {r.backend})")
+    if r.method_note and r.method != "enclosure" and r.method_note != "bisection asked for":
+        out.print(f"  method   bisection ({r.method_note})")
     tol = f"xtol {r.xtol:g}, rtol {r.rtol:g}"
     c, o = r.certified, r.other
     if c is None:
         out.print(f"[red]no certified value of {r.param}[/]: {r.message}")
     else:
         lo_hi = (c, o) if is_max else (o, c)
-        if r.upper_kind == "infeasible-certified":
+        if r.upper_kind in ("infeasible-certified", "dual-bound"):
             out.print(f"[bold]{op} {r.param} in [{_fmt(lo_hi[0], 10)}, {_fmt(lo_hi[1], 10)}][/]   ({tol})")
         elif r.upper_proven is not None:
             ends = (c, r.upper_proven) if is_max else (r.upper_proven, c)
@@ -211,8 +226,10 @@ def _print_sup(r: SupResult, written: str | None = None) -> None:
                 "infeasible-bounded": "infeasible-bounded (no solution with ||x||_inf <= R only): "
                 f"not an {other_side} bound",
                 "infeasible-certified": "infeasible-certified (global proof)",
+                "dual-bound": "proven dual bound (dual point proved feasible: no value beyond it)",
             }.get(r.upper_kind, r.upper_kind)
-            out.print(f"  bisection {other_side} {_fmt(o, 10)}  {kind}")
+            label = "dual" if r.method == "enclosure" else "bisection"
+            out.print(f"  {label} {other_side} {_fmt(o, 10)}  {kind}")
         if r.upper_proven is not None and r.upper_proven != o:
             out.print(f"  proven infeasible (global) from {_fmt(r.upper_proven, 10)}")
         _print_end(out, r)
@@ -224,8 +241,9 @@ def _print_sup(r: SupResult, written: str | None = None) -> None:
     if r.message:
         out.print(f"  note     {r.message}")
     binds = [p.bind_s for p in r.points]
+    steps = "one convex solve" if r.method == "enclosure" else f"{r.iterations} bisection steps"
     out.print(
-        f"  {r.iterations} bisection steps, {len(r.points)} points, {r.total_s:.2f} s "
+        f"  {steps}, {len(r.points)} points, {r.total_s:.2f} s "
         f"(analysis once {r.plan_s * 1e3:.0f} ms, re-bind {1e3 * sum(binds) / max(len(binds), 1):.1f} ms a point, "
         f"solve {sum(p.solve_s for p in r.points):.2f} s, certify {sum(p.certify_s for p in r.points):.2f} s)"
     )

@@ -2,7 +2,7 @@
 
 :func:`run_job` takes the JSON form of a :class:`~lmic.studies.spec.Job` and returns a JSON-able
 record. It calls :func:`lmic.api.solve`, :func:`lmic.crosscheck.crosscheck`,
-:func:`lmic.sweep.maximize`, :func:`lmic.published.audit_published` or
+:func:`lmic.studies.sweep.maximize`, :func:`lmic.published.audit_published` or
 :func:`lmic.certify.audit_certificate`; those cache a theorem's analysed plan per process
 (:func:`lmic.compile.plan_for`), so a worker analyses each theorem once and re-binds the
 numbers of every later job. :func:`outcome` is the one place where results become the verdict
@@ -154,7 +154,7 @@ def _crosscheck(job: dict[str, Any], sysobj: Any, opts: Any) -> dict[str, Any]:
 
 
 def _maximize(job: dict[str, Any], sysobj: Any, opts: Any) -> dict[str, Any]:
-    from lmic.sweep import maximize
+    from lmic.studies.sweep import maximize
 
     m = dict(job["maximize"])
     kwargs = {k: m[k] for k in ("lo", "hi", "xtol", "rtol", "max_evals") if m.get(k) is not None}

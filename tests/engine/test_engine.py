@@ -231,7 +231,7 @@ def test_thesis_example_3_2_2_is_decided_infeasible():
 
 def test_infinite_supremum_has_no_proven_upper_end(tmp_path):
     from lmic.compile import compile_theorem
-    from lmic.sweep import maximize
+    from lmic.studies.sweep import maximize
 
     rng = np.random.default_rng(3)
     A = rng.standard_normal((2, 2))

@@ -36,7 +36,7 @@ class AuditContext:
     params : mapping, optional
         Parameter overrides.
     backend, options
-        For every solve (:func:`lmic.sweep.decide`).
+        For every solve (:func:`lmic.studies.sweep.decide`).
     rtol : float
         Relative tolerance of value claims.
     """
@@ -76,7 +76,7 @@ class AuditContext:
         self._synthesis: Any = None
 
     def decide(self, problem: Problem, keep_objective: bool = True) -> Any:
-        from lmic.sweep import decide
+        from lmic.studies.sweep import decide
 
         return decide(problem, self.backend, self.options, keep_objective=keep_objective)
 

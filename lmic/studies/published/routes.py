@@ -85,8 +85,9 @@ def point_claims(ctx: AuditContext, pub: Mapping[str, Any]) -> set[str]:
 
 def _certify_point(ctx: AuditContext, keys: list[str], x: np.ndarray, rec: str) -> None:
     from lmic.certify import certify
+    from lmic.policy import exact_rescue_point as _exact_rescue
     from lmic.solution import Solution
-    from lmic.sweep import _exact_rescue, _scalar_derived
+    from lmic.studies.sweep.points import scalar_derived as _scalar_derived
 
     prob = ctx.problem
     sol = Solution("feasible", x=x, objective=prob.objective.value(x), backend="published")

@@ -13,8 +13,8 @@ says how lmic computes the quantity (``compute:``), one of::
                           variable: NAME or objective: true (else the outcome only)
     at_published: NAME    a derived quantity computed from the printed numbers (not certified),
                           compared with the printed NAME (or published_key: KEY)
-    maximize: PARAM       supremum by bisection (lmic.sweep.maximize); rtol, lo, hi
-    sweep: P=a:b:n        grid (lmic.sweep.sweep): certified if some point is, else infeasible
+    maximize: PARAM       supremum by bisection (lmic.studies.sweep.maximize); rtol, lo, hi
+    sweep: P=a:b:n        grid (lmic.studies.sweep.sweep): certified if some point is, else infeasible
     gain: KEY             the printed gain KEY through another theorem's fixed_KEY variant
                           (with theorem: and system:), e.g. a Theorem-4 gain as a Theorem-1 gain
 

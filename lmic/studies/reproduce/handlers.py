@@ -6,8 +6,8 @@ example file the loaded system, the audit and the theorem's own solution:
 - ``claim``: the audit of the file's ``published:`` section (:mod:`lmic.studies.published`);
 - ``solve``: the theorem on the file (objective kept);
 - ``at_published``: a derived quantity computed from the printed numbers (not certified);
-- ``maximize``: supremum by bisection (:func:`lmic.sweep.maximize`), optionally on a fixed gain;
-- ``sweep``: a grid (:func:`lmic.sweep.sweep`);
+- ``maximize``: supremum by bisection (:func:`lmic.studies.sweep.maximize`), optionally on a fixed gain;
+- ``sweep``: a grid (:func:`lmic.studies.sweep.sweep`);
 - ``gain``: a printed gain through another theorem's ``fixed_<gain>`` variant
   (:func:`lmic.reductions.fix.with_fixed_gains`).
 
@@ -81,7 +81,7 @@ class Runner:
     def solve(self, row: Row) -> tuple[Any, Any]:
         """``(problem, decided point)`` of the row's theorem on its file (cached)."""
         from lmic.compile import compile_theorem
-        from lmic.sweep import decide
+        from lmic.studies.sweep import decide
 
         params = dict(row.compute.get("params") or {})
         key = (row.file, row.theorem, tuple(sorted(params.items())))
@@ -195,7 +195,7 @@ def at_published_row(runner: Runner, row: Row) -> tuple[str, Any, str, str]:
 @register("maximize")
 def maximize_row(runner: Runner, row: Row) -> tuple[str, Any, str, str]:
     """The supremum of a parameter by bisection (on the fixed-gain variant with ``gain:``)."""
-    from lmic.sweep import maximize
+    from lmic.studies.sweep import maximize
 
     c = row.compute
     system: Any = runner.path(row.file)
@@ -225,7 +225,7 @@ def maximize_row(runner: Runner, row: Row) -> tuple[str, Any, str, str]:
 @register("sweep")
 def sweep_row(runner: Runner, row: Row) -> tuple[str, Any, str, str]:
     """A grid over one parameter: certified if some point is."""
-    from lmic.sweep import parse_grid, sweep
+    from lmic.studies.sweep import parse_grid, sweep
 
     c = row.compute
     name, values = parse_grid(str(c["sweep"]))
@@ -250,7 +250,7 @@ def sweep_row(runner: Runner, row: Row) -> tuple[str, Any, str, str]:
 def gain_row(runner: Runner, row: Row) -> tuple[str, Any, str, str]:
     """The printed gain through another theorem's ``fixed_<gain>`` variant (``theorem:``, ``system:``)."""
     from lmic.compile import compile_theorem
-    from lmic.sweep import decide
+    from lmic.studies.sweep import decide
 
     c = row.compute
     system_file = runner.path(str(c.get("system", row.file)))

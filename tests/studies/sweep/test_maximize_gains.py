@@ -17,10 +17,10 @@ import yaml
 
 from lmic.certify.certificate import integrity_of
 from lmic.cli import main
-from lmic.sweep import maximize, minimize, write_end_certificate
+from lmic.studies.sweep import maximize, minimize, write_end_certificate
 from lmic.template import I, block, theorem
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 UIO = str(ROOT / "examples" / "uio_dt.thm4_1.flexible_joint.yaml")
 #: a short bracket below gamma_max = 51.5 (catalogue T4.3): few solves, a certified lower end
 BRACKET = ["--lo", "50", "--hi", "51.5", "--rtol", "1e-2", "--no-progress"]

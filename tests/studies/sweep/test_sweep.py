@@ -1,4 +1,4 @@
-"""lmic.sweep: bisection on certified feasibility, grids, and the --maximize/--sweep options of lmic solve."""
+"""lmic.studies.sweep: bisection on certified feasibility, grids, and the --maximize/--sweep options of lmic solve."""
 
 from __future__ import annotations
 
@@ -16,11 +16,11 @@ from lmic.compile import bind, plan_for
 from lmic.errors import DataError
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 from lmic.solution import Solution
-from lmic.sweep import decide, maximize, parse_grid, precondition, sweep
+from lmic.studies.sweep import decide, maximize, parse_grid, precondition, sweep
 from lmic.system import load_system
 from lmic.template import block, theorem
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 EX = ROOT / "examples"
 
 

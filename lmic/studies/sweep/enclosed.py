@@ -1,0 +1,373 @@
+"""Suprema and infima of a parameter that enters affinely: one convex solve and its enclosure.
+
+When a theorem's parameter ``p`` enters its constraints affinely and multiplies no decision
+variable (``gamma`` in ``[A'P + PA, PB; *, -gamma I]``), the set of ``(x, p)`` that satisfy them
+is convex, and ``sup {p : the theorem holds}`` is the optimal value of one convex problem: ``p``
+becomes a decision variable and the objective ``max p`` (``min p`` for an infimum). That
+problem is solved once and its optimal value enclosed (:func:`lmic.certify.enclosure.enclosure`,
+through :func:`lmic.api.solve`): the certified point gives the certified end, the proven dual
+bound the other end (weak duality: no feasible value lies beyond it), instead of a bisection.
+
+Whether ``p`` enters affinely is decided from the template and the IR, never from a theorem's
+name (:func:`affine_parameter`):
+
+1. in the plan (:mod:`lmic.compile.plan`) ``p`` appears only in the coefficients of terms
+   without a decision variable, at most affinely (``d coef / dp`` free of ``p``), and in no
+   matrix factor;
+2. the problems bound at three values of ``p`` have the same structure and differ only in the
+   constant column, affinely (this also catches constants computed from ``p`` by a theorem's
+   ``const`` function, which the template cannot show).
+
+The point at the certified end is certified again on the theorem's own problem bound at that
+value (:func:`lmic.studies.sweep.ends.certified_end`, gains and certificate as after a
+bisection). Whenever this route cannot give a certified end (unbounded, no certified point),
+:func:`enclose` returns ``None`` with the reason and the caller bisects.
+
+Examples
+--------
+>>> import sympy
+>>> from lmic.compile.plan import Term
+>>> g, w = sympy.Symbol("gamma"), sympy.Symbol("w")
+>>> _coef_affine(-g, g), _coef_affine(g**2, g), _coef_affine(2 * g * w, g)
+(True, False, True)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Iterator, Mapping
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+import sympy
+
+from lmic.errors import LmicError
+from lmic.ir.problem import LinearConstraints, Objective, Problem, Variable
+from lmic.solution import Solution
+from lmic.studies.sweep.ends import certified_end
+from lmic.studies.sweep.points import Evaluator, domain, in_domain, setup
+from lmic.studies.sweep.results import PointResult, SupResult
+
+__all__ = ["affine_parameter", "lift", "enclose"]
+
+#: relative tolerance of the numeric affinity check of the bound data
+AFFINE_RTOL = 1e-10
+
+
+def _coef_affine(coef: Any, p: sympy.Symbol) -> bool:
+    """``coef`` is affine in ``p`` (its derivative in ``p`` is free of ``p``)."""
+    if p not in getattr(coef, "free_symbols", set()):
+        return True
+    try:
+        d = sympy.diff(coef, p)
+    except (TypeError, ValueError):
+        return False
+    return p not in d.free_symbols
+
+
+def _terms(plan: Any) -> Iterator[tuple[Any, Any, tuple[Any, ...]]]:
+    """Every ``(coef, var, factors)`` of the plan's LMIs and linear constraints."""
+    for lp in plan.lmis:
+        for entry in lp.entries.values():
+            for t in entry.terms:
+                yield t.coef, t.var, tuple(t.left) + tuple(t.right)
+    for _name, _kind, _strict, form in plan.constraints:
+        yield form.const, None, ()
+        for coef, atom in form.terms:
+            yield coef, atom[0], ()
+        for coef, terms in form.traces:
+            for t in terms:
+                yield coef * t.coef, t.var, tuple(t.left) + tuple(t.right)
+
+
+def _template_affine(plan: Any, p: sympy.Symbol) -> str:
+    """``""`` when ``p`` enters the plan affinely and multiplies no decision variable, else why not."""
+    for coef, var, factors in _terms(plan):
+        if any(p in getattr(f, "free_symbols", set()) for f in factors):
+            return f"'{p}' appears in a matrix factor"
+        if p not in getattr(coef, "free_symbols", set()):
+            continue
+        if var is not None:
+            return f"'{p}' multiplies the decision variable {var}"
+        if not _coef_affine(coef, p):
+            return f"'{p}' enters non-affinely ({coef})"
+    return ""
+
+
+def _columns(problem: Problem) -> list[sp.csc_matrix]:
+    return [sp.csc_matrix(lmi.coeffs) for lmi in problem.lmis] + [sp.csc_matrix(problem.linear.A)]
+
+
+def _same_structure(a: Problem, b: Problem) -> bool:
+    if a.n != b.n or len(a.lmis) != len(b.lmis) or len(a.linear) != len(b.linear):
+        return False
+    if a.linear.kinds != b.linear.kinds or a.linear.strict != b.linear.strict:
+        return False
+    return all(x.dim == y.dim and x.strict == y.strict for x, y in zip(a.lmis, b.lmis, strict=True))
+
+
+def _data_affine(probs: list[Problem], values: list[float]) -> str:
+    """``""`` when the bound problems differ only in the constant column, affinely in the value."""
+    p0, p1, p2 = probs
+    v0, v1, v2 = values
+    if not (_same_structure(p0, p1) and _same_structure(p0, p2)):
+        return "the bound problems differ in structure"
+    for M0, M1, M2 in zip(_columns(p0), _columns(p1), _columns(p2), strict=True):
+        scale = max(abs(M0).max() if M0.nnz else 0.0, abs(M1).max() if M1.nnz else 0.0, 1.0)
+        D1, D2 = (M1 - M0).tocsc(), (M2 - M0).tocsc()
+        if D1.shape[1] > 1 and (abs(D1[:, 1:]).max() if D1[:, 1:].nnz else 0.0) > AFFINE_RTOL * scale:
+            return "the parameter changes a coefficient of a decision variable"
+        if D2.shape[1] > 1 and (abs(D2[:, 1:]).max() if D2[:, 1:].nnz else 0.0) > AFFINE_RTOL * scale:
+            return "the parameter changes a coefficient of a decision variable"
+        g1 = D1[:, 0].toarray().ravel() / (v1 - v0)
+        g2 = D2[:, 0].toarray().ravel() / (v2 - v0)
+        if np.max(np.abs(g1 - g2), initial=0.0) > AFFINE_RTOL * scale * max(1.0, abs(v1), abs(v2), abs(v0)):
+            return "the constant terms are not affine in the parameter"
+    return ""
+
+
+def _sample_values(dom: tuple[float, float, bool, bool], start: float | None) -> list[float] | None:
+    """Three distinct values inside the domain (the first two exact steps apart when possible)."""
+    lo, hi, _, _ = dom
+    cands = [0.0, 1.0, 2.0, -1.0, 0.5, 0.25, 0.75]
+    if start is not None and math.isfinite(start):
+        cands = [float(start), float(start) + 1.0, float(start) + 0.5] + cands
+    if math.isfinite(lo) and math.isfinite(hi):
+        cands += [lo + (hi - lo) * t for t in (0.25, 0.5, 0.75)]
+    if math.isfinite(lo):
+        cands += [lo + 1.0, lo + 2.0, lo + 0.5]
+    if math.isfinite(hi):
+        cands += [hi - 1.0, hi - 2.0, hi - 0.5]
+    out: list[float] = []
+    for v in cands:
+        if in_domain(v, dom) and v not in out:
+            out.append(v)
+        if len(out) == 3:
+            return out
+    return None
+
+
+def affine_parameter(plan: Any, sysobj: Any, overrides: Mapping[str, Any], decl: Any) -> tuple[bool, str, Any]:
+    """Whether the parameter ``decl`` enters the theorem affinely (the enclosure replaces bisection).
+
+    Returns ``(affine, reason, bound)``: ``bound`` is ``(problems, values)`` at three values of
+    the parameter (what :func:`lift` needs) when ``affine``.
+
+    Examples
+    --------
+    >>> from lmic.studies.sweep.points import setup
+    >>> s, plan, o, d = setup("qib.thm1", "examples/qib.thm1.flexible-joint.yaml", "beta", None)  # doctest: +SKIP
+    >>> affine_parameter(plan, s, o, d)[:2]                                   # doctest: +SKIP
+    (False, "'beta' multiplies the decision variable omega")
+    """
+    from lmic.compile import bind
+
+    why = _template_affine(plan, decl.symbol)
+    if why:
+        return False, why, None
+    dom = domain(decl)
+    start = sysobj.params.get(decl.name, decl.default)
+    values = _sample_values(dom, float(start) if isinstance(start, int | float) else None)
+    if values is None:
+        return False, "no three values inside the parameter's domain", None
+    try:
+        probs = [bind(plan, sysobj, {**overrides, decl.name: v}) for v in values]
+    except LmicError as err:
+        return False, f"binding at a sample value failed: {err}", None
+    why = _data_affine(probs, values)
+    if why:
+        return False, why, None
+    return True, "", (probs, values)
+
+
+def lift(
+    problems: list[Problem], values: list[float], name: str, sense: str, dom: tuple[float, float, bool, bool]
+) -> Problem:
+    """The problem with the parameter as one more scalar decision variable (the last), ``sense p``.
+
+    The constant column of every LMI and row at ``p`` is ``c0 + p g`` (``g`` from the first two
+    bound problems); the parameter's domain becomes linear rows; the theorem's objective,
+    derived quantities and checks are dropped (the end's point is certified on the theorem's
+    own problem, :func:`lmic.studies.sweep.ends.certified_end`).
+
+    >>> from lmic.ir.problem import LMI
+    >>> P = lambda v: Problem([Variable("q", "scalar", (1, 1))],
+    ...     [LMI("v - q > 0", 1, sp.csc_matrix([[v, -1.0]]))], LinearConstraints.empty(1),
+    ...     Objective("feasibility", [0.0, 0.0]))
+    >>> L = lift([P(0.0), P(1.0)], [0.0, 1.0], "v", "min", (0.0, math.inf, True, False))
+    >>> L.n, L.lmis[0].coeffs.toarray().tolist(), L.objective.c.tolist()
+    (2, [[0.0, -1.0, 1.0]], [0.0, 0.0, 1.0])
+    """
+    p0, p1 = problems[0], problems[1]
+    v0, v1 = values[0], values[1]
+    n = p0.n
+    var_name = name
+    while var_name in {v.name for v in p0.variables}:
+        var_name += "_"
+
+    def widen(M0: sp.spmatrix, M1: sp.spmatrix) -> sp.csc_matrix:
+        M0, M1 = sp.csc_matrix(M0), sp.csc_matrix(M1)
+        g = (M1[:, 0] - M0[:, 0]) / (v1 - v0)
+        c0 = M0[:, 0] - v0 * g
+        return sp.hstack([c0, M0[:, 1:], g], format="csc")
+
+    lmis = [replace(a, coeffs=widen(a.coeffs, b.coeffs)) for a, b in zip(p0.lmis, p1.lmis, strict=True)]
+    rows = [widen(p0.linear.A, p1.linear.A)]
+    kinds, strict, names = list(p0.linear.kinds), list(p0.linear.strict), list(p0.linear.names)
+    lo, hi, lo_in, hi_in = dom
+    for bound, inside, sgn, op in ((lo, lo_in, 1.0, ">"), (hi, hi_in, -1.0, "<")):
+        if math.isfinite(bound):  # sgn (p - bound) >= 0 (> 0 for an open end)
+            r = np.zeros(n + 2)
+            r[0], r[-1] = -sgn * bound, sgn
+            rows.append(sp.csc_matrix(r.reshape(1, -1)))
+            kinds.append("ge")
+            strict.append(not inside)
+            names.append(f"{name} {op}{'' if not inside else '='} {bound:g} (domain)")
+    c = np.zeros(n + 2)
+    c[-1] = 1.0
+    return Problem(
+        variables=[*p0.variables, Variable(var_name, "scalar", (1, 1), offset=n)],
+        lmis=lmis,
+        linear=LinearConstraints(sp.vstack(rows, format="csr"), kinds, strict, names),
+        objective=Objective(sense, c),
+        data=p0.data,
+        meta={**p0.meta, "lifted_parameter": name},
+    )
+
+
+def enclose(
+    theorem: Any,
+    system: Any,
+    param: str,
+    sign: float,
+    *,
+    params: Mapping[str, Any] | None = None,
+    backend: Any = None,
+    options: Any = None,
+    exact: bool = True,
+    xtol: float = 1e-6,
+    rtol: float = 1e-5,
+    backoff: float | None = None,
+) -> tuple[SupResult | None, str]:
+    """The supremum (``sign = 1``) or infimum (``-1``) of an affine parameter, enclosed.
+
+    Returns ``(result, "")``, or ``(None, reason)`` when the parameter does not enter affinely or
+    this route gave no certified end (then the caller bisects).
+
+    Examples
+    --------
+    >>> r, why = enclose("my.brl", "plant.yaml", "gamma", -1.0)            # doctest: +SKIP
+    >>> r.method, r.upper_kind, r.lower <= r.upper                         # doctest: +SKIP
+    ('enclosure', 'dual-bound', True)
+    """
+    from lmic.api import solve
+    from lmic.certify.enclosure import summary
+
+    t_start = time.perf_counter()
+    t0 = time.perf_counter()
+    sysobj, plan, overrides, decl = setup(theorem, system, param, params)
+    plan_s = time.perf_counter() - t0
+    affine, why, bound = affine_parameter(plan, sysobj, overrides, decl)
+    if not affine:
+        return None, why
+    probs, values = bound
+    dom = domain(decl)
+    is_max = sign > 0
+    lifted = lift(probs, values, param, "max" if is_max else "min", dom)
+    try:
+        res = solve(lifted, backend=backend, options=options, backoff=0.0)
+    except LmicError as err:
+        return None, f"the convex problem in '{param}' was not solved: {err}"
+    enc = res.enclosure
+    x = None
+    if res.verdict == "certified" and res.solution is not None and res.solution.x is not None:
+        x = np.asarray(res.solution.x, dtype=float)
+    elif enc is not None and enc.get("restored_x") is not None:
+        x = np.asarray(enc["restored_x"], dtype=float)
+    if x is None or enc is None:
+        why = getattr(res.outcome, "reason", "") or res.status
+        return None, f"no certified point of the convex problem in '{param}' ({res.verdict}: {why})"
+    value = float(x[-1])
+    # the point at the end, certified on the theorem's own problem bound at that value
+    ev = Evaluator(plan, sysobj, overrides, param, backend, options, False, exact, None)
+    ev.reference = x[:-1]
+    pt = _certify_at(ev, value, x[:-1]) if in_domain(value, dom) else None
+    if pt is None:
+        return None, f"the convex problem's point at {param} = {value:g} is not certified on the theorem"
+    pt.solve_s += float(res.timings.get("solve_s", 0.0))  # the convex problem's solve
+    pt.certify_s += float(res.timings.get("certify_s", 0.0)) + float(res.timings.get("enclosure_s", 0.0))
+    dual = enc.get("upper") if is_max else enc.get("lower")
+    end = certified_end(pt, backend, options, backoff)
+    other = None if dual is None else float(dual)
+    if other is not None and ((is_max and other < value) or (not is_max and other > value)):
+        return None, f"inconsistent enclosure ({other:g} against the certified {value:g})"
+    proven = other is not None
+    tol = max(xtol, rtol * max(abs(value), abs(other) if other is not None else 0.0))
+    gap = abs(other - value) if other is not None else math.inf
+    converged = gap <= tol
+    what = "supremum" if is_max else "infimum"
+    message = ""
+    if not proven:
+        message = f"no proven dual bound: the {what} is {'>=' if is_max else '<='} {value:g} ({enc.get('reason')})"
+    elif not converged:
+        message = (
+            f"the enclosure's gap {gap:.3g} is above the tolerance {tol:.3g} "
+            "(an interior-point backend gives a tighter one)"
+        )
+    lower, upper = (value, other) if is_max else (other, value)
+    return (
+        SupResult(
+            theorem=plan.id,
+            param=param,
+            lower=lower,
+            upper=upper,
+            upper_kind="dual-bound" if proven else "none",
+            upper_proven=other,
+            converged=bool(converged),
+            xtol=xtol,
+            rtol=rtol,
+            iterations=0,
+            points=ev.points,
+            backend=str(res.backend),
+            plan_s=plan_s,
+            total_s=time.perf_counter() - t_start,
+            message=message,
+            domain=(dom[0], dom[1]),
+            end=end,
+            sense="max" if is_max else "min",
+            system=sysobj,
+            method="enclosure",
+            enclosure=summary(enc),
+        ),
+        "",
+    )
+
+
+def _certify_at(ev: Evaluator, value: float, x: np.ndarray) -> PointResult | None:
+    """The theorem bound at ``value`` and certified at ``x`` (else decided afresh there)."""
+    from lmic.certify import certify
+    from lmic.compile import bind
+    from lmic.policy import exact_rescue_point
+    from lmic.studies.sweep.points import scalar_derived
+
+    problem = bind(ev.plan, ev.sysobj, {**ev.overrides, ev.param: value})
+    judge = replace(problem, objective=Objective("feasibility", np.zeros(problem.n + 1)))
+    sol = Solution(status="optimal", x=x, backend="enclosure")
+    t0 = time.perf_counter()
+    cert: Any = certify(judge, sol)
+    proof = "certified"
+    if cert.verdict != "certified" and ev.exact:
+        cert, proof = exact_rescue_point(judge, sol, cert), "certified (exact)"
+    if cert is not None and cert.verdict == "certified":
+        pt = PointResult(value=value, outcome="feasible", proof=proof, status="optimal", verdict="certified")
+        pt.x, pt.problem, pt.certificate, pt.solution = x, problem, cert, sol
+        pt.certify_s = time.perf_counter() - t0
+        pt.derived = scalar_derived(cert)
+        pt.attempts = ["enclosure point: " + proof]
+        ev.points.append(pt)
+        return pt
+    pt = ev(value, "enclosure")  # a full decision at this value, preconditioned at x
+    return pt if pt.outcome == "feasible" else None

@@ -1,0 +1,311 @@
+"""One parameter value: bind the cached plan, decide, record (:mod:`lmic.studies.sweep`).
+
+How a point is decided (:func:`decide`)
+---------------------------------------
+A value counts as **feasible** only when the certifier certifies a point there: every LMI, linear
+row and theorem check holds at the returned ``x`` (:func:`lmic.certify.certify`). When the float
+certificate fails only because the margins are below the floating-point error bound (points near a
+supremum that is not attained, where ``P`` grows like ``1e8``), an exact rational proof
+(:mod:`lmic.certify.exact`) may still prove every LMI at the rounded point: that also counts
+("certified (exact)"). A value counts as **infeasible** only with a GLOBAL proof (a verified
+Farkas certificate, :mod:`lmic.outcome`); a bounded ray ("no solution with ``||x||_inf <= R``")
+is recorded as ``infeasible-bounded``. Everything else is **undecided** and reported as such.
+
+The decision itself is the one solve policy (:func:`lmic.policy.decide`): this module only
+chooses what the solver is given (the objective dropped for a bisection, kept for a grid), the
+reference point to precondition at (the last certified point, once a point needed a
+preconditioned problem), and the warm start (the
+neighbouring point's solution, :attr:`lmic.options.SolveOptions.warm_start`), and turns the
+policy's :class:`~lmic.outcome.Outcome` into a :class:`PointResult`.
+
+Examples
+--------
+>>> import scipy.sparse as sp
+>>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+>>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+>>> decide(p).outcome
+'feasible'
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from lmic.errors import DataError
+from lmic.ir.problem import Objective, Problem
+from lmic.solution import Solution
+from lmic.studies.sweep.results import PointResult, Progress
+
+__all__ = ["decide", "setup", "domain", "in_domain", "Evaluator", "scalar_derived", "warm_options"]
+
+
+def _feasibility(problem: Problem) -> Problem:
+    return replace(problem, objective=Objective("feasibility", np.zeros(problem.n + 1)))
+
+
+def scalar_derived(cert: Any) -> dict[str, float]:
+    """The finite scalar derived values of a certificate.
+
+    >>> scalar_derived(None)
+    {}
+    """
+    out: dict[str, float] = {}
+    for item in getattr(cert, "derived", None) or []:
+        v = item.get("value")
+        if isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(float(v)):
+            out[item["name"]] = float(v)
+    return out
+
+
+def _rel_margin(cert: Any) -> float | None:
+    vals = [r.get("rel_margin") for r in getattr(cert, "lmis", None) or []]
+    vals = [float(v) for v in vals if isinstance(v, int | float) and math.isfinite(float(v))]
+    return min(vals) if vals else None
+
+
+def decide(
+    problem: Problem,
+    backend: Any = None,
+    options: Any = None,
+    *,
+    reference: np.ndarray | None = None,
+    keep_objective: bool = False,
+    exact: bool = True,
+    value: float = math.nan,
+    scale: float | None = None,
+) -> PointResult:
+    """Decide one compiled problem: feasible (certified), infeasible, or undecided.
+
+    Runs the one solve policy (:func:`lmic.policy.decide`) on ``problem`` (the objective dropped
+    unless ``keep_objective``): the problem preconditioned at ``reference`` first (if given),
+    then as compiled, the other strict reduction, the problem preconditioned at the returned
+    point, the next backend of the route, exact rescue. ``infeasible`` means a GLOBAL proof
+    (verdict ``infeasible-certified``); a bounded ray ("no solution with ``||x||_inf <= R``",
+    verdict ``infeasible-bounded``) leaves the point ``undecided`` with the radius recorded.
+
+    Parameters
+    ----------
+    problem : Problem
+        The IR at this parameter value.
+    backend : str, Backend or None
+        ``None``/``"auto"``: the escalating route; a backend: that backend alone.
+    options : SolveOptions, optional
+    reference : numpy.ndarray, optional
+        A certified point at a nearby value: the LMIs are preconditioned at it
+        (:func:`precondition`).
+    keep_objective : bool
+        Solve the theorem's own problem (grids). ``False`` drops the objective (bisection).
+    exact : bool
+        Allow the exact rescue of points with margins below the float error bound.
+    value : float
+        The parameter value (for the report).
+    scale : float, optional
+        ``||x||_inf`` of the certified points seen so far (reported next to a bounded ray's
+        radius).
+
+    Returns
+    -------
+    PointResult
+
+    Examples
+    --------
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> r = decide(p)
+    >>> r.outcome, r.proof
+    ('feasible', 'certified')
+    """
+    from lmic.policy import decide as policy_decide
+
+    # a bisection point is a feasibility problem: the policy then routes it as one (SCS for
+    # large strict problems) and its strict reduction decides both ways in one attempt
+    judge = problem if keep_objective else _feasibility(problem)
+    t0 = time.perf_counter()
+    out = policy_decide(
+        judge,
+        None if backend in (None, "auto") else backend,
+        options,
+        solve_as=judge,
+        reference=reference,
+        rescue=exact,
+    )
+    total = time.perf_counter() - t0
+    cert = out.certificate
+    result = PointResult(value=value, outcome="undecided", proof=out.reason or out.verdict)
+    result.attempts = [a.line() for a in out.attempts]
+    result.solve_s = sum(a.time_s for a in out.attempts)
+    result.certify_s = max(0.0, total - result.solve_s)
+    result.status = out.solution.status if out.solution is not None else ""
+    result.verdict = out.verdict
+    result.certificate = cert
+    result.solution = out.solution
+    result.rel_margin = _rel_margin(cert)
+    if out.verdict == "certified":
+        exact_used = bool(getattr(cert, "exact", None) and cert.exact.get("proven"))
+        result.outcome, result.proof = "feasible", "certified (exact)" if exact_used else "certified"
+        result.x = out.solution.x
+        result.objective = out.solution.objective if keep_objective else None
+        result.derived = scalar_derived(cert)
+    elif out.verdict == "infeasible-certified":
+        result.outcome = "infeasible"
+        result.proof = "infeasible-certified: " + out.evidence.statement
+    elif out.verdict == "infeasible-bounded":
+        # never called infeasible: only "no solution with ||x||_inf <= R"
+        result.outcome = "infeasible-bounded"
+        result.farkas_radius = out.evidence.radius
+        result.proof = "infeasible-bounded: " + out.evidence.statement
+        if scale is not None and out.evidence.radius is not None:
+            result.proof += f"; certified points reach ||x||_inf = {scale:.3g}"
+    return result
+
+
+def setup(theorem: str, system: Any, param: str, params: Mapping[str, Any] | None) -> tuple[Any, Any, dict, Any]:
+    """Load the system, analyse the plan once, find the parameter's declaration.
+
+    Returns ``(system, plan, overrides, declaration)``.
+
+    >>> setup("qib.thm1", {"A": [[-1.0]], "C": [[1.0]]}, "nope", None)  # doctest: +SKIP
+    Traceback (most recent call last):
+    lmic.errors.DataError: ...
+    """
+    from lmic.compile import plan_for
+    from lmic.system import load_system
+
+    sysobj = load_system(system)
+    overrides = dict(params or {})
+    if param in overrides:
+        raise DataError(f"-p {param}=...: the swept parameter '{param}' cannot also be fixed")
+    merged = dict(sysobj.params)
+    merged.update(overrides)
+    plan = plan_for(theorem, merged)
+    decls = {p.name: p for p in plan.template.params}
+    if param not in decls:
+        options = {o.name for o in plan.template.options}
+        numeric = ", ".join(sorted(decls)) or "none"
+        what = "a structural option, not a number" if param in options else "not a parameter"
+        raise DataError(f"theorem {plan.id}: '{param}' is {what} (numeric parameters: {numeric})")
+    return sysobj, plan, overrides, decls[param]
+
+
+def domain(decl: Any) -> tuple[float, float, bool, bool]:
+    """(inf, sup, inf included, sup included) of a parameter's sympy domain.
+
+    >>> import sympy
+    >>> class D: domain = sympy.Interval.open(0, 1)
+    >>> domain(D())
+    (0.0, 1.0, False, False)
+    """
+    dom = decl.domain
+    try:
+        lo, hi = float(dom.inf), float(dom.sup)
+        lo_in = not bool(getattr(dom, "left_open", False)) and math.isfinite(lo)
+        hi_in = not bool(getattr(dom, "right_open", False)) and math.isfinite(hi)
+    except (TypeError, AttributeError):
+        return -math.inf, math.inf, False, False
+    return lo, hi, lo_in, hi_in
+
+
+def in_domain(v: float, dom: tuple[float, float, bool, bool]) -> bool:
+    """``v`` inside a :func:`domain` tuple.
+
+    >>> in_domain(0.0, (0.0, 1.0, False, True)), in_domain(1.0, (0.0, 1.0, False, True))
+    (False, True)
+    """
+    lo, hi, lo_in, hi_in = dom
+    return (v > lo or (lo_in and v == lo)) and (v < hi or (hi_in and v == hi))
+
+
+def _preconditioned(res: PointResult) -> bool:
+    """The point was decided on a preconditioned problem (``scaled`` / ``rescaled`` attempt)."""
+    last = res.attempts[-1] if res.attempts else ""
+    return " / scaled" in last or " / rescaled" in last
+
+
+def warm_options(options: Any, warm: Solution | None) -> Any:
+    """``options`` with :attr:`~lmic.options.SolveOptions.warm_start` set to ``warm``.
+
+    An explicit ``warm_start`` of the caller's options is kept for the first point only
+    (``warm`` is ``None`` there).
+
+    >>> warm_options(None, None).warm_start is None
+    True
+    """
+    from lmic.options import SolveOptions
+
+    options = options or SolveOptions()
+    if warm is None:
+        return options
+    return replace(options, warm_start=warm)
+
+
+class Evaluator:
+    """Bind, decide and record one value at a time (re-binding the cached plan)."""
+
+    def __init__(
+        self,
+        plan: Any,
+        sysobj: Any,
+        overrides: dict,
+        param: str,
+        backend: Any,
+        options: Any,
+        keep_objective: bool,
+        exact: bool,
+        progress: Progress | None,
+        sign: float = 1.0,
+    ) -> None:
+        self.plan, self.sysobj, self.overrides, self.param = plan, sysobj, overrides, param
+        self.sign = sign  # called with u, binds the parameter at sign * u (infima: -1)
+        self.backend, self.options = backend, options
+        self.keep_objective, self.exact = keep_objective, exact
+        self.progress = progress
+        self.points: list[PointResult] = []
+        self.reference: np.ndarray | None = None
+        #: precondition at ``reference`` (only once a point needed it: the congruence costs the
+        #: warm start, and most sweeps do not need it)
+        self.precondition = False
+        self.scale: float | None = None
+        self.sense = "feasibility"
+        #: the last solution with a point: the next solve's warm start (same shape: a re-bound plan)
+        self.warm: Solution | None = None
+
+    def __call__(self, value: float, phase: str, **info: Any) -> PointResult:
+        from lmic.compile import bind
+
+        value = self.sign * value
+        t0 = time.perf_counter()
+        problem = bind(self.plan, self.sysobj, {**self.overrides, self.param: float(value)})
+        bind_s = time.perf_counter() - t0
+        self.sense = problem.objective.sense
+        res = decide(
+            problem,
+            self.backend,
+            warm_options(self.options, self.warm),
+            reference=self.reference if self.precondition else None,
+            keep_objective=self.keep_objective,
+            exact=self.exact,
+            value=float(value),
+            scale=self.scale,
+        )
+        res.bind_s = bind_s
+        if res.solution is not None and res.solution.x is not None:
+            self.warm = res.solution
+        if res.outcome == "feasible" and res.x is not None:
+            res.problem = problem
+            self.reference = res.x
+            self.precondition = self.precondition or _preconditioned(res)
+            norm = float(np.max(np.abs(res.x))) if res.x.size else 0.0
+            self.scale = norm if self.scale is None else max(self.scale, norm)
+        self.points.append(res)
+        if self.progress is not None:
+            self.progress({"phase": phase, "value": float(value), "point": res, **info})
+        return res
