@@ -72,6 +72,9 @@ class Result:
         (:func:`lmic.certify.enclosure.enclosure`).
     backoff : dict or None
         The backed-off, well-scaled point near the optimum (:func:`lmic.backoff.backoff`).
+    route : dict or None
+        The route taken (:mod:`lmic.routes`): ``steps`` (backend, verdict, relative gap) and
+        ``text``, the line the CLI prints.
     """
 
     target: str
@@ -90,6 +93,7 @@ class Result:
     outcome: Any = None
     enclosure: dict[str, Any] | None = None
     backoff: dict[str, Any] | None = None
+    route: dict[str, Any] | None = None
 
     @property
     def verdict(self) -> str:
@@ -175,6 +179,7 @@ class Result:
             "verdict": self.verdict,
             "evidence": self.outcome.evidence.to_dict() if self.outcome is not None else None,
             "attempts": self.attempts,
+            "route": self.route,  # lmic.routes: the backends tried, their method and verdict
             # -- optimal-value enclosure (lmic.certify.enclosure) --
             "enclosure": _enclosure_summary(self.enclosure),
             "backoff": _jsonable(self.backoff),
@@ -351,11 +356,12 @@ def solve(
     problem, theorem, compile_s = load_target(target, system, params)
     name = theorem if getattr(target, "build", None) is not None else target  # a Theorem object: its id
     name = name if isinstance(name, str) else ("<problem>" if isinstance(name, Problem) else os.fspath(name))
-    from lmic.policy import decide
+    from lmic.routes import decide_route
 
     t0 = time.perf_counter()
-    outcome = decide(problem, backend, options, exact=exact)
-    total = time.perf_counter() - t0
+    routed = decide_route(problem, backend, options, exact=exact)  # the default route (lmic.routes)
+    outcome = routed.outcome
+    total = time.perf_counter() - t0 - routed.enclosure_s
     sol, cert = outcome.solution, outcome.certificate
     used = outcome.backend or str(getattr(backend, "label", backend))
     attempts = [a.to_dict() for a in outcome.attempts]
@@ -363,7 +369,11 @@ def solve(
     solve_s = sum(a.solve_s for a in outcome.attempts)
     variables, derived = _values(problem, sol.x, cert)
     # -- optimal-value enclosure (lmic.certify.enclosure) --
-    enc, enclosure_s = _enclosure(problem, sol, cert, exact, used, options)
+    enc: dict[str, Any] | None
+    if routed.enclosure is not None:  # computed by the route (its --gap test)
+        enc, enclosure_s = routed.enclosure, routed.enclosure_s
+    else:
+        enc, enclosure_s = _enclosure(problem, sol, cert, exact, used, options)
     back = _backoff(problem, enc, backoff, used, options, sol.objective)
     if enc is not None and (enc["upper"] if problem.objective.sense == "min" else enc["lower"]) is None:
         # no rigorous primal end at the solver's point (a non-strict constraint met only to
@@ -413,6 +423,7 @@ def solve(
         outcome=outcome,
         enclosure=enc,
         backoff=back,
+        route=routed.route,
     )
 
 
@@ -422,26 +433,11 @@ def solve(
 def _enclosure(
     problem: Problem, sol: Solution, cert: Any, exact: bool, backend: str, options: SolveOptions | None
 ) -> tuple[dict[str, Any] | None, float]:
-    """The enclosure of an optimisation problem's optimal value (``None`` for feasibility).
+    """The enclosure of an optimisation problem's optimal value (``None`` for feasibility):
+    :func:`lmic.routes.enclosure_of`."""
+    from lmic.routes import enclosure_of
 
-    A degenerate dual is retried on a perturbed problem, solved on the backend that answered.
-    """
-    if problem.objective.sense == "feasibility" or cert is None or sol.status in ("infeasible", "unbounded"):
-        return None, 0.0
-    from lmic.certify.enclosure import enclosure
-
-    t0 = time.perf_counter()
-    x = sol.x if getattr(cert, "verdict", None) == "certified" else None
-
-    def resolve(perturbed: Problem) -> dict[str, Any] | None:
-        try:
-            other = solve_problem(perturbed, backend, options)
-        except LmicError:
-            return None
-        return other.duals if other.status in ("optimal", "inaccurate") else None
-
-    enc = enclosure(problem, sol.duals, x, exact=exact, resolve=resolve)
-    return enc, time.perf_counter() - t0
+    return enclosure_of(problem, sol, cert, exact, backend, options)
 
 
 def _backoff(

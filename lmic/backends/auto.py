@@ -34,7 +34,18 @@ from lmic.ir.problem import Problem
 from lmic.reductions.strict import has_strict
 from lmic.solution import Solution
 
-__all__ = ["AutoBackend", "route", "choose", "step_options", "SMALL", "SMALL_N", "FIRST_ORDER_TOL"]
+__all__ = [
+    "AutoBackend",
+    "route",
+    "choose",
+    "step_options",
+    "schur_complement_shape",
+    "SMALL",
+    "SMALL_N",
+    "SMALL_FEASIBILITY",
+    "FIRST_ORDER_TOL",
+    "FIRST_ORDER_OPTIMISATION",
+]
 
 #: tolerance of a first-order step of the route: its answer is certified, not trusted, and
 #: the normalised margin (~0.1 on qib.thm1) is far above it
@@ -43,14 +54,42 @@ FIRST_ORDER_TOL = 1e-3
 #: problems with ``sum d_i^2`` at most this and at most :data:`SMALL_N` variables are "small"
 SMALL = 2500
 SMALL_N = 200
+#: strict feasibility problems with ``sum d_i^2`` at most this go to Clarabel; above it the
+#: certified first-order route is faster (measured crossover on qib.thm1: n = 4, sum d_i^2 = 160,
+#: 25 ms both; n = 6, sum d_i^2 = 360: SCS 31 ms, Clarabel 51 ms; docs/backends.md)
+SMALL_FEASIBILITY = 256
+#: optimisation problems that are not small start with a first-order solve (SCS) whose
+#: enclosure may already meet ``--gap``; measured off: on the bounded-real lemma SCS at a
+#: moderate tolerance never met a 1e-4 gap and the interior-point step was needed anyway
+#: (benchmarks/routes.py, docs/backends.md)
+FIRST_ORDER_OPTIMISATION = False
 
 
 def _size(problem: Problem) -> tuple[int, int]:
     return sum(lmi.dim**2 for lmi in problem.lmis), problem.n
 
 
-def route(problem: Problem) -> list[str]:
+def schur_complement_shape(problem: Problem) -> bool:
+    """Whether a Schur-complement interior-point method (CVXOPT, SDPA) suits ``problem``.
+
+    They factor an ``m x m`` matrix (``m`` variables) built from the PSD blocks, so they win when
+    the variables are few against the PSD dimension: ``m <= sum d_i (d_i + 1) / 2`` (the
+    dimension of the PSD cone). Otherwise Clarabel's sparse KKT system is cheaper.
+
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> import numpy as np
+    >>> schur_complement_shape(lyapunov_problem(-np.eye(3)))
+    True
+    """
+    cone = sum(lmi.dim * (lmi.dim + 1) // 2 for lmi in problem.lmis)
+    return problem.n <= cone and bool(problem.lmis)
+
+
+def route(problem: Problem, first_order: bool | None = None) -> list[str]:
     """The backends ``auto`` tries for ``problem``, in order.
+
+    ``first_order`` forces (``True``) or skips (``False``) the first-order step of an
+    optimisation problem that is not small; ``None`` is :data:`FIRST_ORDER_OPTIMISATION`.
 
     >>> import scipy.sparse as sp
     >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
@@ -60,12 +99,21 @@ def route(problem: Problem) -> list[str]:
     ['clarabel']
     """
     psd, n = _size(problem)
-    if psd <= SMALL and n <= SMALL_N:
+    feasibility = problem.objective.sense == "feasibility"
+    small = psd <= SMALL and n <= SMALL_N
+    if feasibility and has_strict(problem):
+        # the certified first-order route (trace normalisation, fixed margin, certified) above
+        # the measured crossover; Clarabel, the embedded default solver, below it
+        chain = ["clarabel"] if psd <= SMALL_FEASIBILITY and n <= SMALL_N else ["scs", "cvxopt"]
+    elif small:
         chain = ["clarabel"]
-    elif problem.objective.sense == "feasibility" and has_strict(problem):
-        chain = ["scs", "cvxopt"]
-    else:  # SDPA is the fastest interior point on large LMI-form problems (SDPLIB, docs/backends.md)
-        chain = ["sdpa", "cvxopt", "clarabel"]
+    else:
+        # interior point by shape: Schur complement (CVXOPT) when the variables are few against
+        # the PSD dimension, Clarabel otherwise; SDPA last (on the bounded-real lemma it stops
+        # short of a certified optimum: docs/backends.md)
+        ipm = ["cvxopt", "clarabel"] if schur_complement_shape(problem) else ["clarabel", "cvxopt"]
+        fo = FIRST_ORDER_OPTIMISATION if first_order is None else first_order
+        chain = (["scs"] if fo and not feasibility else []) + ipm + ["sdpa"]
     usable = [name for name in chain if _usable(name, problem)]
     if not usable:  # e.g. Clarabel cannot take a small problem on a small machine
         usable = [name for name in ("sdpa", "cvxopt", "scs") if _usable(name, problem)]
