@@ -134,7 +134,8 @@ def route(problem: Problem, backend: Any = None) -> list[Any]:
     variant = backend.split(":", 1)[1].lower() if isinstance(backend, str) and ":" in backend else ""
     if variant not in AUTO_VARIANTS:
         raise BackendError(f"backend '{backend}': unknown auto variant; choose " + ", ".join(sorted(AUTO_VARIANTS)))
-    first = [name for name in auto.route(problem, AUTO_VARIANTS[variant]) if _usable(name, problem)]
+    chain = auto.route(problem) if AUTO_VARIANTS[variant] is None else auto.route(problem, AUTO_VARIANTS[variant])
+    first = [name for name in chain if _usable(name, problem)]
     usable = first + [name for name in ORDER if name not in first and _usable(name, problem)]
     if not usable:
         raise BackendError("no installed backend can take this problem (tried " + ", ".join(ORDER) + ")")
