@@ -398,13 +398,15 @@ def achieved_margin(problem: Problem, x: np.ndarray, scale_free: bool) -> float:
     >>> float(achieved_margin(lyapunov_problem(-np.eye(1)), np.array([2.0]), True))
     1.0
     """
+    from lmic.certify.spectra import block_spectrum
+
     x = np.asarray(x, dtype=float)
     values = [math.inf]
     for lmi in problem.lmis:
         if not lmi.strict or lmi.dim == 0:
             continue
-        F = lmi.matrix(x)
-        lmin = float(np.linalg.eigvalsh(F)[0])
+        F, eig = block_spectrum(lmi, x)  # shared with verify_point and the certifier
+        lmin = float(eig[0])
         if scale_free:
             mean = float(np.trace(F)) / lmi.dim
             lmin = lmin / mean if mean > 0 else -math.inf
