@@ -1,20 +1,22 @@
 """``auto``: a route of backends chosen from the problem's size and shape.
 
-The rule (measured numbers in ``docs/backends.md``):
+The rule (measured numbers in ``docs/backends.md``, ``benchmarks/routes.py``):
 
-* Strict feasibility problems that are not small: **SCS first** at tolerance
-  :data:`FIRST_ORDER_TOL`, certified, then **CVXOPT** only if the certificate fails. SCS takes
-  the fixed-margin route of :mod:`lmic.backends.strict` (a point with relative margin
-  ``10 tol = 1e-2`` under the trace normalisation, verified, max-margin only if it is not): on
-  ``qib.thm1`` at n = 40 it is certified in ~0.3 s, 25 iterations, where hand-written CVXPY +
-  Clarabel takes ~22 s (``benchmarks/backends.py``, docs/backends.md); CVXOPT is the faster
-  interior-point backend on these dense block LMIs (0.4-0.6x Clarabel's time).
-* Small problems (``sum of d_i^2 <= SMALL`` and ``n <= SMALL_N``): Clarabel alone (all solvers
-  take milliseconds; Clarabel is the most accurate default).
-* Optimisation problems of larger size: SDPA, then CVXOPT, then Clarabel if the certificate
-  fails (a first-order solver is not accurate enough for optimal values). Backends that are not
-  installed, or cannot take the problem (Clarabel refuses PSD blocks whose dense KKT block would
-  not fit in memory), are left out of the route.
+* Strict feasibility problems above a tiny size (``sum d_i^2 >`` :data:`SMALL_FEASIBILITY`):
+  **SCS first** at tolerance :data:`FIRST_ORDER_TOL`, certified, then **CVXOPT** only if the
+  certificate fails. SCS takes the fixed-margin route of :mod:`lmic.reductions.strict` (a point
+  with relative margin ``10 tol = 1e-2`` under the trace normalisation, verified, max-margin
+  only if it is not): on ``qib.thm1`` at n = 40 it is certified in ~0.3 s where hand-written
+  CVXPY + Clarabel takes 30-140 s. Below the crossover, Clarabel (the embedded default solver).
+* Other small problems (``sum of d_i^2 <= SMALL`` and ``n <= SMALL_N``): Clarabel (all solvers
+  take milliseconds; Clarabel is the most accurate).
+* Larger optimisation problems: the interior-point method that suits the shape
+  (:func:`schur_complement_shape`): CVXOPT (Schur complement) when the variables are at most the
+  dimension of the PSD cone, Clarabel otherwise, then the other, then SDPA (it stops short of a
+  certified optimum on the bounded-real lemma). With ``first_order`` (``auto:first-order``) SCS
+  comes first; :mod:`lmic.routes` stops when its enclosure meets ``--gap``. Backends that are
+  not installed, or cannot take the problem (Clarabel refuses PSD blocks whose dense KKT block
+  would not fit in memory), are left out of the route.
 
 :class:`AutoBackend` runs the first backend of the route; the solve policy (:mod:`lmic.policy`)
 starts from this route and escalates through the rest of its order.
