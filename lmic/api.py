@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -76,6 +76,9 @@ class Result:
         (:func:`lmic.certify.enclosure.enclosure`).
     backoff : dict or None
         The backed-off, well-scaled point near the optimum (:func:`lmic.backoff.backoff`).
+    route : dict or None
+        The route taken (:mod:`lmic.routes`): ``steps`` (backend, verdict, relative gap) and
+        ``text``, the line the CLI prints.
     """
 
     target: str
@@ -94,6 +97,7 @@ class Result:
     outcome: Any = None
     enclosure: dict[str, Any] | None = None
     backoff: dict[str, Any] | None = None
+    route: dict[str, Any] | None = None
 
     @property
     def verdict(self) -> str:
@@ -179,6 +183,7 @@ class Result:
             "verdict": self.verdict,
             "evidence": self.outcome.evidence.to_dict() if self.outcome is not None else None,
             "attempts": self.attempts,
+            "route": self.route,  # lmic.routes: the backends tried, their method and verdict
             # -- optimal-value enclosure (lmic.certify.enclosure) --
             "enclosure": _enclosure_summary(self.enclosure),
             "backoff": _jsonable(self.backoff),
@@ -359,11 +364,12 @@ def solve(
         name = os.fspath(target)
     else:  # a Theorem object: its id
         name = theorem or target.id
-    from lmic.policy import decide
+    from lmic.routes import decide_route
 
     t0 = time.perf_counter()
-    outcome = decide(problem, backend, options, exact=exact)
-    total = time.perf_counter() - t0
+    routed = decide_route(problem, backend, options, exact=exact)  # the default route (lmic.routes)
+    outcome = routed.outcome
+    total = time.perf_counter() - t0 - routed.enclosure_s
     sol, cert = outcome.solution, outcome.certificate
     used = outcome.backend or str(getattr(backend, "label", backend))
     attempts = [a.to_dict() for a in outcome.attempts]
@@ -371,7 +377,11 @@ def solve(
     solve_s = sum(a.solve_s for a in outcome.attempts)
     variables, derived = _values(problem, sol.x, cert)
     # -- optimal-value enclosure (lmic.certify.enclosure) --
-    enc, enclosure_s = _enclosure(problem, sol, cert, exact, used, options)
+    enc: dict[str, Any] | None
+    if routed.enclosure is not None:  # computed by the route (its --gap test)
+        enc, enclosure_s = routed.enclosure, routed.enclosure_s
+    else:
+        enc, enclosure_s = _enclosure(problem, sol, cert, exact, used, options)
     tight_x = enc.pop("tight_x", None) if enc is not None else None
     back = _backoff(problem, enc, backoff, used, options, sol.objective)
     if enc is not None and (enc["upper"] if problem.objective.sense == "min" else enc["lower"]) is None:
@@ -427,6 +437,7 @@ def solve(
         outcome=outcome,
         enclosure=enc,
         backoff=back,
+        route=routed.route,
     )
 
 
@@ -436,71 +447,11 @@ def solve(
 def _enclosure(
     problem: Problem, sol: Solution, cert: Any, exact: bool, backend: str, options: SolveOptions | None
 ) -> tuple[dict[str, Any] | None, float]:
-    """The enclosure of an optimisation problem's optimal value (``None`` for feasibility).
+    """The enclosure of an optimisation problem's optimal value (``None`` for feasibility):
+    :func:`lmic.routes.enclosure_of`."""
+    from lmic.routes import enclosure_of
 
-    A degenerate dual is retried on a perturbed problem, then on a centred dual point (the dual
-    problem solved for the largest interior margin), both on the backend that answered.
-    """
-    if problem.objective.sense == "feasibility" or cert is None or sol.status in ("infeasible", "unbounded"):
-        return None, 0.0
-    from lmic.certify.enclosure import enclosure
-
-    t0 = time.perf_counter()
-    x = sol.x if getattr(cert, "verdict", None) == "certified" else None
-
-    def resolve(perturbed: Problem) -> dict[str, Any] | None:
-        try:
-            other = solve_problem(perturbed, backend, options)
-        except LmicError:
-            return None
-        return other.duals if other.status in ("optimal", "inaccurate") else None
-
-    def solve_point(other_problem: Problem) -> np.ndarray | None:
-        try:
-            other = solve_problem(other_problem, backend, options)
-        except LmicError:
-            return None
-        return other.x if other.status in ("optimal", "inaccurate") else None
-
-    enc = enclosure(problem, sol.duals, x, exact=exact, resolve=resolve, solve_point=solve_point)
-    enc = _tighter(problem, enc, x, exact, backend, options, resolve, solve_point)
-    return enc, time.perf_counter() - t0
-
-
-def _tighter(
-    problem: Problem, enc: dict[str, Any], x: Any, exact: bool, backend: str, options: Any, resolve, solve_point
-):
-    """A gap above :data:`lmic.certify.enclosure.GAP_TARGET` on an interior-point backend: a
-    re-solve at :data:`~lmic.certify.enclosure.TIGHT_TOL` and the better proven end of each."""
-    from lmic.certify.enclosure import GAP_TARGET, TIGHT_TOL, best_of, enclosure
-
-    gap = enc.get("rel_gap")
-    if (gap is not None and gap <= GAP_TARGET) or "scs" in backend.lower():
-        return enc
-    if options is not None and options.tol <= TIGHT_TOL:
-        return enc
-    tight = replace(options, tol=TIGHT_TOL) if options is not None else SolveOptions(tol=TIGHT_TOL)
-    try:
-        sol2 = solve_problem(problem, backend, tight)
-    except LmicError:
-        return enc
-    if sol2.status not in ("optimal", "inaccurate") or sol2.x is None:
-        return enc
-    enc2 = enclosure(problem, sol2.duals, sol2.x, exact=exact, resolve=resolve, solve_point=solve_point)
-    key = "upper" if problem.objective.sense == "min" else "lower"
-    inner = enc.get("restored_x") if enc.get("primal") == "restored point" else x
-    if enc2.get(key) is None and enc.get(key) is not None and inner is not None:
-        # the tight point is met only to round-off: as close to it as the proof allows
-        from lmic.certify.enclosure import polish_primal, with_primal
-
-        pol = polish_primal(problem, np.asarray(inner, dtype=float), np.asarray(sol2.x, dtype=float))
-        if pol["proven"]:
-            enc2 = dict(with_primal(enc2, pol["value"], "restored point"), restored_x=pol["x"])
-            return best_of(enc, enc2, pol["x"])
-    out = best_of(enc, enc2, sol2.x)
-    if out.get(key) is None:
-        out["tight_x"] = np.asarray(sol2.x, dtype=float).tolist()  # the restoration's target (solve())
-    return out
+    return enclosure_of(problem, sol, cert, exact, backend, options)
 
 
 def _backoff(

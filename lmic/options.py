@@ -49,6 +49,10 @@ class SolveOptions:
     relative_margin : float
         Margin of the ``fixed-margin`` feasibility solve of a scale-free problem, relative to
         the mean eigenvalue under the trace normalisation (default ``1e-4``).
+    gap : float
+        Optimisation problems on the default route (:mod:`lmic.routes`): the relative gap of the
+        certified enclosure of the optimal value at which the route stops (default ``1e-4``);
+        a larger gap is polished by an interior-point method. In ``(0, 1)``.
     extra : dict
         Solver-specific settings passed through unchanged.
     warm_start : Solution or None
@@ -70,6 +74,10 @@ class SolveOptions:
     50
     >>> SolveOptions(strict="fixed-margin").strict
     'fixed-margin'
+    >>> SolveOptions(gap=0)
+    Traceback (most recent call last):
+    ...
+    lmic.errors.LmicError: gap must be a relative gap in (0, 1), got 0
     >>> SolveOptions(time_limit=float("nan"))
     Traceback (most recent call last):
     ...
@@ -83,6 +91,7 @@ class SolveOptions:
     margin: float = 1e-7
     strict: str = "auto"
     relative_margin: float = 1e-4
+    gap: float = 1e-4
     extra: dict[str, Any] = field(default_factory=dict)
     warm_start: Solution | None = None
 
@@ -154,6 +163,13 @@ def _check_warm_start(value: Any) -> Solution | None:
     return value
 
 
+def _check_gap(value: Any) -> float:
+    value = _finite_number("gap", value)
+    if not 0.0 < value < 1.0:
+        raise LmicError(f"gap must be a relative gap in (0, 1), got {value:g}")
+    return value
+
+
 _OPTION_CHECKS: dict[str, Callable[[Any], Any]] = {
     "warm_start": _check_warm_start,
     "tol": _check_tol,
@@ -162,4 +178,5 @@ _OPTION_CHECKS: dict[str, Callable[[Any], Any]] = {
     "margin": _check_margin,
     "strict": _check_strict,
     "relative_margin": _check_relative_margin,
+    "gap": _check_gap,
 }

@@ -27,9 +27,11 @@ point whose float eigenvalues are all positive (margins below the float error bo
 supremum that is not attained). The best outcome found is returned (certified or
 infeasible-certified > infeasible-bounded > rejected > undecided), with every attempt.
 
-Escalation order: the size-based first choice of :func:`lmic.backends.auto.route` (small
-problems: Clarabel; large strict feasibility problems: SCS then CVXOPT; large optimisation
-problems: SDPA, CVXOPT, Clarabel), then the rest of :data:`ORDER` (Clarabel -> CVXOPT -> SDPA ->
+Escalation order: the shape- and size-based first choice of :func:`lmic.backends.auto.route`
+(strict feasibility problems above a tiny size: the certified first-order route, SCS then
+CVXOPT; small problems: Clarabel; larger optimisation problems: the interior-point method that
+suits the shape, CVXOPT or Clarabel, then SDPA; :mod:`lmic.routes` adds the ``--gap`` test of
+the optimal-value enclosure), then the rest of :data:`ORDER` (Clarabel -> CVXOPT -> SDPA ->
 SCS), skipping backends that are not installed or cannot take the problem (Clarabel's memory
 guard on large PSD blocks). SCS, a first-order method, runs at tolerance
 :data:`FIRST_ORDER_TOL` in the route (its answers are certified, not trusted; alone it runs at
@@ -65,6 +67,7 @@ __all__ = [
     "ORDER",
     "FIRST_ORDER_TOL",
     "MAX_BOUNDED",
+    "AUTO_VARIANTS",
     "route",
     "decide",
     "step_options",
@@ -78,6 +81,9 @@ ORDER = ("clarabel", "cvxopt", "sdpa", "scs")
 FIRST_ORDER_TOL = 1e-3
 #: stop escalating once this many backends gave bounded rays that no exact proof upgraded
 MAX_BOUNDED = 2
+#: ``auto:VARIANT``: ``first-order`` starts an optimisation route with SCS, ``interior-point``
+#: skips that step; ``auto`` alone follows :data:`lmic.backends.auto.FIRST_ORDER_OPTIMISATION`
+AUTO_VARIANTS: dict[str, bool | None] = {"": None, "first-order": True, "interior-point": False}
 
 
 def is_auto(backend: Any) -> bool:
@@ -125,7 +131,11 @@ def route(problem: Problem, backend: Any = None) -> list[Any]:
         return [backend]
     from lmic.backends import auto
 
-    first = [name for name in auto.route(problem) if _usable(name, problem)]
+    variant = backend.split(":", 1)[1].lower() if isinstance(backend, str) and ":" in backend else ""
+    if variant not in AUTO_VARIANTS:
+        raise BackendError(f"backend '{backend}': unknown auto variant; choose " + ", ".join(sorted(AUTO_VARIANTS)))
+    chain = auto.route(problem) if AUTO_VARIANTS[variant] is None else auto.route(problem, AUTO_VARIANTS[variant])
+    first = [name for name in chain if _usable(name, problem)]
     usable = first + [name for name in ORDER if name not in first and _usable(name, problem)]
     if not usable:
         raise BackendError("no installed backend can take this problem (tried " + ", ".join(ORDER) + ")")

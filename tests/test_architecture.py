@@ -60,7 +60,10 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("compile", ("lmic.compile.*",)),
     ("backends", ("lmic.backends.*",)),
     ("certify", ("lmic.certify.*",)),
-    ("engine", ("lmic.outcome", "lmic.reductions.*", "lmic.policy", "lmic.backoff", "lmic.testing.*")),
+    (
+        "engine",
+        ("lmic.outcome", "lmic.reductions.*", "lmic.policy", "lmic.routes", "lmic.backoff", "lmic.testing.*"),
+    ),
     (
         "studies",
         ("lmic.api", "lmic.sweep", "lmic.crosscheck", "lmic.published", "lmic.studies.*"),

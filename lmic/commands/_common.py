@@ -99,6 +99,8 @@ def solve_options(args: argparse.Namespace) -> Any:
         opts.margin = args.margin
     if getattr(args, "strict", None) is not None:
         opts.strict = args.strict
+    if getattr(args, "gap", None) is not None:
+        opts.gap = args.gap  # lmic.routes: the relative gap the default route stops at
     return opts
 
 

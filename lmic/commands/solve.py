@@ -39,6 +39,13 @@ def add_solver_options(p: argparse.ArgumentParser) -> None:
         help="strict LMIs of feasibility problems: maximise the margin, impose a fixed one, or auto "
         "(default; docs/backends.md)",
     )
+    p.add_argument(
+        "--gap",
+        type=float,
+        default=None,
+        help="optimisation problems, default route: stop when the certified enclosure of the optimal value "
+        "has this relative gap (default 1e-4); otherwise polish with an interior-point method",
+    )
     p.add_argument("--verbose", action="store_true", help="show the solver's own output")
 
 
@@ -58,7 +65,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--backend",
         "-b",
         default=None,
-        help="backend (see 'lmic backends'); default clarabel, or auto when a PSD block is too large for it",
+        help="backend (see 'lmic backends'); default: the fastest route that can prove the answer, by shape "
+        "and size (docs/backends.md; the chosen route is printed)",
     )
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("-o", "--output", default=None, help="write the certificate file here")
@@ -136,6 +144,9 @@ def run(args: argparse.Namespace) -> int:
     from lmic.present.text import print_result
 
     print_result(result, args.system, args.output)
+    route = getattr(result, "route", None)  # lmic.routes: the backends tried, method, verdict
+    if route and route.get("text"):
+        print(route["text"])
     # -- optimal-value enclosure (lmic.certify.enclosure) --
     from lmic.certify.enclosure import describe
 

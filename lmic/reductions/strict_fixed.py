@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from lmic.certify.spectra import block_spectrum
 from lmic.ir.problem import LinearConstraints, Objective, Problem
 from lmic.reductions.strict_common import StrictInverse, _diagonal_positions, _restrict, _trace_row
 from lmic.solution import Solution
@@ -90,8 +91,8 @@ def achieved_margin(problem: Problem, x: np.ndarray, scale_free: bool) -> float:
     for lmi in problem.lmis:
         if not lmi.strict or lmi.dim == 0:
             continue
-        F = lmi.matrix(x)
-        lmin = float(np.linalg.eigvalsh(F)[0])
+        F, eig = block_spectrum(lmi, x)  # shared with verify_point and the certifier
+        lmin = float(eig[0])
         if scale_free:
             mean = float(np.trace(F)) / lmi.dim
             lmin = lmin / mean if mean > 0 else -math.inf

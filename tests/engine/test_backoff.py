@@ -13,7 +13,7 @@ from lmic.backoff import backoff_problem
 from lmic.certify import audit_certificate, write_certificate
 from lmic.ir.problem import LinearConstraints, Objective, Problem, Variable
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
 def test_backoff_problem_keeps_the_objective_within_the_relative_room():

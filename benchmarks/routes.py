@@ -1,0 +1,347 @@
+"""Route benchmark: lmic's default route against hand-written CVXPY, interleaved, certified.
+
+Tables (issue 14, "Done when"):
+
+* **feasibility**, ``qib.thm1`` on random discrete-time systems (``benchmarks/backends.py``'s
+  generator): default ``lmic`` (no backend) against the same LMI hand-written in CVXPY +
+  Clarabel, and the expert route CVXPY + SCS with a trace normalisation (``trace P = n``,
+  ``M << -delta I``, ``P >> delta I`` with ``delta = 1e-2``), whose point is then certified by
+  lmic's certifier; ``lmic%`` is lmic's own share of its in-process time (compile, lowering,
+  certification: everything but the solver);
+* **optimisation**, the bounded-real lemma (``tutorial.bounded_real``, ``min gamma``) on random
+  stable systems: default ``lmic`` (solve, then the certified enclosure of the optimal value)
+  against CVXPY + Clarabel (``min gamma`` with ``eps = 1e-7`` margins); the H-infinity norm is
+  computed independently (``control.norm(..., method="scipy")``, a Hamiltonian bisection) and
+  every enclosure is checked to contain it (``in``); ``gap`` is the enclosure's relative gap;
+  ``err`` the relative error of CVXPY's ``gamma`` against the norm;
+* **optimisation**, ``uncertain_dt.thm1`` and ``delay_b.thm4_1`` on random plants
+  (:func:`lmic.studies.plants.random_plants`): default ``lmic`` against lmic with Clarabel alone
+  (no hand-written CVXPY version: the LMIs have 4-5 blocks of 20 block entries); the reference
+  optimum is Clarabel's certified objective, which must not be below the default route's
+  proven lower end.
+
+Every method runs ``--repeat`` times, methods *interleaved* (rotated order per round), each run in
+a fresh forked child with a time limit (``qib.thm1``'s plan analysed once in the parent). Times
+are whole in-process times of the call; medians; ``x lmic`` is the ratio of a method's median to
+default lmic's. ``--cli`` adds a one-shot ``lmic solve`` process (imports and template analysis
+included) for the default route. Usage::
+
+    python benchmarks/routes.py --quick          # a few minutes
+    python benchmarks/routes.py --sizes 10,20,30,40,50 --brl-sizes 10,20,30,40 --repeat 3 --cli
+
+Examples
+--------
+>>> brl_system(3, 0)["data"]["A"].__len__()
+3
+>>> ratio(2.0, 1.0)
+2.0
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from backends import _timed, random_qib_system, run_cvxpy  # noqa: E402
+
+__all__ = ["brl_system", "hinf_norm", "ratio", "main"]
+
+
+def ratio(a: float | None, b: float | None) -> float | None:
+    """``a / b`` or ``None``."""
+    return a / b if a is not None and b else None
+
+
+def brl_system(n: int, seed: int) -> dict[str, Any]:
+    """A random stable continuous-time system (2 inputs, 2 outputs), abscissa -0.5."""
+    rng = np.random.default_rng(seed + 7919 * n)
+    A = rng.standard_normal((n, n))
+    A -= (max(np.linalg.eigvals(A).real) + 0.5) * np.eye(n)
+    B, C = rng.standard_normal((n, 2)), rng.standard_normal((2, n))
+    return {"lmic": 1, "name": f"random n={n}", "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}
+
+
+def hinf_norm(system: dict[str, Any]) -> float:
+    """The H-infinity norm, independently of any LMI solver (python-control's Hamiltonian bisection)."""
+    import control
+
+    A, B, C = (np.asarray(system["data"][k]) for k in ("A", "B", "C"))
+    return float(
+        control.norm(control.ss(A, B, C, np.zeros((C.shape[0], B.shape[1]))), p="inf", tol=1e-10, method="scipy")
+    )
+
+
+def _lmic(target: str, system: dict[str, Any], backend: str | None) -> dict[str, Any]:
+    from lmic.api import solve
+
+    t0 = time.perf_counter()
+    r = solve(target, system, backend=backend, backoff=0)
+    total = time.perf_counter() - t0
+    enc = r.enclosure or {}
+    t = r.timings
+    return {
+        "status": r.status,
+        "verdict": r.verdict,
+        "total_s": total,
+        "solve_s": t["solve_s"],
+        "enclosure_s": t.get("enclosure_s", 0.0),
+        "lmic_s": total - t["solve_s"] - t.get("enclosure_s", 0.0),
+        "point_s": total - t.get("enclosure_s", 0.0),
+        "lower": enc.get("lower"),
+        "upper": enc.get("upper"),
+        "rel_gap": enc.get("rel_gap"),
+        "objective": r.objective,
+        "route": (r.route or {}).get("text", ""),
+    }
+
+
+def _expert_scs(n: int, delta: float = 1e-2) -> dict[str, Any]:
+    """qib.thm1 hand-written in CVXPY + SCS with a trace normalisation; certified by lmic."""
+    import cvxpy as cp
+
+    from lmic.certify import certify
+    from lmic.compile import compile_theorem
+    from lmic.solution import Solution
+
+    system = random_qib_system(n)
+    A, C = (np.asarray(system["data"][k]) for k in ("A", "C"))
+    beta = system["params"]["beta"]
+    p = C.shape[0]
+    t0 = time.perf_counter()
+    P, R, w = cp.Variable((n, n), symmetric=True), cp.Variable((p, n)), cp.Variable()
+    In, Z = np.eye(n), np.zeros((n, n))
+    X = A.T @ P - C.T @ R
+    M = cp.bmat([[-P + 2 * w * beta * In, X, X], [X.T, P - 2 * w * In, Z], [X.T, Z, -P]])
+    cons = [0.5 * (M + M.T) << -delta * np.eye(3 * n), P >> delta * In, w >= delta, cp.trace(P) == n]
+    prob = cp.Problem(cp.Minimize(0), cons)
+    prob.solve(solver="SCS", eps=1e-3)
+    out: dict[str, Any] = {"status": prob.status, "verdict": "unverified"}
+    if P.value is not None:
+        ir = compile_theorem("qib.thm1", system)
+        x = ir.pack({"P": P.value, "R": R.value, "omega": float(w.value)})
+        out["verdict"] = certify(ir, Solution("feasible", x=x)).verdict
+    out["total_s"] = time.perf_counter() - t0
+    return out
+
+
+def _cvxpy_brl(system: dict[str, Any], eps: float = 1e-7) -> dict[str, Any]:
+    """min gamma of the bounded-real lemma, hand-written in CVXPY + Clarabel."""
+    import cvxpy as cp
+
+    A, B, C = (np.asarray(system["data"][k]) for k in ("A", "B", "C"))
+    n, m, q = A.shape[0], B.shape[1], C.shape[0]
+    t0 = time.perf_counter()
+    P, g = cp.Variable((n, n), symmetric=True), cp.Variable()
+    M = cp.bmat(
+        [
+            [A.T @ P + P @ A, P @ B, C.T],
+            [B.T @ P, -g * np.eye(m), np.zeros((m, q))],
+            [C, np.zeros((q, m)), -g * np.eye(q)],
+        ]
+    )
+    prob = cp.Problem(cp.Minimize(g), [0.5 * (M + M.T) << -eps * np.eye(n + m + q), P >> eps * np.eye(n)])
+    prob.solve(solver="CLARABEL")
+    return {
+        "status": prob.status,
+        "total_s": time.perf_counter() - t0,
+        "objective": None if g.value is None else float(g.value),
+    }
+
+
+def _cli(target: str, system: dict[str, Any]) -> dict[str, Any]:
+    with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as fh:
+        json.dump(system, fh)
+    t0 = time.perf_counter()
+    proc = subprocess.run(["lmic", "solve", target, fh.name, "--backoff", "0"], capture_output=True, text=True)
+    os.unlink(fh.name)
+    return {"total_s": time.perf_counter() - t0, "status": f"exit {proc.returncode}"}
+
+
+def _plant(tid: str, n: int, seed: int) -> dict[str, Any]:
+    from lmic.registry import get_theorem
+    from lmic.studies.plants import random_plants
+
+    if tid == "uncertain_dt.thm1":
+        dims, params = {"n": n, "p": 2, "nw": 1, "nz": n, "r": 2, "s": 2}, {"mu": 1.25, "beta": 0.05}
+    else:
+        dims = {"n": n, "p": 1, "nw": 1, "nz": n, "r": 1, "s": 1}
+        params = {"tau1": 0, "tau2": 2, "eps2": 1, "eps3": 1, "lambda": 0.5}
+    spec = {"count": 1, "seed": seed, "dims": dims, "spectral_radius": {"A": 0.3}, "scale": 0.1}
+    plant = random_plants(get_theorem(tid).template(), spec, "benchmark")[0]
+    plant["params"] = params
+    return plant
+
+
+def _rounds(jobs: list[tuple[str, Any, tuple]], repeat: int, limit: float, label: str) -> dict[str, list[dict]]:
+    out: dict[str, list[dict]] = {name: [] for name, _, _ in jobs}
+    for k in range(repeat):
+        order = jobs[k % len(jobs) :] + jobs[: k % len(jobs)]
+        for name, fn, args in order:
+            r = _timed(fn, args, limit)
+            out[name].append(r)
+            what = r.get("verdict", r.get("status"))
+            print(
+                f"  [{label} {k + 1}/{repeat}] {name}: {what} {r.get('total_s', r['wall_s']):.3f} s",
+                file=sys.stderr,
+                flush=True,
+            )
+    return out
+
+
+def _med(rows: list[dict], key: str) -> float | None:
+    vals = [r[key] for r in rows if isinstance(r.get(key), int | float)]
+    return statistics.median(vals) if vals else None
+
+
+def _f(v: Any, spec: str = ".3f") -> str:
+    return "-" if v is None else format(v, spec) if isinstance(v, float) else str(v)
+
+
+def _row(cells: list[tuple[Any, int, str]]) -> str:
+    """One table row: ``(value, width, format)`` per cell, right-aligned; a string is as is."""
+    return " ".join(f"{_f(v, spec) if not isinstance(v, str) else v:>{w}}" for v, w, spec in cells)
+
+
+def feasibility(sizes: list[int], repeat: int, limit: float, cli: bool) -> list[str]:
+    """The qib.thm1 table."""
+    heads = [("n", 3), ("lmic s", 8), ("lmic%", 6), ("verdict", 10), ("cvxpy+clarabel s", 17), ("x lmic", 7)]
+    heads += [("expert scs s", 13), ("x lmic", 7), ("verdict", 10), ("cli s", 7)]
+    lines = [" ".join(f"{h:>{w}}" for h, w in heads) + "  route"]
+    for n in sizes:
+        system = random_qib_system(n)
+        jobs = [
+            ("lmic", _lmic, ("qib.thm1", system, None)),
+            ("cvxpy:CLARABEL", run_cvxpy, ("CLARABEL", n)),
+            ("expert", _expert_scs, (n,)),
+        ]
+        if cli:
+            jobs.append(("cli", _cli, ("qib.thm1", system)))
+        res = _rounds(jobs, repeat, limit, f"qib n={n}")
+        lm, cv, ex = (_med(res[k], "total_s") for k in ("lmic", "cvxpy:CLARABEL", "expert"))
+        share = ratio(_med(res["lmic"], "lmic_s"), lm)
+        last = res["lmic"][-1]
+        cv_txt = _f(cv) if cv is not None else str(res["cvxpy:CLARABEL"][-1].get("status"))[:17]
+        cells = [(n, 3, "d"), (lm, 8, ".3f"), (None if share is None else 100 * share, 6, ".1f")]
+        cells += [(str(last.get("verdict"))[:10], 10, ""), (cv_txt, 17, ""), (ratio(cv, lm), 7, ".1f")]
+        cells += [(ex, 13, ".3f"), (ratio(ex, lm), 7, ".1f"), (str(res["expert"][-1].get("verdict"))[:10], 10, "")]
+        cells += [(_med(res.get("cli", []), "total_s"), 7, ".3f")]
+        lines.append(_row(cells) + "  " + str(last.get("route", "")))
+    lines.append("  lmic%: lmic's own share of its in-process time (compile, lowering, certification)")
+    return lines
+
+
+def brl(sizes: list[int], repeat: int, limit: float, variant: str | None = None) -> list[str]:
+    """The bounded-real-lemma table (``variant``: e.g. ``"auto:first-order"`` as lmic's route)."""
+    heads = [("n", 3), ("lmic s", 8), ("point s", 8), ("encl s", 8), ("verdict", 10), ("gap", 8), ("in", 4)]
+    heads += [("cvxpy+clarabel s", 17), ("err", 8), ("x lmic", 7), ("x point", 7)]
+    lines = [" ".join(f"{h:>{w}}" for h, w in heads) + "  route"]
+    for n in sizes:
+        system = brl_system(n, 0)
+        norm = hinf_norm(system)
+        jobs = [("lmic", _lmic, ("tutorial.bounded_real", system, variant)), ("cvxpy", _cvxpy_brl, (system,))]
+        res = _rounds(jobs, repeat, limit, f"brl n={n}")
+        lm, cv, pt = _med(res["lmic"], "total_s"), _med(res["cvxpy"], "total_s"), _med(res["lmic"], "point_s")
+        last = res["lmic"][-1]
+        lo, hi = last.get("lower"), last.get("upper")
+        inside = (lo is None or lo <= norm * (1 + 1e-9)) and (hi is None or hi >= norm * (1 - 1e-9))
+        obj = res["cvxpy"][-1].get("objective")
+        err = None if obj is None else abs(obj - norm) / norm
+        cells = [(n, 3, "d"), (lm, 8, ".3f"), (pt, 8, ".3f"), (_med(res["lmic"], "enclosure_s"), 8, ".3f")]
+        cells += [(str(last.get("verdict"))[:10], 10, ""), (last.get("rel_gap"), 8, ".1e")]
+        cells += [(("yes" if inside else "NO") + ("" if lo is not None else "*"), 4, "")]
+        cells += [(cv, 17, ".3f"), (err, 8, ".1e"), (ratio(cv, lm), 7, ".2f"), (ratio(cv, pt), 7, ".2f")]
+        lines.append(_row(cells) + "  " + str(last.get("route", "")))
+    lines.append("  point s: to the certified point (no enclosure); in: the enclosure contains the H-infinity norm")
+    lines.append("  (* = no certified lower end: only the upper end is checked); err: CVXPY's gamma against the norm")
+    return lines
+
+
+def theorems(sizes: list[int], repeat: int, limit: float) -> list[str]:
+    """The uncertain_dt.thm1 / delay_b.thm4_1 table."""
+    heads = [("theorem", 18), ("n", 3), ("lmic s", 8), ("encl s", 8), ("verdict", 10), ("gap", 8), ("ok", 4)]
+    heads += [("clarabel s", 11), ("x lmic", 7)]
+    lines = [" ".join(f"{h:>{w}}" for h, w in heads) + "  route"]
+    for tid in ("uncertain_dt.thm1", "delay_b.thm4_1"):
+        for n in sizes:
+            plant = _plant(tid, n, 1)
+            jobs = [("lmic", _lmic, (tid, plant, None)), ("clarabel", _lmic, (tid, plant, "clarabel"))]
+            res = _rounds(jobs, repeat, limit, f"{tid} n={n}")
+            lm, cl = _med(res["lmic"], "total_s"), _med(res["clarabel"], "total_s")
+            last, ref = res["lmic"][-1], res["clarabel"][-1]
+            lo, obj = last.get("lower"), ref.get("objective")
+            ok = "-" if obj is None else ("yes" if lo is None or lo <= obj * (1 + 1e-9) + 1e-12 else "NO")
+            ok += "" if lo is not None or obj is None else "*"
+            cells = [(tid, 18, ""), (n, 3, "d"), (lm, 8, ".3f"), (_med(res["lmic"], "enclosure_s"), 8, ".3f")]
+            cells += [(str(last.get("verdict"))[:10], 10, ""), (last.get("rel_gap"), 8, ".1e"), (ok, 4, "")]
+            cells += [(cl, 11, ".3f"), (ratio(cl, lm), 7, ".2f")]
+            lines.append(_row(cells) + "  " + str(last.get("route", "")))
+    lines.append("  ok: the proven lower end is not above Clarabel's certified objective; * = no certified lower end")
+    return lines
+
+
+def _warm_up() -> None:
+    """Import the solvers and CVXPY and analyse every template once in the parent (as a session
+    does); the timed children are forked from it, so no method pays imports or the analysis."""
+    import clarabel  # noqa: F401
+    import cvxpy  # noqa: F401
+
+    from lmic.api import solve
+    from lmic.compile import compile_theorem
+
+    # not Clarabel: a forked child of a process that has run Clarabel hangs in its thread pool
+    for backend in ("scs", "cvxopt"):
+        solve("qib.thm1", random_qib_system(3), backend=backend)
+        solve("tutorial.bounded_real", brl_system(3, 0), backend=backend, backoff=0)
+    for tid in ("uncertain_dt.thm1", "delay_b.thm4_1"):
+        compile_theorem(tid, _plant(tid, 2, 0))
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the tables (interleaved rounds) and print them."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="small sizes, one round: a few minutes")
+    ap.add_argument("--sizes", default="10,20,30,40,50", help="qib.thm1 sizes")
+    ap.add_argument("--brl-sizes", default="10,20,30,40")
+    ap.add_argument("--theorem-sizes", default="4,8")
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--limit", type=float, default=300.0, help="seconds per run")
+    ap.add_argument("--cli", action="store_true", help="also a one-shot 'lmic solve' process (default route)")
+    ap.add_argument("--only", default="feasibility,brl,theorems")
+    ap.add_argument("--brl-route", default=None, help="lmic's backend for the BRL table, e.g. auto:first-order")
+    args = ap.parse_args(argv)
+    if args.quick:
+        args.sizes, args.brl_sizes, args.theorem_sizes, args.repeat = "10,40", "10,20", "4", 1
+    warnings.simplefilter("ignore")
+    _warm_up()  # imports and analysed plans, once: the forked children inherit them
+    ints = lambda s: [int(v) for v in s.split(",") if v]  # noqa: E731
+    only = set(args.only.split(","))
+    out: list[str] = []
+    if "feasibility" in only:
+        out += ["", "Feasibility, qib.thm1 (medians of interleaved runs)"] + feasibility(
+            ints(args.sizes), args.repeat, args.limit, args.cli
+        )
+    if "brl" in only:
+        out += ["", "Optimisation, bounded-real lemma (min gamma)"] + brl(
+            ints(args.brl_sizes), args.repeat, args.limit, args.brl_route
+        )
+    if "theorems" in only:
+        out += ["", "Optimisation, uncertain_dt.thm1 and delay_b.thm4_1 (random plants)"] + theorems(
+            ints(args.theorem_sizes), args.repeat, args.limit
+        )
+    print("\n".join(out))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

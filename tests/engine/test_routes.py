@@ -1,0 +1,190 @@
+"""The default route (lmic.routes, lmic.backends.auto.route): which route for which shape, that
+it certifies on random instances with the enclosure containing an independently computed
+optimum (the H-infinity norm by a Hamiltonian bisection), --gap validation, and escalation when
+the first-order step fails. Every solver answer is re-checked through the certifier."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import lmic.api
+from lmic.backends import auto
+from lmic.certify import certify
+from lmic.errors import BackendError, LmicError
+from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+from lmic.options import SolveOptions
+from lmic.policy import route
+
+
+def _shape(dims: list[int], n: int, sense: str = "feasibility", strict: bool = True) -> Problem:
+    """A problem with LMI blocks of the given sizes and ``n`` scalar variables (only the shape
+    matters to the route rule)."""
+    rng = np.random.default_rng(0)
+    lmis = []
+    for k, d in enumerate(dims):
+        rows = d * (d + 1) // 2
+        lmis.append(LMI(f"F{k}", d, sp.random(rows, n + 1, density=0.2, random_state=rng, format="csc"), strict=strict))
+    variables = [Variable(f"x{i}", "scalar", (1, 1), offset=i) for i in range(n)]
+    c = np.r_[0.0, np.ones(n)] if sense != "feasibility" else np.zeros(n + 1)
+    return Problem(variables, lmis, LinearConstraints.empty(n), Objective(sense, c))
+
+
+def test_tiny_strict_feasibility_takes_clarabel_larger_takes_the_first_order_route():
+    assert route(_shape([4, 12], 10))[0] == "clarabel"  # sum d^2 = 160 <= SMALL_FEASIBILITY
+    r = route(_shape([40, 120], 100))
+    assert r[:2] == ["scs", "cvxopt"]
+
+
+def test_optimisation_route_picks_the_interior_point_method_by_shape():
+    # small: Clarabel
+    assert route(_shape([10, 14], 20, "min", strict=False))[0] == "clarabel"
+    # few variables against the PSD cone dimension (sum d(d+1)/2 = 1830): CVXOPT, SDPA last
+    few = _shape([60], 100, "min", strict=False)
+    assert auto.schur_complement_shape(few)
+    r = route(few)
+    assert r[0] == "cvxopt" and r.index("sdpa") > r.index("clarabel")
+    # many variables against it (55 < 300): Clarabel first
+    many = _shape([10], 300, "min", strict=False)
+    assert not auto.schur_complement_shape(many) and route(many)[0] == "clarabel"
+    # the first-order variant starts with SCS; the interior-point variant never does
+    assert route(few, "auto:first-order")[:2] == ["scs", "cvxopt"]
+    assert route(few, "auto:interior-point")[0] == "cvxopt"
+
+
+def test_unknown_auto_variant_and_explicit_backend():
+    with pytest.raises(BackendError, match="unknown auto variant"):
+        route(_shape([4], 3), "auto:fastest")
+    assert route(_shape([40, 120], 100), "clarabel") == ["clarabel"]
+
+
+# -- the default route on random instances, against the H-infinity norm -----------------------
+
+
+def hinf_norm(A, B, C, tol=1e-12):
+    """Bracket of the H-infinity norm of (A, B, C, 0) by bisection on the imaginary-axis
+    eigenvalues of the Hamiltonian (no LMI solver involved)."""
+
+    def crosses(g):
+        H = np.block([[A, B @ B.T / g], [-C.T @ C / g, -A.T]])
+        ev = np.linalg.eigvals(H)
+        return np.any(np.abs(ev.real) < 1e-8 * max(1.0, np.abs(ev).max()))
+
+    lo, hi = 0.0, 1.0
+    while crosses(hi):
+        lo, hi = hi, 2 * hi
+    while hi - lo > tol * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if crosses(mid) else (lo, mid)
+    return lo, hi
+
+
+def _brl(n: int, seed: int):
+    rng = np.random.default_rng(seed)
+    A = rng.standard_normal((n, n))
+    A -= (max(np.linalg.eigvals(A).real) + 0.5) * np.eye(n)
+    B, C = rng.standard_normal((n, 2)), rng.standard_normal((2, n))
+    system = {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}
+    return system, hinf_norm(A, B, C)
+
+
+def _check_enclosure(r, lo, hi):
+    assert r.verdict == "certified"
+    assert certify(r.problem, r.solution).verdict == "certified"  # re-checked independently of the route
+    e = r.enclosure
+    assert e["upper"] is not None and e["upper"] >= hi
+    if e["lower"] is not None:
+        assert e["lower"] <= lo
+    return e
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_default_route_small_brl_certifies_and_encloses_the_hinf_norm(seed):
+    system, (lo, hi) = _brl(4, seed)
+    r = lmic.api.solve("tutorial.bounded_real", system)
+    e = _check_enclosure(r, lo, hi)
+    assert e["lower"] is not None and e["rel_gap"] <= SolveOptions().gap
+    assert r.route["steps"][-1]["backend"] == "clarabel" and "clarabel (interior point" in r.route["text"]
+
+
+@pytest.mark.parametrize("variant", ["auto", "auto:first-order"])
+def test_default_route_above_the_small_size_polishes_with_the_schur_complement_method(monkeypatch, variant):
+    # the size threshold is a measured parameter: lowering it exercises the large-problem route
+    # on an instance that solves in well under a second
+    monkeypatch.setattr(auto, "SMALL", 10)
+    system, (lo, hi) = _brl(5, 3)
+    r = lmic.api.solve("tutorial.bounded_real", system, backend=variant)
+    _check_enclosure(r, lo, hi)
+    steps = [s["backend"] for s in r.route["steps"]]
+    assert steps[0] == ("scs" if variant == "auto:first-order" else "cvxopt")
+    if variant == "auto:first-order":
+        gap = r.route["steps"][0].get("rel_gap")
+        # the first-order step stops the route only when its proven gap meets --gap
+        assert (gap is not None and gap <= r.route["gap"]) == (steps == ["scs"])
+
+
+def test_first_order_optimisation_step_that_fails_escalates(monkeypatch):
+    import lmic.routes
+
+    monkeypatch.setattr(auto, "SMALL", 10)
+    monkeypatch.setattr(lmic.routes, "OPTIMISATION_FIRST_ORDER_ITERS", 1)  # SCS cannot converge
+    system, (lo, hi) = _brl(5, 4)
+    r = lmic.api.solve("tutorial.bounded_real", system, backend="auto:first-order")
+    _check_enclosure(r, lo, hi)
+    assert r.route["steps"][0]["backend"] == "scs" and r.route["steps"][0]["verdict"] != "certified"
+    assert r.backend == "cvxopt"
+
+
+def test_feasibility_first_order_failure_escalates_to_an_interior_point_method():
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parents[2] / "benchmarks"))
+    from backends import random_qib_system
+
+    # one SCS iteration (extra settings reach SCS only): its point is not certified
+    r = lmic.api.solve("qib.thm1", random_qib_system(8), options=SolveOptions(extra={"max_iters": 1}))
+    assert r.verdict == "certified" and certify(r.problem, r.solution).verdict == "certified"
+    steps = r.route["steps"]
+    assert steps[0] == {"backend": "scs", "verdict": "rejected"} and steps[-1]["verdict"] == "certified"
+    assert r.backend != "scs" and "=> " in r.route["text"]
+    assert r.to_dict()["route"]["steps"] == steps
+
+
+# -- --gap ----------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("bad", [0, 1, -1e-3, float("nan"), float("inf"), "1e-4", True])
+def test_gap_validation(bad):
+    with pytest.raises(LmicError, match="gap must be"):
+        SolveOptions(gap=bad)
+
+
+@pytest.mark.parametrize("bad", ["0", "2", "nan", "-1", "abc"])
+def test_cli_bad_gap_is_one_line_exit_2(tmp_path, bad):
+    system, _ = _brl(3, 0)
+    path = tmp_path / "s.json"
+    path.write_text(__import__("json").dumps(system))
+    out = subprocess.run(
+        [sys.executable, "-m", "lmic.cli", "solve", "tutorial.bounded_real", str(path), "--gap", bad],
+        capture_output=True,
+        text=True,
+    )
+    assert out.returncode == 2
+    lines = [ln for ln in out.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "gap" in lines[0], out.stderr
+    assert out.stdout == ""
+
+
+def test_cli_prints_the_route(tmp_path):
+    system, (lo, hi) = _brl(3, 1)
+    path = tmp_path / "s.json"
+    path.write_text(__import__("json").dumps(system))
+    out = subprocess.run(
+        [sys.executable, "-m", "lmic.cli", "solve", "tutorial.bounded_real", str(path), "--gap", "1e-3"],
+        capture_output=True,
+        text=True,
+    )
+    assert out.returncode == 0, out.stderr
+    assert "route: clarabel (interior point; " in out.stdout and "-> certified" in out.stdout
