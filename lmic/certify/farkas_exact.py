@@ -85,12 +85,13 @@ def prove_farkas(
 
     t0 = time.perf_counter()
     out: dict[str, Any] = {}
-    for rel in rel_face:
-        for center in (False, True):
-            attempt = _prove_farkas(problem, farkas, rel, keep_certificate, center)
+    for rel in _face_thresholds(problem, farkas, rel_face):
+        for center, rational in ((False, False), (False, True), (True, False), (True, True)):
+            attempt = _prove_farkas(problem, farkas, rel, keep_certificate, center, rational)
             if attempt["face"] is not None:
                 attempt["face"]["threshold"] = rel
                 attempt["face"]["centered"] = center
+                attempt["face"]["rational_basis"] = rational
             if not out or attempt["proven"]:
                 out = attempt
             if attempt["proven"]:
@@ -101,8 +102,58 @@ def prove_farkas(
     return out
 
 
+#: eigenvalue gaps (ratio of consecutive multipliers) that also define a face, at most this many
+_GAP_FACES = 3
+#: smallest ratio of consecutive multipliers that counts as a gap
+_GAP_RATIO = 8.0
+
+
+def _face_thresholds(problem: Problem, farkas: dict[str, Any], rel_face: tuple[float, ...]) -> list[float]:
+    """The face thresholds to try: ``rel_face``, then the certificate's largest eigenvalue gaps.
+
+    A fixed threshold depends on the solver's noise level relative to the certificate (the
+    noise eigenvalues of a ray sit at ``1e-8`` of the largest on one instance and at ``1e-9``
+    on the same instance scaled by ``1e3``): on one side of it the face is the true face of the
+    certificates, on the other a tilted rank-deficient one on which the only exact solution is
+    ``0``. The largest ratios between consecutive multipliers (every ``Z_i``'s eigenvalues and
+    ``y_r``, each block on its own, relative to the largest multiplier) separate the certificate from the solver's noise
+    whatever the scale; a threshold in the middle of each of the ``_GAP_FACES`` largest gaps
+    (ratio above ``_GAP_RATIO``) is tried after ``rel_face`` when it gives another face.
+    """
+    mats, y = _parse(problem, farkas)
+    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
+    ws = [np.linalg.eigvalsh(Z) if Z.size else np.zeros(0) for Z in mats]
+    ys = np.where(ge, y, np.abs(y)) if len(y) else np.zeros(0)
+    top = float(max([float(np.max(w, initial=0.0)) for w in ws] + [float(np.max(ys, initial=0.0))]))
+    if not top > 0:
+        return list(rel_face)
+
+    def face(rel: float) -> tuple[int, ...]:
+        return (*[int(np.sum(w > rel * top)) for w in ws], int(np.sum(ys > rel * top)))
+
+    gaps: list[tuple[float, float]] = []  # (ratio, threshold), every block on its own
+    for w in [*ws, ys]:
+        v = np.sort(w[w > 1e-15 * top] / top)[::-1]
+        if v.size >= 2:
+            ratio = v[:-1] / v[1:]
+            gaps += [(float(ratio[j]), float(np.sqrt(v[j] * v[j + 1]))) for j in range(v.size - 1)]
+    out, seen = list(rel_face), {face(rel) for rel in rel_face}
+    for ratio, rel in sorted(gaps, reverse=True):
+        if ratio < _GAP_RATIO or len(out) >= len(rel_face) + _GAP_FACES:
+            break
+        if face(rel) not in seen:
+            seen.add(face(rel))
+            out.append(rel)
+    return out
+
+
 def _prove_farkas(
-    problem: Problem, farkas: dict[str, Any], rel_face: float, keep: bool, center: bool = False
+    problem: Problem,
+    farkas: dict[str, Any],
+    rel_face: float,
+    keep: bool,
+    center: bool = False,
+    rational: bool = False,
 ) -> dict[str, Any]:
     from fractions import Fraction
 
@@ -134,6 +185,17 @@ def _prove_farkas(
     ranks: list[int] = []
     sels = [w > thr for w, _ in eigs]
     rows = [r for r in range(len(y)) if (not ge[r]) or y[r] > thr]
+    bases: list[np.ndarray | None] = [None] * len(eigs)
+    if rational:
+        # the face spanned by small-denominator rationals (module docstring); a block whose
+        # face has no such basis is dropped (its multiplier set to 0): the exact check decides
+        for i, ((_w, V), sel) in enumerate(zip(eigs, sels, strict=True)):
+            if np.any(sel):
+                bases[i] = _rational_basis(_snap(V[:, sel]))
+                if bases[i] is None:
+                    sels[i] = np.zeros_like(sel)
+        if not any(np.any(sel) for sel in sels) and not rows:
+            return dict(fail, reason="no face block has a small-denominator rational basis")
     # the float starting point: S_i = diag(w) on the face, y on the rows used
     parts = []
     for (w, _), sel in zip(eigs, sels, strict=True):
@@ -155,7 +217,11 @@ def _prove_farkas(
         t = lmi.dim * (lmi.dim + 1) // 2
         if (1 + n) * t * r * (r + 1) // 2 > EXACT_MAX_ENTRIES:
             return dict(fail, reason=f"the face of LMI '{lmi.name}' is too large for an exact proof")
-        W = np.rint(np.ldexp(_snap(V[:, sel]), _FACE_BITS)).astype(np.int64).astype(object)
+        basis = bases[i]
+        if basis is None:
+            W = np.rint(np.ldexp(_snap(V[:, sel]), _FACE_BITS)).astype(np.int64).astype(object)
+        else:
+            W = basis
         ri, ci = tril_rows_cols(lmi.dim)
         ia, ib = np.triu_indices(r)
         P, Q = W[ri], W[ci]
@@ -168,9 +234,19 @@ def _prove_farkas(
         Jl = (Cq * flint.fmpq_mat(T.tolist())).tolist()  # (1 + n) x r(r+1)/2
         for col in range(len(ia)):
             columns.append([Jl[k][col] for k in range(1 + n)])
-        # V diag(w) V^T = W (diag(w) 2^-100) W^T
-        scale = flint.fmpq(1, 1 << (2 * _FACE_BITS))
-        u0 += [q(float(v)) * scale for v in u0f[k0 : k0 + len(ia)]]
+        seg = u0f[k0 : k0 + len(ia)]
+        if basis is None:
+            # V diag(w) V^T = W (diag(w) 2^-100) W^T
+            scale = flint.fmpq(1, 1 << (2 * _FACE_BITS))
+            u0 += [q(float(v)) * scale for v in seg]
+        else:
+            # the same face matrix V S V^T in the rational basis: S_W = W^+ V S V^T W^+T
+            Sv = np.zeros((r, r))
+            Sv[ia, ib] = Sv[ib, ia] = seg
+            U = _snap(V[:, sel])
+            Wp = np.linalg.pinv(W.astype(float))
+            Sw = Wp @ (U @ Sv @ U.T) @ Wp.T
+            u0 += [q(float(v)) for v in Sw[ia, ib]]
         k0 += len(ia)
         blocks.append((i, W, r))
     if rows:
@@ -285,6 +361,58 @@ def _snap(V: np.ndarray) -> np.ndarray:
     projection would have to cancel an O(1) component of the multiplier along it.
     """
     return np.where(np.abs(V) < 2.0 ** -(_FACE_BITS - 10), 0.0, V)
+
+
+#: rational face bases: (tolerance on an entry, largest denominator), tried in order
+_RATIONAL_GRID = ((1e-9, 1000), (1e-5, 30), (1e-3, 6))
+
+
+def _rational_basis(U: np.ndarray) -> np.ndarray | None:
+    """An integer basis of the span of ``U`` (``d x r``) whose entries are small-denominator rationals.
+
+    A solver's ray is accurate only to its own tolerance: its face (the span of the top
+    eigenvectors) is tilted by ``1e-6`` or so off the true face, and when the true face is
+    spanned by rational vectors (structured data: ``e_4 - e_7``, ...) the tilt makes the exact
+    conditions bind where they vanish identically on the true face (the only exact solution is
+    then ``Z_i = 0``). The canonical basis ``B = U U[p]^-1`` (``p`` ``r`` pivot rows by QR with
+    column pivoting, so ``B[p] = I``) is scale-free; its entries are replaced by the nearest
+    fractions with denominators up to ``q_max`` when every entry is within ``tol`` of one
+    (:data:`_RATIONAL_GRID`, tried in order), and ``B`` times the common denominator is
+    returned. ``None`` when no grid entry fits. A candidate only: the exact proof checks it.
+
+    Examples
+    --------
+    >>> U = np.array([[0.0], [1.0], [3e-7], [-1.0]]) / np.sqrt(2)
+    >>> _rational_basis(U).ravel().tolist()
+    [0, 1, 0, -1]
+    """
+    from fractions import Fraction
+
+    import scipy.linalg
+
+    d, r = U.shape
+    if not r:
+        return None
+    _, _, piv = scipy.linalg.qr(U.T, pivoting=True, mode="economic")
+    p = np.sort(piv[:r])
+    try:
+        B = U @ np.linalg.inv(U[p])
+    except np.linalg.LinAlgError:
+        return None
+    B[p] = np.eye(r)
+    for tol, qmax in _RATIONAL_GRID:
+        fr = [[Fraction(float(b)).limit_denominator(qmax) for b in row] for row in B]
+        if all(
+            abs(float(f) - b) <= tol * max(1.0, abs(b))
+            for row, brow in zip(fr, B, strict=True)
+            for f, b in zip(row, brow, strict=True)
+        ):
+            den = 1
+            for row in fr:
+                for f in row:
+                    den = den * f.denominator // math.gcd(den, f.denominator)
+            return np.array([[int(f * den) for f in row] for row in fr], dtype=object).reshape(d, r)
+    return None
 
 
 def _face_jacobian(problem: Problem, eigs: list, sels: list, rows: list[int]) -> np.ndarray:
