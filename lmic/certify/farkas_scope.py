@@ -84,8 +84,8 @@ def scope(problem: Problem, verification: dict[str, Any] | None, exact: dict[str
     ...              LMI("-1 - p >= 0", 1, sp.csc_matrix([[-1., -1.0000001]]), strict=False)],
     ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
     >>> s = scope(q, verify_farkas(q, {"lmis": [np.eye(1), np.eye(1)]}, repair=False))
-    >>> s["scope"], round(s["radius"])
-    ('bounded', 10000000)
+    >>> s["scope"], f"{s['radius']:.6g}"
+    ('bounded', '1e+07')
     """
     if exact is not None and exact.get("proven"):
         return {
