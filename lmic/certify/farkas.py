@@ -71,7 +71,11 @@ remains is the float residual ``g_k != 0`` (``k >= 1``), and that is what decide
   ``[[x, 1], [1, 1e-5]] > 0`` is feasible exactly for ``x > 1e5``, and SDPA and SCS return
   certificates that verify to ``1e-6`` with ``R ~ 4e4`` (``tests/engine/test_engine.py``). To go
   further: an exact proof (``--exact``), another backend (another ray), or a larger ``R``
-  (a more accurate ray).
+  (a more accurate ray). A float ``g_k`` is known only up to the rounding of its own
+  evaluation (``residual_floor``: a few ``eps`` per term, each term bounded by ``c_k``), so
+  ``R`` uses ``||g_{1:}||_1`` plus that bound: a float residual of exactly ``0.0`` (an exact
+  certificate checked in float) gives a large but finite ``R``, never "no solution with
+  ``||x||_inf <= inf``"; only the exact proof makes it global.
 
 Repair of inaccurate certificates
 ---------------------------------
@@ -110,7 +114,17 @@ the cone (an eigenvalue of ``S_i`` smaller than the projection's correction), a 
 first moves the float point towards the analytic centre of the face's certificates (log-det
 barrier, Newton steps in the null space of the float equations): by the smallest step of a
 grid that leaves every eigenvalue a float margin, so the certificate stays close to the
-solver's. Either way the result is only a candidate; then, exactly: every ``S_i`` is
+solver's. Two more failures are searched around (:mod:`lmic.certify.farkas_face`). A solver's ray is
+accurate only to its tolerance: the span of its top eigenvectors is tilted by ``1e-6`` or so
+off the true face, and when the certificates' face is spanned by rational vectors (structured
+data: ``z = e_4 - e_7``) the exact conditions then bind where they vanish on the true face and
+force ``S_i = 0`` ("no exact separation: g_0 = 0"); a third attempt replaces the face basis by
+its canonical basis (identity on pivot rows) rounded to fractions with small denominators, when
+every entry is within a tolerance of one. And which eigenvalues are the certificate and which
+the solver's noise is not a fixed ratio (the same problem scaled by ``1e3`` moves the noise from
+``1e-8`` to ``1e-9`` of the largest multiplier): after the given thresholds, the largest
+eigenvalue gaps of every block define further faces (scale-free).
+Either way the result is only a candidate; then, exactly: every ``S_i`` is
 positive semidefinite (so is ``Z_i``), ``y_r >= 0`` on ``ge`` rows, ``g_k = 0`` for
 ``k >= 1`` by construction, and ``g_0 < 0`` (closed) or ``g_0 <= 0`` with ``tau > 0``
 (strict). Nothing is left to tolerance: the problem is infeasible as stated by its IR.
@@ -130,7 +144,8 @@ Examples
 
 The module is split by job and re-exports every public name: ray verification and repair
 (:mod:`lmic.certify.farkas_ray`), exact global proofs (:mod:`lmic.certify.farkas_exact`) and
-the scope of what a certificate proves (:mod:`lmic.certify.farkas_scope`).
+the scope of what a certificate proves (:mod:`lmic.certify.farkas_scope`); the faces the exact
+proof tries are found by :mod:`lmic.certify.farkas_face`.
 """
 
 from __future__ import annotations

@@ -24,6 +24,13 @@ from typing import Any
 
 import numpy as np
 
+from lmic.certify.farkas_face import (
+    _FACE_BITS,
+    _face_thresholds,
+    _rational_basis,
+    _snap,
+    _towards_center,
+)
 from lmic.certify.farkas_ray import _parse, _weights
 from lmic.ir.problem import Problem
 from lmic.ir.svec import tril_rows_cols
@@ -32,8 +39,6 @@ __all__ = ["prove_farkas", "prove_infeasible", "EXACT_MAX_ENTRIES"]
 
 #: largest exact Jacobian ((1 + n) x (tril entries) x (face unknowns)) an exact proof builds
 EXACT_MAX_ENTRIES = 50_000_000
-#: bits of the rational rounding of the face bases
-_FACE_BITS = 50
 
 
 def prove_farkas(
@@ -85,12 +90,13 @@ def prove_farkas(
 
     t0 = time.perf_counter()
     out: dict[str, Any] = {}
-    for rel in rel_face:
-        for center in (False, True):
-            attempt = _prove_farkas(problem, farkas, rel, keep_certificate, center)
+    for rel in _face_thresholds(problem, farkas, rel_face):
+        for center, rational in ((False, False), (False, True), (True, False), (True, True)):
+            attempt = _prove_farkas(problem, farkas, rel, keep_certificate, center, rational)
             if attempt["face"] is not None:
                 attempt["face"]["threshold"] = rel
                 attempt["face"]["centered"] = center
+                attempt["face"]["rational_basis"] = rational
             if not out or attempt["proven"]:
                 out = attempt
             if attempt["proven"]:
@@ -102,7 +108,12 @@ def prove_farkas(
 
 
 def _prove_farkas(
-    problem: Problem, farkas: dict[str, Any], rel_face: float, keep: bool, center: bool = False
+    problem: Problem,
+    farkas: dict[str, Any],
+    rel_face: float,
+    keep: bool,
+    center: bool = False,
+    rational: bool = False,
 ) -> dict[str, Any]:
     from fractions import Fraction
 
@@ -134,6 +145,17 @@ def _prove_farkas(
     ranks: list[int] = []
     sels = [w > thr for w, _ in eigs]
     rows = [r for r in range(len(y)) if (not ge[r]) or y[r] > thr]
+    bases: list[np.ndarray | None] = [None] * len(eigs)
+    if rational:
+        # the face spanned by small-denominator rationals (module docstring); a block whose
+        # face has no such basis is dropped (its multiplier set to 0): the exact check decides
+        for i, ((_w, V), sel) in enumerate(zip(eigs, sels, strict=True)):
+            if np.any(sel):
+                bases[i] = _rational_basis(_snap(V[:, sel]))
+                if bases[i] is None:
+                    sels[i] = np.zeros_like(sel)
+        if not any(np.any(sel) for sel in sels) and not rows:
+            return dict(fail, reason="no face block has a small-denominator rational basis")
     # the float starting point: S_i = diag(w) on the face, y on the rows used
     parts = []
     for (w, _), sel in zip(eigs, sels, strict=True):
@@ -155,7 +177,11 @@ def _prove_farkas(
         t = lmi.dim * (lmi.dim + 1) // 2
         if (1 + n) * t * r * (r + 1) // 2 > EXACT_MAX_ENTRIES:
             return dict(fail, reason=f"the face of LMI '{lmi.name}' is too large for an exact proof")
-        W = np.rint(np.ldexp(_snap(V[:, sel]), _FACE_BITS)).astype(np.int64).astype(object)
+        basis = bases[i]
+        if basis is None:
+            W = np.rint(np.ldexp(_snap(V[:, sel]), _FACE_BITS)).astype(np.int64).astype(object)
+        else:
+            W = basis
         ri, ci = tril_rows_cols(lmi.dim)
         ia, ib = np.triu_indices(r)
         P, Q = W[ri], W[ci]
@@ -168,9 +194,19 @@ def _prove_farkas(
         Jl = (Cq * flint.fmpq_mat(T.tolist())).tolist()  # (1 + n) x r(r+1)/2
         for col in range(len(ia)):
             columns.append([Jl[k][col] for k in range(1 + n)])
-        # V diag(w) V^T = W (diag(w) 2^-100) W^T
-        scale = flint.fmpq(1, 1 << (2 * _FACE_BITS))
-        u0 += [q(float(v)) * scale for v in u0f[k0 : k0 + len(ia)]]
+        seg = u0f[k0 : k0 + len(ia)]
+        if basis is None:
+            # V diag(w) V^T = W (diag(w) 2^-100) W^T
+            scale = flint.fmpq(1, 1 << (2 * _FACE_BITS))
+            u0 += [q(float(v)) * scale for v in seg]
+        else:
+            # the same face matrix V S V^T in the rational basis: S_W = W^+ V S V^T W^+T
+            Sv = np.zeros((r, r))
+            Sv[ia, ib] = Sv[ib, ia] = seg
+            U = _snap(V[:, sel])
+            Wp = np.linalg.pinv(W.astype(float))
+            Sw = Wp @ (U @ Sv @ U.T) @ Wp.T
+            u0 += [q(float(v)) for v in Sw[ia, ib]]
         k0 += len(ia)
         blocks.append((i, W, r))
     if rows:
@@ -272,210 +308,6 @@ def _prove_farkas(
         reason = f"{exactly}, g_0 = 0 and tau = {base['tau']:.3g} > 0 (the strict problem is infeasible)"
         return dict(base, proven=True, kind="strict", reason=reason)
     return dict(base, proven=False, kind=None, reason=f"no exact separation: g_0 = {float(g0):.3g}")
-
-
-def _snap(V: np.ndarray) -> np.ndarray:
-    """Face basis with its round-off entries set to exact zeros.
-
-    An entry below ``2^-(_FACE_BITS - 10)`` of a unit basis vector is LAPACK's noise on a
-    coordinate the face does not touch (a zero row of ``Z_i``, a block of a block-diagonal
-    ``Z_i``). Rounded to ``2^-_FACE_BITS`` it would survive as a few units and tilt the face out
-    of that coordinate subspace: an equation ``<M, Z_i> = 0`` that holds identically on the
-    true face (``M`` vanishing there) would then bind in exact arithmetic, and the exact
-    projection would have to cancel an O(1) component of the multiplier along it.
-    """
-    return np.where(np.abs(V) < 2.0 ** -(_FACE_BITS - 10), 0.0, V)
-
-
-def _face_jacobian(problem: Problem, eigs: list, sels: list, rows: list[int]) -> np.ndarray:
-    """Float ``d g_k / d u`` (``k = 0 .. n``) for the face unknowns of :func:`_prove_farkas`.
-
-    The unknowns are ``svec(S_i)`` (upper triangle, each off-diagonal entry once) with
-    ``Z_i = V_i S_i V_i^T`` (``V_i`` the orthonormal face basis), then ``y`` on ``rows``.
-    """
-    cols = []
-    for lmi, (_, V), sel in zip(problem.lmis, eigs, sels, strict=True):
-        r = int(np.sum(sel))
-        if not r:
-            continue
-        U = _snap(V[:, sel])
-        ri, ci = tril_rows_cols(lmi.dim)
-        ia, ib = np.triu_indices(r)
-        P, Q = U[ri], U[ci]
-        T = P[:, ia] * Q[:, ib] + P[:, ib] * Q[:, ia]
-        T[:, ia == ib] *= 0.5
-        cols.append(np.asarray(lmi.coeffs.tocsc().T @ (_weights(lmi.dim)[:, None] * T)))
-    if rows:
-        cols.append(np.asarray(problem.linear.A.tocsr()[rows].T.toarray()))
-    return np.hstack(cols)
-
-
-def _center_on_face(
-    J: np.ndarray, u0: np.ndarray, sizes: list[int], ge_rows: np.ndarray, separate: bool, max_iter: int = 30
-) -> np.ndarray | None:
-    """A point deep inside the face's slice of the certificate cone, in floats.
-
-    Maximises ``sum_i log det S_i + sum_{ge rows} log y_r (+ log(-g_0) when separate)`` subject
-    to ``g_k = 0`` (``k >= 1``) and ``sum_i tr S_i + sum_{ge rows} y_r`` fixed, by infeasible-start
-    Newton steps from ``u0`` (which must be strictly inside the cone). Returns ``None`` when no
-    strictly interior point was reached (the face is larger than the certificates' face).
-    """
-    m = u0.size
-    tri = [np.triu_indices(r) for r in sizes]
-    nS = sum(len(a) for a, _ in tri)
-    # trace row of the normalisation; svec -> S for every block
-    N = np.zeros(m)
-    k = 0
-    for a, b in tri:
-        N[k : k + len(a)] = (a == b).astype(float)
-        k += len(a)
-    N[nS:] = ge_rows.astype(float)
-    A = np.vstack([J[1:], N[None, :]])
-    c0 = J[0]
-    scale = np.maximum(np.linalg.norm(A, axis=1), 1e-300)
-    A = A / scale[:, None]  # rows of unit norm: the KKT system is better balanced
-    b = np.zeros(A.shape[0])
-    b[-1] = float(N @ u0) / scale[-1]
-
-    def split(u: np.ndarray) -> list[np.ndarray]:
-        out, k = [], 0
-        for r, (a, bb) in zip(sizes, tri, strict=True):
-            S = np.zeros((r, r))
-            S[a, bb] = u[k : k + len(a)]
-            S[bb, a] = u[k : k + len(a)]
-            out.append(S)
-            k += len(a)
-        return out
-
-    def inside(u: np.ndarray) -> bool:
-        if separate and not float(c0 @ u) < 0:
-            return False
-        if np.any(u[nS:][ge_rows] <= 0):
-            return False
-        return all(np.linalg.eigvalsh(S)[0] > 0 for S in split(u) if S.size)
-
-    def derivatives(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        grad, H = np.zeros(m), np.zeros((m, m))
-        k = 0
-        for r, (a, bb), S in zip(sizes, tri, split(u), strict=True):
-            t = len(a)
-            E = np.zeros((t, r, r))
-            E[np.arange(t), a, bb] = 1.0
-            E[np.arange(t), bb, a] = 1.0
-            Si = np.linalg.inv(S)
-            M = Si @ E
-            grad[k : k + t] = -np.einsum("kii->k", M)
-            H[k : k + t, k : k + t] = np.einsum("kij,lji->kl", M, M)
-            k += t
-        yr = np.flatnonzero(ge_rows) + nS
-        grad[yr] -= 1.0 / u[yr]
-        H[yr, yr] += 1.0 / u[yr] ** 2
-        if separate:
-            h = -float(c0 @ u)
-            grad += c0 / h
-            H += np.outer(c0, c0) / h**2
-        return grad, H
-
-    # feasible-start Newton on the null space of the equality rows (orthonormal basis B)
-    _, sv, Vt = np.linalg.svd(A)
-    rank = int(np.sum(sv > 1e-10 * sv[0])) if sv.size else 0
-    B = Vt[rank:].T
-    dp = -np.linalg.lstsq(A, A @ u0 - b, rcond=1e-10)[0]  # least-norm move onto the slice
-    if not inside(u0) or not B.shape[1]:
-        return None
-    # phase 1 (infeasible start): u = u0 + s dp + B z; each step takes the rest of dp and the
-    # barrier's Newton correction in the null space, damped to stay inside the cone, until s = 1
-    u, s = u0.copy(), 0.0
-    for _ in range(max_iter):
-        grad, H = derivatives(u)
-        rest = (1.0 - s) * dp
-        Hz = B.T @ H @ B
-        dz = -np.linalg.solve(Hz + 1e-14 * np.trace(Hz) * np.eye(len(Hz)) / len(Hz), B.T @ (grad + H @ rest))
-        t = 1.0
-        while t > 1e-6 and not inside(u + t * (rest + B @ dz)):
-            t *= 0.5
-        if t <= 1e-6:
-            return None
-        u = u + t * (rest + B @ dz)
-        s = 1.0 if t == 1.0 else s + t * (1.0 - s)
-        if s == 1.0:
-            break
-    if s < 1.0:
-        return None
-
-    def value(u: np.ndarray) -> float:
-        f = -sum(float(np.linalg.slogdet(S)[1]) for S in split(u) if S.size)
-        f -= float(np.sum(np.log(u[nS:][ge_rows])))
-        return f - (math.log(-float(c0 @ u)) if separate else 0.0)
-
-    f = value(u)
-    for _ in range(max_iter):
-        grad, H = derivatives(u)
-        gz, Hz = B.T @ grad, B.T @ H @ B
-        dz = -np.linalg.solve(Hz + 1e-14 * np.trace(Hz) * np.eye(len(gz)) / len(gz), gz)
-        dec = -float(gz @ dz)  # Newton decrement squared
-        if not dec > 1e-8:  # near enough to the centre: only a margin is needed
-            break
-        du, t = B @ dz, 1.0
-        while t > 1e-6:
-            un = u + t * du
-            if inside(un):
-                fn = value(un)
-                if fn <= f - 0.25 * t * dec:
-                    break
-            t *= 0.5
-        if t <= 1e-6:
-            break
-        u, f = un, fn
-    return u
-
-
-def _towards_center(
-    problem: Problem, eigs: list, sels: list, rows: list[int], ge: np.ndarray, u0: np.ndarray, top: float
-) -> np.ndarray | None:
-    """Move the face point ``u0`` towards the centre of the face's certificates, just enough.
-
-    ``u0`` fails the exact test when an eigenvalue of some ``S_i`` (or a ``y_r``) is smaller
-    than the correction the exact projection makes. The analytic centre ``u_c`` of the face's
-    certificates (:func:`_center_on_face`) has every eigenvalue well inside; the returned point
-    is ``(1 - theta) u_a + theta u_c`` with ``u_a`` the float projection of ``u0`` on
-    ``g_k = 0`` and the smallest ``theta`` of a geometric grid whose float margin is at least
-    ``1e-6 top`` and a quarter of the centre's (a convex combination: the separation and the
-    trace conditions stay those of ``u0`` and ``u_c``).
-    """
-    sizes = [int(np.sum(sel)) for sel in sels]
-    J = _face_jacobian(problem, eigs, sels, rows)
-    ge_rows = np.array([bool(ge[r]) for r in rows], dtype=bool)
-    separate = float(J[0] @ u0) < 0
-    try:
-        uc = _center_on_face(J, u0, sizes, ge_rows, separate)
-    except np.linalg.LinAlgError:  # a singular block: the slice has no interior here
-        uc = None
-    if uc is None:
-        return None
-    ua = u0 - np.linalg.lstsq(J[1:], J[1:] @ u0, rcond=1e-13)[0]
-    nS = sum(r * (r + 1) // 2 for r in sizes)
-
-    def margin(u: np.ndarray) -> float:
-        out, k = [], 0
-        for r in sizes:
-            ia, ib = np.triu_indices(r)
-            S = np.zeros((r, r))
-            S[ia, ib] = S[ib, ia] = u[k : k + len(ia)]
-            k += len(ia)
-            if r:
-                out.append(float(np.linalg.eigvalsh(S)[0]))
-        out += [float(v) for v in u[nS:][ge_rows]]
-        return min(out, default=math.inf)
-
-    if not margin(uc) > 1e-9 * top:  # the centre is on the boundary: the face is too large
-        return None
-    want = min(0.25 * margin(uc), 1e-6 * top)
-    for theta in (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 0.03, 0.1, 0.3):
-        u = (1 - theta) * ua + theta * uc
-        if margin(u) >= want:
-            return u
-    return uc
 
 
 def prove_infeasible(

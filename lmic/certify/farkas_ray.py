@@ -105,6 +105,13 @@ def _evaluate(problem: Problem, mats: list[np.ndarray], y: np.ndarray, tol: floa
     rel_residual = float(np.max(rel)) if rel.size else 0.0
     worst = int(np.argmax(rel)) if rel.size else -1
     res1 = float(np.sum(res))
+    # a float residual at round-off (often exactly 0.0) does not prove g_k = 0: every g_k is
+    # known only up to the rounding of its evaluation (the PSD projection and the rescaling,
+    # ~ d eps per entry of Z, and the sum of its nonzero terms, ~ eps per term, each bounded
+    # by c_k since |<F^(k), Z>| <= ||F^(k)||_F ||Z||_F <= c_k tr Z), so the radius is taken
+    # with |g_k| + (that bound) in place of |g_k|
+    res1_floor = float(np.sum(_ROUNDING_TERMS * np.finfo(float).eps * _terms(problem)[1:] * sk))
+    res1 = res1 + res1_floor
     closed = g0 < -tol * s0 and g0 < 0
     strict_ok = tau >= tol and g0 <= tol * s0
     out: dict[str, Any] = {
@@ -116,6 +123,7 @@ def _evaluate(problem: Problem, mats: list[np.ndarray], y: np.ndarray, tol: floa
         "tau": tau,
         "eta": 1.0,
         "radius": (-g0 / res1 if res1 > 0 else math.inf) if g0 < 0 else 0.0,
+        "residual_floor": res1_floor,
         "margin_bound": (g0 + res1) / tau if tau > 0 else None,
         "kind": "closed" if closed else ("strict" if strict_ok else None),
     }
@@ -153,6 +161,27 @@ def _evaluate(problem: Problem, mats: list[np.ndarray], y: np.ndarray, tol: floa
             f"(relative residual {rel_residual:.2g})"
         )
     return out
+
+
+#: safety factor on the rounding level of a float ``g_k`` (:func:`_evaluate`)
+_ROUNDING_TERMS = 2.0
+
+
+def _terms(problem: Problem) -> np.ndarray:
+    """For ``k = 0 .. n``: how many rounded operations enter a float ``g_k`` at most.
+
+    The nonzero coefficients of ``x_k`` (every LMI and row), plus the largest LMI dimension
+    (the reconstruction of a PSD-projected ``Z_i``), plus one (the rescaling).
+    """
+    nnz = np.zeros(1 + problem.n)
+    dmax = 0
+    for lmi in problem.lmis:
+        C = lmi.coeffs.tocsc()
+        nnz += np.diff(C.indptr)
+        dmax = max(dmax, lmi.dim)
+    if len(problem.linear):
+        nnz += np.diff(problem.linear.A.tocsc().indptr)
+    return nnz + dmax + 1
 
 
 def _variable_of(problem: Problem, k: int) -> str:
@@ -220,8 +249,8 @@ def verify_farkas(problem: Problem, farkas: dict[str, Any], *, tol: float = 1e-6
     ...              LMI("-p > 0", 1, sp.csc_matrix([[0., -1.]]))],
     ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
     >>> r = verify_farkas(p, {"lmis": [np.eye(1), np.eye(1)]})
-    >>> r["verified"], r["kind"], r["margin_bound"]
-    (True, 'strict', 0.0)
+    >>> r["verified"], r["kind"], r["margin_bound"] < 1e-14  # 0 up to the check's rounding
+    (True, 'strict', True)
     """
     mats, y = _parse(problem, farkas)
     first = _evaluate(problem, mats, y, tol)

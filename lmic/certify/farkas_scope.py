@@ -84,8 +84,8 @@ def scope(problem: Problem, verification: dict[str, Any] | None, exact: dict[str
     ...              LMI("-1 - p >= 0", 1, sp.csc_matrix([[-1., -1.0000001]]), strict=False)],
     ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
     >>> s = scope(q, verify_farkas(q, {"lmis": [np.eye(1), np.eye(1)]}, repair=False))
-    >>> s["scope"], round(s["radius"])
-    ('bounded', 10000000)
+    >>> s["scope"], f"{s['radius']:.6g}"
+    ('bounded', '1e+07')
     """
     if exact is not None and exact.get("proven"):
         return {
@@ -113,7 +113,27 @@ def scope(problem: Problem, verification: dict[str, Any] | None, exact: dict[str
                 f"margin above {rho:.3g} (strict Farkas certificate)"
             ),
         }
+    if g0 < 0 and radius > 0 and not math.isfinite(radius):
+        # a float check cannot show g_k = 0 exactly (its own rounding is not accounted for), so
+        # an infinite radius is not a statement lmic can make: nothing beyond the float
+        # residual's rounding level is claimed, and that level was not recorded
+        return {
+            "scope": None,
+            "radius": None,
+            "basis": "float",
+            "rho": None,
+            "statement": (
+                "the float residual vanishes, but float arithmetic cannot prove it zero: "
+                "no radius is claimed; an exact proof (--exact) decides"
+            ),
+        }
     if g0 < 0 and radius > 0:
+        floor = float(v.get("residual_floor") or 0.0)
+        limit = (
+            "; the radius is set by the rounding of the float check itself"
+            if -g0 / radius <= floor * (1 + 1e-9)
+            else ""
+        )
         return {
             "scope": "bounded",
             "radius": radius,
@@ -121,7 +141,8 @@ def scope(problem: Problem, verification: dict[str, Any] | None, exact: dict[str
             "rho": None,
             "statement": (
                 f"no solution with ||x||_inf <= {radius:.6g} (float Farkas certificate, residual "
-                f"{float(v.get('rel_residual') or 0.0):.2g}); a larger solution is not excluded"
+                f"{float(v.get('rel_residual') or 0.0):.2g}{limit}); a larger solution is not excluded "
+                "(an exact proof, --exact, decides)"
             ),
         }
     return {

@@ -21,6 +21,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 from collections import OrderedDict
 from typing import Any
 
@@ -84,7 +85,11 @@ def perron_root(M: np.ndarray, rtol: float = 1e-10, max_iter: int = 200) -> floa
             break  # a zero row (reducible matrix): the bracket does not apply
         q = w / v
         lo, hi = float(q.min()), float(q.max())
+        if not math.isfinite(hi):
+            break  # overflow or an entry of v that underflowed to 0: no bracket, decompose
         if hi - lo <= rtol * hi:
             return hi
         v = w / float(w.max())
+        if not np.all(v > 0):
+            break  # an entry underflowed (a component with a much smaller root): decompose
     return float(max(np.linalg.eigvalsh(M)[-1], 0.0))

@@ -112,8 +112,10 @@ def test_thesis_lipschitz_example_on_cvxopt_and_picos(backend):
     assert ok.status == "feasible" and ok.verdict == "certified"
     assert ok.solution.info["eliminated"]["variables"] == ["Lbar"]
     bad = solve("thesis.thm3_2_2", THESIS, {"gamma": 3.33}, backend=backend)
-    # a float ray of an inhomogeneous LMI whose exact proof fails: bounded, exit 4 (never 3)
-    assert bad.status == "infeasible" and bad.verdict == "infeasible-bounded" and bad.exit_code() == 4
+    # the float ray of an inhomogeneous LMI, proven exactly on a rational basis of its face (the
+    # closed-form certificate z = (e4, -e3) of tests/engine/test_engine.py): global, exit 3
+    assert bad.status == "infeasible" and bad.verdict == "infeasible-certified" and bad.exit_code() == 3
+    assert bad.certificate.exact["proven"]
     assert ok.timings["solve_s"] + bad.timings["solve_s"] < 20
 
 

@@ -10,7 +10,7 @@ import scipy.sparse as sp
 from certify_helpers import lmi_from, lyapunov
 
 from lmic.certify import certify
-from lmic.certify.farkas import verify_farkas
+from lmic.certify.farkas import prove_farkas, verify_farkas
 from lmic.errors import CertificateError
 from lmic.ir.problem import LinearConstraints, Objective, Problem, Variable
 from lmic.reductions.pipeline import solve as solve_with_reductions
@@ -69,7 +69,11 @@ def test_closed_infeasibility_with_linear_rows():
     r = verify_farkas(prob, {"lmis": [np.eye(1)], "linear": np.array([1.0])})
     assert r["verified"] and r["kind"] == "closed"
     assert r["g0"] == pytest.approx(-1.0)  # after normalisation to sum tr Z + |y| = 1
-    assert r["radius"] == float("inf")
+    # g_1 = 0 in float is not a proof of g_1 = 0: the radius stops at the check's own rounding
+    # (never inf, never "no solution with ||x|| <= inf"); the exact proof is what makes it global
+    assert np.isfinite(r["radius"]) and r["radius"] > 1e12
+    assert r["radius"] == pytest.approx(-r["g0"] / r["residual_floor"])
+    assert prove_farkas(prob, {"lmis": [np.eye(1)], "linear": np.array([1.0])})["proven"]
 
 
 def test_opposite_sign_convention_is_recognised():
@@ -157,15 +161,17 @@ def test_sdpa_certificate_with_residual_3e_5_is_verified_after_repair():
     assert r["verified"] and r["repaired"] and r["kind"] == "closed"
     assert r["original"]["rel_residual"] == pytest.approx(2.76e-5, rel=1e-2)
     assert r["rel_residual"] < 1e-12 and r["g0"] < -0.1
-    assert r["radius"] > 1e10  # no feasible point with ||x||_inf below it
+    # no feasible point with ||x||_inf below it (at the rounding level of the float check:
+    # the residual 1e-14 is below it, so the radius is set by the check's own rounding)
+    assert 1e9 < r["radius"] <= -r["g0"] / r["residual_floor"]
     assert r["repair"]["change"] < 0.1  # a cleaned-up version of the solver's certificate
     # the recorded repaired certificate verifies on its own, without another repair
     again = verify_farkas(prob, r["certificate"], repair=False)
     assert again["verified"] and again["rel_residual"] == pytest.approx(r["rel_residual"], abs=1e-15)
     cert = certify(prob, Solution("infeasible", farkas=farkas, backend="sdpa"))
     # the ray is a float certificate of an inhomogeneous problem: it proves "no solution with
-    # ||x||_inf <= R" (R > 1e10), not infeasibility (lmic.certify.farkas.scope)
-    assert cert.verdict == "infeasible-bounded" and cert.farkas["scope"]["radius"] > 1e10
+    # ||x||_inf <= R" (R > 1e9), not infeasibility (lmic.certify.farkas.scope)
+    assert cert.verdict == "infeasible-bounded" and cert.farkas["scope"]["radius"] > 1e9
     assert "after repair" in cert.farkas["reason"]
 
 

@@ -217,12 +217,25 @@ def test_closed_form_farkas_certificate_of_thesis_example_is_proven_exactly():
     assert cert.verdict == "infeasible-certified" and cert.exact["proven"]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known gap (coordinator): every backend gives only a bounded Farkas ray (radius ~1.8e8) and "
-    "the exact proof of that ray fails ('no exact separation: g_0 = 0'), although the closed-form "
-    "certificate above proves infeasibility exactly",
-)
+def test_exact_certificate_checked_in_float_only_claims_a_finite_radius():
+    # the closed-form certificate above has g_k = 0.0 exactly in float, but a float check does
+    # not prove g_k = 0 (its own rounding): it once said "no solution with ||x||_inf <= inf ...
+    # a larger solution is not excluded". It must claim a finite radius, set by that rounding.
+    from lmic.compile import compile_theorem
+
+    problem = compile_theorem("thesis.thm3_2_2", str(THESIS_EX))
+    z = np.zeros(8)
+    z[3], z[4 + 2] = 1.0, -1.0
+    lmis = [np.outer(z, z) if lmi.name == "(3.14)" else np.zeros((lmi.dim, lmi.dim)) for lmi in problem.lmis]
+    cert = certify(problem, Solution("infeasible", farkas={"lmis": lmis, "linear": []}), exact=False)
+    assert cert.verdict == "infeasible-bounded" and not cert.exact
+    sc = cert.farkas["scope"]
+    assert sc["scope"] == "bounded" and np.isfinite(sc["radius"])
+    assert cert.farkas["rel_residual"] == 0.0 and sc["radius"] <= -cert.farkas["g0"] / cert.farkas["residual_floor"]
+    assert "<= inf" not in sc["statement"] and "rounding" in sc["statement"]
+    assert "<= inf" not in cert.reason
+
+
 def test_thesis_example_3_2_2_is_decided_infeasible():
     gamma, bound = _thesis_gamma_bound()
     assert gamma > bound  # infeasible, and a global proof exists (previous test): a decision exists

@@ -153,9 +153,11 @@ def test_published_point_audit(name):
     if "ex1" in name:  # Table 1's gamma* is met at tau0 = 1 (catalogue tolerance 0.01)
         assert r.derived["gamma_star"] == pytest.approx(pub["gamma_star"], abs=0.01)
     prob = compile_theorem("delay_b.thm4_1", system)
-    # at the example's own delay bound (tau0 = 3 / 4) the published P's certify nothing
+    # at the example's own delay bound (tau0 = 3 / 4) the published P's certify nothing: an exact
+    # Farkas proof (the solver's ray on a rational basis of its face)
     r = solve(ref.restrict(prob, fixed, {"alpha": 1.0, "eps1": 1.0}))
-    assert (r.status, r.verdict) == ("infeasible", "infeasible-bounded"), r.certificate.reason
+    assert (r.status, r.verdict) == ("infeasible", "infeasible-certified"), r.certificate.reason
+    assert r.certificate.exact["proven"]
     r = solve(ref.restrict(prob, {**fixed, "alpha": 1.0, "eps1": 1.0}, {"rho": 1.0}, lmis=["(48)"]))
     assert (r.status, r.verdict) == ("optimal", "certified"), r.certificate.reason
     assert r.derived["eta_star"] == pytest.approx(eta, abs=2e-3)

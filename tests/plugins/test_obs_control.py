@@ -81,9 +81,9 @@ def test_thm3_2_z_coordinates_borderline_at_alpha_0_05():
     K = r.problem.environment(r.solution.x)["K"]
     assert np.allclose(K, [[129.4, 57.7, -19.86]], rtol=1e-2)
     s = solve("obs_control.thm3_2", example(EXZ), backend="scs", options=SolveOptions(tol=1e-5))
-    first = s.attempts[0]  # SCS's own point is rejected; its policy then finds a bounded ray
+    first = s.attempts[0]  # SCS's own point is rejected; its policy then finds a ray, proven exactly
     assert first["status"] in ("optimal", "feasible", "inaccurate") and first["verdict"] == "rejected"
-    assert s.verdict == "infeasible-bounded"
+    assert s.verdict == "infeasible-certified" and s.certificate.exact["proven"]
 
 
 def test_thm3_2_z_coordinates_feasible_at_alpha_0_06():

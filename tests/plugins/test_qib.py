@@ -174,14 +174,7 @@ def test_thm2_remark2_is_infeasible_and_published_k_is_least_infeasible(backend)
     [
         1e-3,
         1.0,
-        pytest.param(
-            1e3,
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="known gap (coordinator): at alpha = 1e3 lmic ends with a bounded ray "
-                "(infeasible-bounded), no exact proof, although (26) scaled by 1e-3 is the alpha = 1 problem",
-            ),
-        ),
+        1e3,
     ],
 )
 def test_thm2_is_proven_infeasible_for_every_alpha(alpha):

@@ -157,8 +157,8 @@ def test_thm1_sup_gamma_d():
 def test_thm4_example_is_infeasible(backend):
     r = solve("sampled_euler.thm4", system("sampled_euler.thm4.example"), backend=backend)
     assert r.status == "infeasible"
-    assert r.verdict == "infeasible-bounded"
-    assert r.exit_code() == 4
+    assert r.verdict == "infeasible-certified" and r.certificate.exact["proven"]  # the ray, proven exactly
+    assert r.exit_code() == 3
     lam2 = r.problem.data["Lambda2"]
     assert np.linalg.eigvalsh(lam2)[-1] == pytest.approx(0.1049, abs=1e-4)
     assert r.problem.data["Psi1"] == pytest.approx(0.6753, abs=1e-4)
@@ -169,7 +169,7 @@ def test_thm4_infeasible_for_large_gamma_d_and_printed_coupling():
     assert r.verdict == "infeasible-certified" and r.outcome.evidence.kind == "exact-proof"
     d = system("sampled_euler.thm4.example", data={"Bd": [[1.0, 0.0], [0.0, 1.0]]})
     r = solve("sampled_euler.thm4", d, {"coupling": "I"})
-    assert r.verdict == "infeasible-bounded"
+    assert r.verdict == "infeasible-certified" and r.outcome.evidence.kind == "exact-proof"
 
 
 # -- random systems: the compiled LMIs are the catalogue's, and solvers agree with CVXPY ----------
@@ -273,7 +273,7 @@ def test_random_thm4_infeasible_like_cvxpy():
             status, _ = cvx_min(zeta, [m73], [P], [zeta], solver=solver)
             assert status == "infeasible"
         for backend in BACKENDS:
-            assert solve("sampled_euler.thm4", d, backend=backend).verdict == "infeasible-bounded"
+            assert solve("sampled_euler.thm4", d, backend=backend).verdict == "infeasible-certified"
 
 
 # -- bad input ------------------------------------------------------------------------------------

@@ -94,11 +94,13 @@ def test_thm3_2_1_example_and_published_point():
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_thm3_2_2_infeasible_at_gamma_3_33(backend):
     # "there is no feasible solution for (3.14) with gamma = 3.33" (line 1241): infeasible, with
-    # a verified Farkas certificate
+    # a Farkas certificate proven exactly (the solver's ray, on a small-denominator rational basis
+    # of its face; the closed-form certificate is in tests/engine/test_engine.py)
     system, _ = _system("thesis.thm3_2_2.ex3_2_2.yaml")
     r = solve("thesis.thm3_2_2", system, backend=backend)
     assert r.status == "infeasible"
-    assert r.verdict == "infeasible-bounded", r.certificate.reason
+    assert r.verdict == "infeasible-certified", r.certificate.reason
+    assert r.certificate.exact["proven"] and r.certificate.farkas["scope"]["basis"] == "exact"
 
 
 def _sup(tid: str, system, key: str, lo: float, hi: float, tol: float, backend="clarabel") -> float:

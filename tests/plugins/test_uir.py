@@ -93,7 +93,7 @@ def test_thm5_1_example_infeasible_and_scs_success_rejected(name):
     point (status inaccurate) that the certifier must reject (catalogue 6.3, 11.9)."""
     r = solve("uir.thm5_1", example(name), backend="clarabel")
     assert r.status == "infeasible"
-    assert r.certificate.verdict == "infeasible-bounded", r.certificate.reason
+    assert r.certificate.verdict == "infeasible-certified", r.certificate.reason  # the ray, proven exactly
     s = solve("uir.thm5_1", example(name), backend="scs", options=SCS_FAST)
     first = s.attempts[0]  # SCS's own point is rejected; its policy then finds a bounded ray
     assert first["status"] in ("optimal", "feasible", "inaccurate") and first["verdict"] == "rejected"

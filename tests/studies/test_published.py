@@ -137,7 +137,7 @@ def test_descriptor_published_point_completed_in_gamma():
 def test_delay_a_published_point_infeasible_and_L_consistent():
     """T2.2 lines 290-296: P1^-1 Upsilon = [0.9919; -1.0007]; published point infeasible; optimum L, gamma*."""
     rep = audit_published("delay_a.thm3_2", EX / "delay_a.thm3_2.example.yaml")
-    assert rep.claim("P1").finding == "infeasible-bounded"
+    assert rep.claim("P1").finding == "infeasible"  # an exact Farkas proof of the ray
     L = rep.claim("L")
     assert np.allclose(L.computed, [[1.229], [-1.473]], atol=2e-3)  # at the optimum (the point is refuted)
     assert "[0.9919; -1.001]" in L.reason
@@ -157,7 +157,7 @@ def test_delay_a_published_point_infeasible_and_L_consistent():
         ("nonuniform.thm1", "nonuniform.thm1.chua.yaml", "infeasible"),
         ("nonuniform.thm1", "nonuniform.thm1.chua-gamma2.95.yaml", "certified"),  # S6 line 500
         ("nonuniform.thm1", "nonuniform.thm1.flexible-arm.yaml", "infeasible"),  # S6 line 495 (idem)
-        ("sampled_euler.thm4", "sampled_euler.thm4.example.yaml", "infeasible-bounded"),  # S6 line 475
+        ("sampled_euler.thm4", "sampled_euler.thm4.example.yaml", "infeasible"),  # S6 line 475
     ],
 )
 def test_printed_gains(theorem, file, finding):
@@ -182,13 +182,14 @@ def test_qib_thm2_published_K_in_both_forms():
 
 
 def test_status_claims():
-    """T1.5 line 124: infeasible at gamma = 3.33; T11.6 line 702: uir (11). Both are float rays of
-    inhomogeneous LMIs, so lmic proves "no solution with ||x||_inf <= R" only (undecided claims)."""
+    """T1.5 line 124: infeasible at gamma = 3.33; T11.6 line 702: uir (11). Both are Farkas rays of
+    inhomogeneous LMIs that lmic proves exactly (global proofs)."""
     rep = audit_published("thesis.thm3_2_2", EX / "thesis.thm3_2_2.ex3_2_2.yaml")
     c = rep.claim("status")
-    # a float Farkas ray of an inhomogeneous LMI: "no solution with ||x||_inf <= R", not a proof
-    assert (c.finding, c.agrees, c.verdict) == ("infeasible-bounded", None, "infeasible-bounded")
-    assert rep.exit_code() == 4
+    # the Farkas ray of an inhomogeneous LMI, proven exactly (a rational basis of its face; gamma =
+    # 3.33 is above the closed-form bound sigma_min(A|ker C) = 1 of tests/engine/test_engine.py)
+    assert (c.finding, c.verdict) == ("infeasible", "infeasible-certified")
+    assert rep.exit_code() == 3
     uir = audit_published("uir.thm3_1", EX / "uir.thm3_1.rossler_published_gains.yaml").claim("status")
     # the claim "feasible" is refuted: the Farkas ray is proven exactly (a global proof)
     assert uir.finding == "infeasible" and uir.agrees is False

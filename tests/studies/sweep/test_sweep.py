@@ -156,9 +156,12 @@ def test_maximize_thesis_thm3_2_2_sup_gamma_0_9997():
     assert res.points[0].value == 3.33 and res.points[0].outcome == "infeasible-bounded"
     best = next(p for p in res.points if p.value == res.lower)
     _certified_at("thesis.thm3_2_2", f, "gamma", res.lower, best.x)
-    # no global proof of the upper end (exact proofs fail here): reported as such, never "proven"
-    assert res.upper_proven is None and res.upper_kind == "infeasible-bounded"
-    assert not res.to_dict()["bracket_proven"]
+    # a global proof of an upper end: an exact Farkas certificate (on a rational face of the ray) at
+    # a value above the certified lower end and at or below the closed-form bound sup <= 1 of
+    # tests/engine/test_engine.py (gamma < sigma_min(A|ker C) = 1 is necessary)
+    assert res.upper_proven is not None and res.lower < res.upper_proven <= 1.0
+    # the bisection's own (tighter) upper end rests on a bounded ray only: not a proven bracket
+    assert res.upper_kind == "infeasible-bounded" and not res.to_dict()["bracket_proven"]
 
 
 def test_maximize_uio_dt_thm4_1_gamma_max_51_5():
@@ -204,7 +207,8 @@ def test_solve_maximize_text_and_sweep_table(capsys):
         == 0
     )
     out = capsys.readouterr().out
-    assert "sup gamma >= " in out and "lower" in out and "upper" in out and "bisection steps" in out
+    # the bisection's upper end is proven exactly (a Farkas ray on a rational face): a proven bracket
+    assert "sup gamma in [" in out and "lower" in out and "upper" in out and "bisection steps" in out
     q = str(EX / "qib.thm2.flexible-joint.yaml")
     assert main(["solve", "qib.thm2", q, "--sweep", "alpha=log:1e-3:1:3"]) == 3  # (26): proven at every alpha
     out = capsys.readouterr().out

@@ -1,0 +1,335 @@
+"""The faces of a Farkas certificate for the exact proofs of :mod:`lmic.certify.farkas_exact`.
+
+A solver's ray is exact only to the solver's tolerance: the exact proof needs the right face
+(which eigenvectors of ``Z_i`` carry the certificate), the right basis of it (rational when the
+true face is) and, when the float point sits on the boundary, a point inside. This module finds
+them; every result is a candidate that the exact proof checks. Split out of
+:mod:`lmic.certify.farkas_exact` (private helpers only).
+
+* :func:`_face_thresholds`: the eigenvalue thresholds defining the faces to try (the given
+  ones, then each block's largest eigenvalue gaps: scale-free).
+* :func:`_snap` and :func:`_rational_basis`: the face basis without LAPACK's round-off, and a
+  small-denominator rational basis of it.
+* :func:`_towards_center`: a point moved towards the analytic centre of the face's
+  certificates.
+
+Examples
+--------
+>>> U = np.array([[0.0], [1.0], [3e-7], [-1.0]]) / np.sqrt(2)
+>>> _rational_basis(U).ravel().tolist()
+[0, 1, 0, -1]
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from lmic.certify.farkas_ray import _parse, _weights
+from lmic.ir.problem import Problem
+from lmic.ir.svec import tril_rows_cols
+
+#: bits of the rational rounding of the face bases
+_FACE_BITS = 50
+
+#: eigenvalue gaps (ratio of consecutive multipliers) that also define a face, at most this many
+_GAP_FACES = 3
+#: smallest ratio of consecutive multipliers that counts as a gap
+_GAP_RATIO = 8.0
+
+
+def _face_thresholds(problem: Problem, farkas: dict[str, Any], rel_face: tuple[float, ...]) -> list[float]:
+    """The face thresholds to try: ``rel_face``, then the certificate's largest eigenvalue gaps.
+
+    A fixed threshold depends on the solver's noise level relative to the certificate (the
+    noise eigenvalues of a ray sit at ``1e-8`` of the largest on one instance and at ``1e-9``
+    on the same instance scaled by ``1e3``): on one side of it the face is the true face of the
+    certificates, on the other a tilted rank-deficient one on which the only exact solution is
+    ``0``. The largest ratios between consecutive multipliers (every ``Z_i``'s eigenvalues and
+    ``y_r``, each block on its own, relative to the largest multiplier) separate the certificate from the solver's noise
+    whatever the scale; a threshold in the middle of each of the ``_GAP_FACES`` largest gaps
+    (ratio above ``_GAP_RATIO``) is tried after ``rel_face`` when it gives another face.
+    """
+    mats, y = _parse(problem, farkas)
+    ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
+    ws = [np.linalg.eigvalsh(Z) if Z.size else np.zeros(0) for Z in mats]
+    ys = np.where(ge, y, np.abs(y)) if len(y) else np.zeros(0)
+    top = float(max([float(np.max(w, initial=0.0)) for w in ws] + [float(np.max(ys, initial=0.0))]))
+    if not top > 0:
+        return list(rel_face)
+
+    def face(rel: float) -> tuple[int, ...]:
+        return (*[int(np.sum(w > rel * top)) for w in ws], int(np.sum(ys > rel * top)))
+
+    gaps: list[tuple[float, float]] = []  # (ratio, threshold), every block on its own
+    for w in [*ws, ys]:
+        v = np.sort(w[w > 1e-15 * top] / top)[::-1]
+        if v.size >= 2:
+            ratios = v[:-1] / v[1:]
+            gaps += [(float(ratios[j]), float(np.sqrt(v[j] * v[j + 1]))) for j in range(v.size - 1)]
+    out, seen = list(rel_face), {face(rel) for rel in rel_face}
+    for ratio, rel in sorted(gaps, reverse=True):
+        if ratio < _GAP_RATIO or len(out) >= len(rel_face) + _GAP_FACES:
+            break
+        if face(rel) not in seen:
+            seen.add(face(rel))
+            out.append(rel)
+    return out
+
+
+def _snap(V: np.ndarray) -> np.ndarray:
+    """Face basis with its round-off entries set to exact zeros.
+
+    An entry below ``2^-(_FACE_BITS - 10)`` of a unit basis vector is LAPACK's noise on a
+    coordinate the face does not touch (a zero row of ``Z_i``, a block of a block-diagonal
+    ``Z_i``). Rounded to ``2^-_FACE_BITS`` it would survive as a few units and tilt the face out
+    of that coordinate subspace: an equation ``<M, Z_i> = 0`` that holds identically on the
+    true face (``M`` vanishing there) would then bind in exact arithmetic, and the exact
+    projection would have to cancel an O(1) component of the multiplier along it.
+    """
+    return np.where(np.abs(V) < 2.0 ** -(_FACE_BITS - 10), 0.0, V)
+
+
+#: rational face bases: (tolerance on an entry, largest denominator), tried in order
+_RATIONAL_GRID = ((1e-9, 1000), (1e-5, 30), (1e-3, 6))
+
+
+def _rational_basis(U: np.ndarray) -> np.ndarray | None:
+    """An integer basis of the span of ``U`` (``d x r``) whose entries are small-denominator rationals.
+
+    A solver's ray is accurate only to its own tolerance: its face (the span of the top
+    eigenvectors) is tilted by ``1e-6`` or so off the true face, and when the true face is
+    spanned by rational vectors (structured data: ``e_4 - e_7``, ...) the tilt makes the exact
+    conditions bind where they vanish identically on the true face (the only exact solution is
+    then ``Z_i = 0``). The canonical basis ``B = U U[p]^-1`` (``p`` ``r`` pivot rows by QR with
+    column pivoting, so ``B[p] = I``) is scale-free; its entries are replaced by the nearest
+    fractions with denominators up to ``q_max`` when every entry is within ``tol`` of one
+    (:data:`_RATIONAL_GRID`, tried in order), and ``B`` times the common denominator is
+    returned. ``None`` when no grid entry fits. A candidate only: the exact proof checks it.
+
+    Examples
+    --------
+    >>> U = np.array([[0.0], [1.0], [3e-7], [-1.0]]) / np.sqrt(2)
+    >>> _rational_basis(U).ravel().tolist()
+    [0, 1, 0, -1]
+    """
+    from fractions import Fraction
+
+    import scipy.linalg
+
+    d, r = U.shape
+    if not r:
+        return None
+    _, _, piv = scipy.linalg.qr(U.T, pivoting=True, mode="economic")
+    p = np.sort(piv[:r])
+    try:
+        B = U @ np.linalg.inv(U[p])
+    except np.linalg.LinAlgError:
+        return None
+    B[p] = np.eye(r)
+    for tol, qmax in _RATIONAL_GRID:
+        fr = [[Fraction(float(b)).limit_denominator(qmax) for b in row] for row in B]
+        if all(
+            abs(float(f) - b) <= tol * max(1.0, abs(b))
+            for row, brow in zip(fr, B, strict=True)
+            for f, b in zip(row, brow, strict=True)
+        ):
+            den = 1
+            for row in fr:
+                for f in row:
+                    den = den * f.denominator // math.gcd(den, f.denominator)
+            return np.array([[int(f * den) for f in row] for row in fr], dtype=object).reshape(d, r)
+    return None
+
+
+def _face_jacobian(problem: Problem, eigs: list, sels: list, rows: list[int]) -> np.ndarray:
+    """Float ``d g_k / d u`` (``k = 0 .. n``) for the face unknowns of :func:`_prove_farkas`.
+
+    The unknowns are ``svec(S_i)`` (upper triangle, each off-diagonal entry once) with
+    ``Z_i = V_i S_i V_i^T`` (``V_i`` the orthonormal face basis), then ``y`` on ``rows``.
+    """
+    cols = []
+    for lmi, (_, V), sel in zip(problem.lmis, eigs, sels, strict=True):
+        r = int(np.sum(sel))
+        if not r:
+            continue
+        U = _snap(V[:, sel])
+        ri, ci = tril_rows_cols(lmi.dim)
+        ia, ib = np.triu_indices(r)
+        P, Q = U[ri], U[ci]
+        T = P[:, ia] * Q[:, ib] + P[:, ib] * Q[:, ia]
+        T[:, ia == ib] *= 0.5
+        cols.append(np.asarray(lmi.coeffs.tocsc().T @ (_weights(lmi.dim)[:, None] * T)))
+    if rows:
+        cols.append(np.asarray(problem.linear.A.tocsr()[rows].T.toarray()))
+    return np.hstack(cols)
+
+
+def _center_on_face(
+    J: np.ndarray, u0: np.ndarray, sizes: list[int], ge_rows: np.ndarray, separate: bool, max_iter: int = 30
+) -> np.ndarray | None:
+    """A point deep inside the face's slice of the certificate cone, in floats.
+
+    Maximises ``sum_i log det S_i + sum_{ge rows} log y_r (+ log(-g_0) when separate)`` subject
+    to ``g_k = 0`` (``k >= 1``) and ``sum_i tr S_i + sum_{ge rows} y_r`` fixed, by infeasible-start
+    Newton steps from ``u0`` (which must be strictly inside the cone). Returns ``None`` when no
+    strictly interior point was reached (the face is larger than the certificates' face).
+    """
+    m = u0.size
+    tri = [np.triu_indices(r) for r in sizes]
+    nS = sum(len(a) for a, _ in tri)
+    # trace row of the normalisation; svec -> S for every block
+    N = np.zeros(m)
+    k = 0
+    for a, b in tri:
+        N[k : k + len(a)] = (a == b).astype(float)
+        k += len(a)
+    N[nS:] = ge_rows.astype(float)
+    A = np.vstack([J[1:], N[None, :]])
+    c0 = J[0]
+    scale = np.maximum(np.linalg.norm(A, axis=1), 1e-300)
+    A = A / scale[:, None]  # rows of unit norm: the KKT system is better balanced
+    b = np.zeros(A.shape[0])
+    b[-1] = float(N @ u0) / scale[-1]
+
+    def split(u: np.ndarray) -> list[np.ndarray]:
+        out, k = [], 0
+        for r, (a, bb) in zip(sizes, tri, strict=True):
+            S = np.zeros((r, r))
+            S[a, bb] = u[k : k + len(a)]
+            S[bb, a] = u[k : k + len(a)]
+            out.append(S)
+            k += len(a)
+        return out
+
+    def inside(u: np.ndarray) -> bool:
+        if separate and not float(c0 @ u) < 0:
+            return False
+        if np.any(u[nS:][ge_rows] <= 0):
+            return False
+        return all(np.linalg.eigvalsh(S)[0] > 0 for S in split(u) if S.size)
+
+    def derivatives(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        grad, H = np.zeros(m), np.zeros((m, m))
+        k = 0
+        for r, (a, bb), S in zip(sizes, tri, split(u), strict=True):
+            t = len(a)
+            E = np.zeros((t, r, r))
+            E[np.arange(t), a, bb] = 1.0
+            E[np.arange(t), bb, a] = 1.0
+            Si = np.linalg.inv(S)
+            M = Si @ E
+            grad[k : k + t] = -np.einsum("kii->k", M)
+            H[k : k + t, k : k + t] = np.einsum("kij,lji->kl", M, M)
+            k += t
+        yr = np.flatnonzero(ge_rows) + nS
+        grad[yr] -= 1.0 / u[yr]
+        H[yr, yr] += 1.0 / u[yr] ** 2
+        if separate:
+            h = -float(c0 @ u)
+            grad += c0 / h
+            H += np.outer(c0, c0) / h**2
+        return grad, H
+
+    # feasible-start Newton on the null space of the equality rows (orthonormal basis B)
+    _, sv, Vt = np.linalg.svd(A)
+    rank = int(np.sum(sv > 1e-10 * sv[0])) if sv.size else 0
+    B = Vt[rank:].T
+    dp = -np.linalg.lstsq(A, A @ u0 - b, rcond=1e-10)[0]  # least-norm move onto the slice
+    if not inside(u0) or not B.shape[1]:
+        return None
+    # phase 1 (infeasible start): u = u0 + s dp + B z; each step takes the rest of dp and the
+    # barrier's Newton correction in the null space, damped to stay inside the cone, until s = 1
+    u, s = u0.copy(), 0.0
+    for _ in range(max_iter):
+        grad, H = derivatives(u)
+        rest = (1.0 - s) * dp
+        Hz = B.T @ H @ B
+        dz = -np.linalg.solve(Hz + 1e-14 * np.trace(Hz) * np.eye(len(Hz)) / len(Hz), B.T @ (grad + H @ rest))
+        t = 1.0
+        while t > 1e-6 and not inside(u + t * (rest + B @ dz)):
+            t *= 0.5
+        if t <= 1e-6:
+            return None
+        u = u + t * (rest + B @ dz)
+        s = 1.0 if t == 1.0 else s + t * (1.0 - s)
+        if s == 1.0:
+            break
+    if s < 1.0:
+        return None
+
+    def value(u: np.ndarray) -> float:
+        f = -sum(float(np.linalg.slogdet(S)[1]) for S in split(u) if S.size)
+        f -= float(np.sum(np.log(u[nS:][ge_rows])))
+        return f - (math.log(-float(c0 @ u)) if separate else 0.0)
+
+    f = value(u)
+    for _ in range(max_iter):
+        grad, H = derivatives(u)
+        gz, Hz = B.T @ grad, B.T @ H @ B
+        dz = -np.linalg.solve(Hz + 1e-14 * np.trace(Hz) * np.eye(len(gz)) / len(gz), gz)
+        dec = -float(gz @ dz)  # Newton decrement squared
+        if not dec > 1e-8:  # near enough to the centre: only a margin is needed
+            break
+        du, t = B @ dz, 1.0
+        while t > 1e-6:
+            un = u + t * du
+            if inside(un):
+                fn = value(un)
+                if fn <= f - 0.25 * t * dec:
+                    break
+            t *= 0.5
+        if t <= 1e-6:
+            break
+        u, f = un, fn
+    return u
+
+
+def _towards_center(
+    problem: Problem, eigs: list, sels: list, rows: list[int], ge: np.ndarray, u0: np.ndarray, top: float
+) -> np.ndarray | None:
+    """Move the face point ``u0`` towards the centre of the face's certificates, just enough.
+
+    ``u0`` fails the exact test when an eigenvalue of some ``S_i`` (or a ``y_r``) is smaller
+    than the correction the exact projection makes. The analytic centre ``u_c`` of the face's
+    certificates (:func:`_center_on_face`) has every eigenvalue well inside; the returned point
+    is ``(1 - theta) u_a + theta u_c`` with ``u_a`` the float projection of ``u0`` on
+    ``g_k = 0`` and the smallest ``theta`` of a geometric grid whose float margin is at least
+    ``1e-6 top`` and a quarter of the centre's (a convex combination: the separation and the
+    trace conditions stay those of ``u0`` and ``u_c``).
+    """
+    sizes = [int(np.sum(sel)) for sel in sels]
+    J = _face_jacobian(problem, eigs, sels, rows)
+    ge_rows = np.array([bool(ge[r]) for r in rows], dtype=bool)
+    separate = float(J[0] @ u0) < 0
+    try:
+        uc = _center_on_face(J, u0, sizes, ge_rows, separate)
+    except np.linalg.LinAlgError:  # a singular block: the slice has no interior here
+        uc = None
+    if uc is None:
+        return None
+    ua = u0 - np.linalg.lstsq(J[1:], J[1:] @ u0, rcond=1e-13)[0]
+    nS = sum(r * (r + 1) // 2 for r in sizes)
+
+    def margin(u: np.ndarray) -> float:
+        out, k = [], 0
+        for r in sizes:
+            ia, ib = np.triu_indices(r)
+            S = np.zeros((r, r))
+            S[ia, ib] = S[ib, ia] = u[k : k + len(ia)]
+            k += len(ia)
+            if r:
+                out.append(float(np.linalg.eigvalsh(S)[0]))
+        out += [float(v) for v in u[nS:][ge_rows]]
+        return min(out, default=math.inf)
+
+    if not margin(uc) > 1e-9 * top:  # the centre is on the boundary: the face is too large
+        return None
+    want = min(0.25 * margin(uc), 1e-6 * top)
+    for theta in (0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 0.03, 0.1, 0.3):
+        u = (1 - theta) * ua + theta * uc
+        if margin(u) >= want:
+            return u
+    return uc
