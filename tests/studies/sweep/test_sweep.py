@@ -152,14 +152,17 @@ def test_maximize_thesis_thm3_2_2_sup_gamma_0_9997():
     res = maximize("thesis.thm3_2_2", f, "gamma", rtol=1e-5)
     assert res.converged and res.lower == pytest.approx(0.9997, abs=1.5e-4)
     assert res.upper_kind != "none" and res.upper < 1.0
-    # the example's gamma: a float Farkas ray of an inhomogeneous LMI, bounded only
-    assert res.points[0].value == 3.33 and res.points[0].outcome == "infeasible-bounded"
+    # the example's gamma: infeasible in closed form (gamma = 3.33 > sigma_min(A|ker C) = 1,
+    # tests/engine/test_engine.py), proven exactly on a rational face of the solver's ray
+    assert res.points[0].value == 3.33 and res.points[0].outcome == "infeasible"
     best = next(p for p in res.points if p.value == res.lower)
     _certified_at("thesis.thm3_2_2", f, "gamma", res.lower, best.x)
-    # a global proof of an upper end: an exact Farkas certificate (on a rational face of the ray) at
-    # a value above the certified lower end and at or below the closed-form bound sup <= 1 of
-    # tests/engine/test_engine.py (gamma < sigma_min(A|ker C) = 1 is necessary)
-    assert res.upper_proven is not None and res.lower < res.upper_proven <= 1.0
+    # a global proof of an upper end: an exact Farkas certificate (on a rational face of the ray).
+    # It can only be true above the supremum (catalogue T11.4: 0.9997), hence above the certified
+    # lower end; past the closed-form bound (gamma < sigma_min(A|ker C) = 1 is necessary,
+    # tests/engine/test_engine.py) every value is infeasible, so a proof there is one we expect
+    assert res.upper_proven is not None and res.lower < res.upper_proven
+    assert res.upper_proven >= 0.9997 - 1.5e-4 and res.upper_proven < 3.33
     # the bisection's own (tighter) upper end rests on a bounded ray only: not a proven bracket
     assert res.upper_kind == "infeasible-bounded" and not res.to_dict()["bracket_proven"]
 
@@ -220,7 +223,9 @@ def test_solve_sweep_json_obs_control_young_eps(capsys):
     f = str(EX / "obs_control.thm3_2.rossler_z.yaml")
     assert main(["solve", "obs_control.thm3_2", f, "--sweep", "eps=0.6:0.8:2", "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
-    assert [p["outcome"] for p in d["points"]] == ["feasible", "infeasible-bounded"]
+    # eps = 0.8: infeasible by a hair (catalogue T7.2, T11.7: max margin -1.63e-5), proven by an
+    # exact rational Farkas certificate on the face of the solver's ray
+    assert [p["outcome"] for p in d["points"]] == ["feasible", "infeasible"]
     assert d["best"]["value"] == 0.6 and d["best"]["verdict"] == "certified"
 
 
