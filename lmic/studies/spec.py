@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from lmic.api import __version__
+from lmic._version import __version__
 from lmic.errors import DataError, LmicError
 from lmic.system import canonical_json, load_system
 

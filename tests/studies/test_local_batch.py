@@ -398,3 +398,21 @@ def test_a_bad_study_stops_the_runners_started_early(tmp_path):
     assert main(["batch", str(bad), "-o", str(tmp_path / "out"), "--workers", "2"]) == 2
     assert not (tmp_path / "out").exists()
     assert _runner_children() == []
+
+
+def test_runners_yield_the_cores_to_the_driver():
+    """A runner child runs RUNNER_NICENESS steps nicer than its driver (it starts while the driver loads)."""
+    from lmic.studies.runner import RUNNER_NICENESS
+
+    mine = os.getpriority(os.PRIO_PROCESS, 0)
+    if mine + RUNNER_NICENESS > 19:
+        pytest.skip(f"this process already runs at niceness {mine}: no room to lower a child's priority")
+    ex = LocalExecutor(1)
+    try:
+        pid = ex.runner_pids[0]
+        deadline = time.monotonic() + 30
+        while os.getpriority(os.PRIO_PROCESS, pid) == mine and time.monotonic() < deadline:
+            time.sleep(0.05)  # the child lowers its own priority first thing after it starts
+        assert os.getpriority(os.PRIO_PROCESS, pid) == mine + RUNNER_NICENESS
+    finally:
+        ex.close()
