@@ -34,6 +34,7 @@ from lmic._version import __version__
 from lmic.backends.base import Backend, SolveOptions
 from lmic.errors import BackendError, LmicError
 from lmic.ir.problem import Problem
+from lmic.jsonable import to_jsonable
 from lmic.reductions.pipeline import solve as solve_with_reductions
 from lmic.solution import Solution
 
@@ -186,7 +187,7 @@ class Result:
             "route": self.route,  # lmic.routes: the backends tried, their method and verdict
             # -- optimal-value enclosure (lmic.certify.enclosure) --
             "enclosure": _enclosure_summary(self.enclosure),
-            "backoff": _jsonable(self.backoff),
+            "backoff": to_jsonable(self.backoff),
             "exit_code": self.exit_code(),
         }
 
@@ -297,16 +298,6 @@ def _as_numeric(value: Any) -> Any:
         return np.atleast_2d(np.asarray(value, dtype=float))
     if isinstance(value, int | float):
         return float(value)
-    return value
-
-
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {k: _jsonable(v) for k, v in value.items()}
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.floating | np.integer):
-        return value.item()
     return value
 
 
@@ -426,8 +417,8 @@ def solve(
         backend=used,
         status=sol.status,
         objective=sol.objective,
-        variables=_jsonable(variables),
-        derived=_jsonable(derived),
+        variables=to_jsonable(variables),
+        derived=to_jsonable(derived),
         certificate=cert,
         timings=timings,
         problem=problem,
@@ -484,4 +475,4 @@ def _backoff(
 def _enclosure_summary(enc: dict[str, Any] | None) -> dict[str, Any] | None:
     from lmic.certify.enclosure import summary
 
-    return _jsonable(summary(enc))
+    return to_jsonable(summary(enc))
