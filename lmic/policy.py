@@ -373,7 +373,7 @@ def decide(
                 if problem.objective.sense != "feasibility" and sol.status in ("error", "inaccurate", "infeasible"):
                     # an optimisation solve that failed: the feasibility problem can still prove
                     # infeasibility (a Farkas ray does not depend on the objective)
-                    plan.append(("feasibility", _feasibility(solve_as), None))
+                    plan.append(("feasibility", feasibility_problem(solve_as), None))
         if decided:
             break
         if run.best is not None and run.best.verdict == "infeasible-bounded":
@@ -420,14 +420,29 @@ def decide(
     return best
 
 
-def _feasibility(problem: Problem) -> Problem:
-    """The same constraints without the objective."""
+def feasibility_problem(problem: Problem) -> Problem:
+    """The same constraints without the objective.
+
+    >>> from lmic.testing.conformance import CASES
+    >>> feasibility_problem(CASES["max_sense"].build()).objective.sense
+    'feasibility'
+    """
     from lmic.ir.problem import Objective
 
     return replace(problem, objective=Objective("feasibility", np.zeros(problem.n + 1)))
 
 
-def _rel_margin(cert: Any) -> float:
+def min_rel_margin(cert: Any) -> float | None:
+    """The smallest finite relative LMI margin of a certificate (``None`` without one).
+
+    >>> min_rel_margin(None) is None
+    True
+    """
     vals = [r.get("rel_margin") for r in getattr(cert, "lmis", None) or []]
     vals = [float(v) for v in vals if isinstance(v, int | float) and np.isfinite(float(v))]
-    return min(vals) if vals else -np.inf
+    return min(vals) if vals else None
+
+
+def _rel_margin(cert: Any) -> float:
+    margin = min_rel_margin(cert)
+    return -np.inf if margin is None else margin

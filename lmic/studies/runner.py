@@ -287,10 +287,9 @@ def write_certificate_here(job: dict[str, Any], rec: dict[str, Any]) -> None:
     doc = rec.get("_certificate")
     if not path or doc is None:
         return
-    from lmic.studies.store import write_atomic
+    from lmic.studies.store import write_json_atomic
 
-    text = json.dumps(to_jsonable(doc), allow_nan=False)
-    write_atomic(path, lambda fh: fh.write(text))
+    write_json_atomic(path, to_jsonable(doc))
     del rec["_certificate"]
     rec["_certificate_written"] = True
 

@@ -74,3 +74,21 @@ def observer(A: np.ndarray, C: np.ndarray) -> Problem:
         derived=[NamedExpr("L", L)],
         checks=[Check("A - L C Schur stable", "schur_stable", closed)],
     )
+
+
+def hinf_norm(A, B, C, tol=1e-12):
+    """Bracket ``(lo, hi)`` of the H-infinity norm of (A, B, C, 0) by bisection on the
+    imaginary-axis eigenvalues of the Hamiltonian (independent of any LMI solver)."""
+
+    def crosses(g):
+        H = np.block([[A, B @ B.T / g], [-C.T @ C / g, -A.T]])
+        ev = np.linalg.eigvals(H)
+        return np.any(np.abs(ev.real) < 1e-8 * max(1.0, np.abs(ev).max()))
+
+    lo, hi = 0.0, 1.0
+    while crosses(hi):
+        lo, hi = hi, 2 * hi
+    while hi - lo > tol * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if crosses(mid) else (lo, mid)
+    return lo, hi

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from certify_helpers import lmi_from
+from certify_helpers import hinf_norm, lmi_from
 
 import lmic.api
 from lmic.certify import audit_certificate, certify, write_certificate
@@ -53,24 +53,6 @@ def _eig_problem(M: np.ndarray, sense: str) -> Problem:
     else:
         lmi = lmi_from("M - tI >= 0", [M, -np.eye(d)], strict=False)
     return Problem([Variable("t", "scalar", (1, 1))], [lmi], LinearConstraints.empty(1), Objective(sense, [0.0, 1.0]))
-
-
-def hinf_norm(A, B, C, tol=1e-12):
-    """H-infinity norm of (A, B, C, 0) by bisection on the imaginary-axis eigenvalues of the
-    Hamiltonian (independent of any LMI solver)."""
-
-    def crosses(g):
-        H = np.block([[A, B @ B.T / g], [-C.T @ C / g, -A.T]])
-        ev = np.linalg.eigvals(H)
-        return np.any(np.abs(ev.real) < 1e-8 * max(1.0, np.abs(ev).max()))
-
-    lo, hi = 0.0, 1.0
-    while crosses(hi):
-        lo, hi = hi, 2 * hi
-    while hi - lo > tol * hi:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if crosses(mid) else (lo, mid)
-    return lo, hi
 
 
 def _stable(n: int, seed: int):

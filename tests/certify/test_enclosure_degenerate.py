@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_enclosure import hinf_norm
+from certify_helpers import hinf_norm
 
 import lmic.api
 from lmic.certify import audit_certificate, write_certificate

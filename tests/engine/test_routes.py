@@ -11,6 +11,7 @@ import sys
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from certify_helpers import hinf_norm
 
 import lmic.api
 from lmic.backends import auto
@@ -63,24 +64,6 @@ def test_unknown_auto_variant_and_explicit_backend():
 
 
 # -- the default route on random instances, against the H-infinity norm -----------------------
-
-
-def hinf_norm(A, B, C, tol=1e-12):
-    """Bracket of the H-infinity norm of (A, B, C, 0) by bisection on the imaginary-axis
-    eigenvalues of the Hamiltonian (no LMI solver involved)."""
-
-    def crosses(g):
-        H = np.block([[A, B @ B.T / g], [-C.T @ C / g, -A.T]])
-        ev = np.linalg.eigvals(H)
-        return np.any(np.abs(ev.real) < 1e-8 * max(1.0, np.abs(ev).max()))
-
-    lo, hi = 0.0, 1.0
-    while crosses(hi):
-        lo, hi = hi, 2 * hi
-    while hi - lo > tol * hi:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if crosses(mid) else (lo, mid)
-    return lo, hi
 
 
 def _brl(n: int, seed: int):

@@ -39,15 +39,12 @@ from typing import Any
 import numpy as np
 
 from lmic.errors import DataError
-from lmic.ir.problem import Objective, Problem
+from lmic.ir.problem import Problem
+from lmic.policy import feasibility_problem, min_rel_margin
 from lmic.solution import Solution
 from lmic.studies.sweep.results import PointResult, Progress
 
 __all__ = ["decide", "setup", "domain", "in_domain", "Evaluator", "scalar_derived", "warm_options"]
-
-
-def _feasibility(problem: Problem) -> Problem:
-    return replace(problem, objective=Objective("feasibility", np.zeros(problem.n + 1)))
 
 
 def scalar_derived(cert: Any) -> dict[str, float]:
@@ -62,12 +59,6 @@ def scalar_derived(cert: Any) -> dict[str, float]:
         if isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(float(v)):
             out[item["name"]] = float(v)
     return out
-
-
-def _rel_margin(cert: Any) -> float | None:
-    vals = [r.get("rel_margin") for r in getattr(cert, "lmis", None) or []]
-    vals = [float(v) for v in vals if isinstance(v, int | float) and math.isfinite(float(v))]
-    return min(vals) if vals else None
 
 
 def decide(
@@ -128,7 +119,7 @@ def decide(
 
     # a bisection point is a feasibility problem: the policy then routes it as one (SCS for
     # large strict problems) and its strict reduction decides both ways in one attempt
-    judge = problem if keep_objective else _feasibility(problem)
+    judge = problem if keep_objective else feasibility_problem(problem)
     t0 = time.perf_counter()
     out = policy_decide(
         judge,
@@ -148,7 +139,7 @@ def decide(
     result.verdict = out.verdict
     result.certificate = cert
     result.solution = out.solution
-    result.rel_margin = _rel_margin(cert)
+    result.rel_margin = min_rel_margin(cert)
     if out.verdict == "certified":
         exact_used = bool(getattr(cert, "exact", None) and cert.exact.get("proven"))
         result.outcome, result.proof = "feasible", "certified (exact)" if exact_used else "certified"
