@@ -136,3 +136,26 @@ def test_affine_parameter_detection_sees_through_constants():
     assert ok is False and "not affine" in reason
     s, plan, overrides, decl = setup(brl, system, "gamma", None)
     assert affine_parameter(plan, s, overrides, decl)[0] is True
+
+
+def test_cli_method_option_selects_the_route_and_both_routes_agree(capsys):
+    """`--method enclosure` and `--method bisection` on delay_b's affine lambda: two algorithms,
+    one supremum (lambda's domain ends at 1, where both certify); a bad --method is bad input."""
+    import json
+    from pathlib import Path
+
+    from lmic.cli import main
+
+    f = str(Path(__file__).resolve().parents[3] / "examples" / "delay_b.thm4_1.ex1_lambda0_2.yaml")
+    found = {}
+    for method in ("enclosure", "bisection"):
+        assert main(["solve", "delay_b.thm4_1", f, "--maximize", "lambda", "--method", method, "--json"]) == 0
+        d = json.loads(capsys.readouterr().out)
+        assert d["method"] == method
+        found[method] = d["lower"]
+    assert abs(found["enclosure"] - found["bisection"]) <= 1e-6
+    with pytest.raises(SystemExit) as exc:
+        main(["solve", "delay_b.thm4_1", f, "--maximize", "lambda", "--method", "nonsense"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--method" in err[0] and "nonsense" in err[0]
