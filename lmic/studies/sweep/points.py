@@ -108,7 +108,7 @@ def decide(
     Examples
     --------
     >>> import scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Variable
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
     >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
     ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
     >>> r = decide(p)
