@@ -52,6 +52,7 @@ def dual_bound(
     exact: bool = False,
     resolve: Callable[[Problem], dict[str, Any] | None] | None = None,
     budget_s: float = 20.0,
+    solve_s: float = 0.0,
     solve_point: Callable[[Problem], np.ndarray | None] | None = None,
 ) -> dict[str, Any]:
     """Prove a lower bound of the minimisation form's optimal value from a dual point.
@@ -69,7 +70,12 @@ def dual_bound(
         dual cannot be proved (a degenerate dual: no strictly feasible point near it), the
         dual of :func:`perturbed_problem` is tried (``route`` ``"perturbed"``).
     budget_s : float
-        No new attempt (shift or perturbation) starts after this many seconds.
+        No new attempt (shift, perturbation or centring solve) starts after this many seconds
+        (:func:`lmic.certify.enclosure.search_budget` gives the callers' default); an attempt
+        is not started when the time spent plus its expected cost (the last attempt's, plus
+        ``solve_s`` for one that solves) would exceed it.
+    solve_s : float
+        The expected time of a solve on the caller's backend (the original solve's).
     solve_point : callable, optional
         ``solve_point(problem) -> x or None`` (a solve on the caller's backend, its primal
         point). When neither the shifts nor the perturbation prove, the dual problem is solved
@@ -104,20 +110,13 @@ def dual_bound(
     J, ranges = _jacobian(problem)
     out: dict[str, Any] = {"proven": False, "reason": "no shift gave a provable dual point"}
     top = _scale(problem, mats0, y0)
-    attempts: list[tuple[str, float, Any, Any]] = [("solver dual", e, mats0, y0) for e in SHIFTS]
-    for k, (route, eps_rel, mz, yz) in enumerate(attempts):
-        if k and time.perf_counter() - t0 > budget_s:
-            out["reason"] = f"{out.get('reason')}; time budget {budget_s:g} s spent after {k} attempts"
-            break
-        if route == "perturbed" and mz is None:
-            try:
-                d2 = resolve(perturbed_problem(problem, eps_rel * top)) if resolve is not None else None
-                mz, yz = _parse(problem, d2) if d2 else (None, None)
-            except CertificateError:
-                mz = None
-            if mz is None:
-                continue
-            # Z = Z' + eps I: the perturbed dual shifted back (the shift of _prepare)
+    last = [0.0]  # the duration of the last attempt: the next one is not started if it would overrun
+
+    def spent(solves: bool = False) -> bool:
+        return time.perf_counter() - t0 + last[0] + (solve_s if solves else 0.0) > budget_s
+
+    def attempt(route: str, eps_rel: float, mz: Any, yz: Any) -> dict[str, Any]:
+        ta = time.perf_counter()
         try:
             mats, y, active = _prepare(problem, J, ranges, q, mz, yz, eps_rel, top)
             res = _prove_float(problem, J, ranges, q, mats, y, active)
@@ -127,25 +126,63 @@ def dual_bound(
         except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
             res = {"proven": False, "reason": f"numerical failure in the repair: {exc}"}
         res.update(method="rigorous-float", shift=eps_rel, route=route)
-        if res["proven"] or not out.get("proven"):
-            res["dual"] = {"lmis": [Z.tolist() for Z in mats], "linear": y.tolist()} if res["proven"] else None
+        res["dual"] = {"lmis": [Z.tolist() for Z in mats], "linear": y.tolist()} if res["proven"] else None
+        last[0] = time.perf_counter() - ta
+        return res
+
+    # the solver's dual: the smallest shift, then the largest as a probe (PROBE): when even it
+    # fails, the shifts between are not tried (each costs a repair; on a dual whose interior
+    # is thinner than the shifts, as the bounded-real lemma's from about 15 states, they all
+    # fail), else the smallest proving shift of the ladder, refined
+    n_tried = 1
+    out = attempt("solver dual", SHIFTS[0], mats0, y0)
+    if not out["proven"] and len(SHIFTS) > 1 and not spent():
+        n_tried += 1
+        probe = attempt("solver dual", SHIFTS[-1], mats0, y0)
+        if probe["proven"]:
+            low, high, best = SHIFTS[0], SHIFTS[-1], probe
+            for eps_rel in SHIFTS[1:-1]:
+                if spent():
+                    break
+                n_tried += 1
+                res = attempt("solver dual", eps_rel, mats0, y0)
+                if res["proven"]:
+                    high, best = eps_rel, res
+                    break
+                low = eps_rel
+            out = _refine(problem, J, ranges, q, mats0, y0, top, low, high, best) if not spent() else best
+        else:
+            out = probe
+    if not out["proven"] and resolve is not None:
+        for eps_rel in PERTURBATIONS:
+            if spent(solves=True):
+                out["reason"] = f"{out.get('reason')}; time budget {budget_s:g} s spent after {n_tried} attempts"
+                break
+            ta = time.perf_counter()
+            try:
+                d2 = resolve(perturbed_problem(problem, eps_rel * top))
+                mz, yz = _parse(problem, d2) if d2 else (None, None)
+            except CertificateError:
+                mz = None
+            if mz is None:
+                continue
+            # Z = Z' + eps I: the perturbed dual shifted back (the shift of _prepare)
+            n_tried += 1
+            res = attempt("perturbed", eps_rel, mz, yz)
+            last[0] = time.perf_counter() - ta  # a solve and a repair
             out = res
-        if res["proven"]:
-            if route == "solver dual" and 0 < k < len(SHIFTS):
-                out = _refine(problem, J, ranges, q, mz, yz, top, SHIFTS[k - 1], eps_rel, out)
-            break
-        if k == len(SHIFTS) - 1 and resolve is not None:
-            attempts += [("perturbed", e, None, None) for e in PERTURBATIONS]
-    if not out.get("proven") and solve_point is not None and time.perf_counter() - t0 <= budget_s:
-        mats_c, y_c, res = _centred(
-            problem, J, ranges, q, mats0, y0, top, solve_point, lambda: time.perf_counter() - t0 > budget_s
-        )
+            if res["proven"]:
+                break
+    if not out.get("proven") and solve_point is not None and not spent(solves=True):
+        mats_c, y_c, res = _centred(problem, J, ranges, q, mats0, y0, top, solve_point, lambda: spent(solves=True))
         res.update(method="rigorous-float", shift=0.0, route="centred")
         if res["proven"]:
             res["dual"] = {"lmis": [Z.tolist() for Z in mats_c], "linear": y_c.tolist()}
             out = res
         else:
             out["reason"] = f"{out.get('reason')}; {res['reason']}"
+    elif not out.get("proven") and solve_point is not None:
+        out["reason"] = f"{out.get('reason')}; time budget {budget_s:g} s spent before the centred route"
     if exact and out.get("proven"):
         mats, y = _parse(problem, out["dual"])
         ex = _prove_exact(problem, J, ranges, q, mats, y)
