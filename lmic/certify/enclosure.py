@@ -421,7 +421,9 @@ def describe(record: dict[str, Any] | None) -> list[str]:
     primal_end = "upper" if dual_end == "lower" else "lower"
     if dual.get("proven"):
         how = "exact rational arithmetic" if dual.get("method") == "exact" else "rigorous floating-point error bounds"
-        if dual.get("route") == "centred":
+        if dual.get("route") == "face":
+            where = f"the optimal face W = 0 of a Lyapunov-type LMI, rank {dual.get('rank')}"
+        elif dual.get("route") == "centred":
             where = f"centred dual point, weight {dual.get('theta'):g} at loss {dual.get('centring_loss'):g}"
         else:
             where = f"interior shift {dual.get('shift'):g}"

@@ -1,10 +1,14 @@
 """The dual (lower) end of the enclosure: :func:`dual_bound` and :func:`verify_dual_bound`.
 
-:func:`dual_bound` tries, in order, the solver's dual shifted inside the cone (:data:`SHIFTS`),
-the dual of VSDP's perturbed problem, and a centred dual point (the dual problem solved for the
-largest interior margin at a small loss of objective, combined with the solver's dual); each
-candidate is repaired (:mod:`lmic.certify.enclosure_repair`) and proved
-(:mod:`lmic.certify.enclosure_float`, optionally :mod:`lmic.certify.enclosure_exact`).
+:func:`dual_bound` tries, in order, the exact point on the optimal face of a Lyapunov-type
+LMI (:mod:`lmic.certify.enclosure_face`, when the IR's coefficients have that structure
+exactly), the solver's dual shifted inside the cone (:data:`SHIFTS`: the smallest, then the
+largest as a probe, then the ones between), the dual of VSDP's perturbed problem, and a
+centred dual point (the dual problem solved for the largest interior margin at a small loss of
+objective, combined with the solver's dual); each float candidate is repaired
+(:mod:`lmic.certify.enclosure_repair`) and proved (:mod:`lmic.certify.enclosure_float`,
+optionally :mod:`lmic.certify.enclosure_exact`). The search stops at its time budget (an
+attempt is not started when its expected cost would overrun it).
 
 Examples
 --------
@@ -27,6 +31,7 @@ import numpy as np
 
 from lmic.certify.enclosure_centre import centred_bound
 from lmic.certify.enclosure_exact import _prove_exact
+from lmic.certify.enclosure_face import face_bound, verify_face
 from lmic.certify.enclosure_float import _prove_float
 from lmic.certify.enclosure_repair import (
     PERTURBATIONS,
@@ -84,7 +89,8 @@ def dual_bound(
     Returns
     -------
     dict
-        ``proven`` (bool), ``route`` (``"solver dual"``, ``"perturbed"`` or ``"centred"``), ``lower`` (a
+        ``proven`` (bool), ``route`` (``"face"``, ``"solver dual"``, ``"perturbed"`` or
+        ``"centred"``), ``lower`` (a
         bound ``<= inf q_0 + q . x``, the minimisation form:
         for ``max`` problems ``-lower`` bounds the maximum from above), ``method``
         (``"rigorous-float"`` or ``"exact"``), ``shift`` (the ``eps_rel`` used), ``reason``,
@@ -130,6 +136,13 @@ def dual_bound(
         last[0] = time.perf_counter() - ta
         return res
 
+    # a Lyapunov-type LMI whose IR coefficients have the exact structure: the exact point on
+    # the optimal face (lmic.certify.enclosure_face), cheap and tight; its interior is too thin
+    # for the repairs below from about 15 states
+    face = face_bound(problem, duals)
+    if face["proven"]:
+        face["time_s"] = time.perf_counter() - t0
+        return face
     # the solver's dual: the smallest shift, then the largest as a probe (PROBE): when even it
     # fails, the shifts between are not tried (each costs a repair; on a dual whose interior
     # is thinner than the shifts, as the bounded-real lemma's from about 15 states, they all
@@ -254,6 +267,8 @@ def verify_dual_bound(problem: Problem, record: dict[str, Any], *, exact: bool =
     """
     if not record.get("dual") or record.get("lower") is None:
         return {"ok": False, "lower": None, "reason": "no dual point recorded"}
+    if isinstance(record["dual"], dict) and record["dual"].get("form") == "face":
+        return verify_face(problem, record)
     try:
         mats, y = _parse(problem, record["dual"])
     except CertificateError as exc:
