@@ -230,10 +230,10 @@ def enclosure(
         pe = primal_end(problem, x)
         upper_value = pe["value"] if pe["proven"] else None
         out["primal"] = "certified point" if pe["proven"] else "no rigorous primal end: " + pe["reason"]
-        if pe["proven"] and strict and solve_point is not None and dual.get("proven"):
+        if pe["proven"] and strict and solve_point is not None and _gap_above(problem, dual, upper_value):
             # the strict problem's point keeps the solver's margin: move it towards a point of
             # the closed problem as far as the proof allows (a solve: only worth it when there
-            # is a proven lower end to close the gap with)
+            # is a proven lower end and the gap to it is above GAP_TARGET)
             pol = _polish_strict(problem, np.asarray(x, dtype=float), solve_point)
             better = pol.get("proven") and (
                 pol["value"] < upper_value if sense == "min" else pol["value"] > upper_value
@@ -274,6 +274,16 @@ def enclosure(
         )
     out["consistent"] = True
     return out
+
+
+def _gap_above(problem: Problem, dual: dict[str, Any], primal: float | None) -> bool:
+    """A proven dual end whose relative gap to the primal end ``primal`` is above
+    :data:`GAP_TARGET`."""
+    if not dual.get("proven") or primal is None:
+        return False
+    lo = dual["lower"] if problem.objective.sense == "min" else -dual["lower"]
+    lo, hi = (lo, primal) if problem.objective.sense == "min" else (primal, lo)
+    return bool((hi - lo) / max(1.0, 0.5 * (abs(hi) + abs(lo))) > GAP_TARGET)
 
 
 def _polish_strict(problem: Problem, x: np.ndarray, solve_point: Callable[[Problem], Any]) -> dict[str, Any]:
