@@ -61,7 +61,7 @@ from lmic.ir.svec import tril_rows_cols
 __all__ = ["LOSSES", "THETAS", "centring_problem", "centred_bound"]
 
 #: relative losses ``delta / max(1, |L_0|)`` of dual objective tried, smallest first
-LOSSES = (1e-6, 1e-4, 1e-2)
+LOSSES = (1e-6, 1e-4, 1e-3, 1e-2)
 #: weights ``theta`` of the centred point in the combination, smallest first
 THETAS = (1e-4, 1e-3, 1e-2, 0.03, 0.1, 0.3, 1.0)
 
