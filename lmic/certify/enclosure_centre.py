@@ -29,8 +29,10 @@ repair of :mod:`lmic.certify.enclosure_repair`, gives the bound. Nothing about `
 trusted: the solver's point is only a candidate, the proof decides.
 
 Where the interior is thinner than the floating-point resolution (the bounded-real lemma from
-about 15 states), no candidate proves; :mod:`lmic.certify.enclosure_conditional` then gives a
-bound that holds for solutions in a box only, labelled as such.
+about 15 states), no candidate proves: :mod:`lmic.certify.enclosure_face` proves such problems
+exactly on their optimal face when the IR's coefficients have the Lyapunov structure exactly;
+otherwise :mod:`lmic.certify.enclosure_conditional` gives a bound that holds for solutions in a
+box only, labelled as such.
 
 Examples
 --------
