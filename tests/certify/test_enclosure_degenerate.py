@@ -184,3 +184,20 @@ def test_strict_examples_gap_within_1e6_and_backends_bracket_each_other(theorem,
             assert audit_certificate(path).ok
     (a_lo, a_hi), (b_lo, b_hi) = ends["clarabel"], ends["cvxopt"]
     assert a_lo <= b_hi and b_lo <= a_hi
+
+
+def test_dual_search_stops_at_its_budget():
+    """With no time left after the first attempt, the search starts no re-solve and says so;
+    with the default budget the same dual point proves (the centred route, test above)."""
+    from lmic.certify.enclosure_dual import dual_bound
+
+    _, r = _brl(10, 0, "clarabel", backoff=0)
+    calls = []
+
+    def solve(p):
+        calls.append(p)
+        return None
+
+    res = dual_bound(r.problem, r.solution.duals, budget_s=0.0, resolve=solve, solve_point=solve)
+    assert not res["proven"] and not calls
+    assert "time budget 0 s spent" in res["reason"]
