@@ -309,7 +309,7 @@ def _polish_strict(problem: Problem, x: np.ndarray, solve_point: Callable[[Probl
 
 
 #: the dual search (shifts, perturbed and centring solves) may take this many times the solve
-BUDGET_FACTOR = 2.0
+BUDGET_FACTOR = 1.0
 #: ... and at least this many seconds (a small problem's whole search, perturbed and centring
 #: solves included, takes about 1.5 s on one busy core: twice that is left for contention)
 BUDGET_MIN_S = 3.0
@@ -320,8 +320,8 @@ def search_budget(solve_s: float) -> float:
     lower end costs at most a small multiple of the solve (each attempt of the search
     costs a repair of the dual or a solve of a problem of the dual's size).
 
-    >>> search_budget(0.01), search_budget(3.0)
-    (3.0, 6.0)
+    >>> search_budget(0.01), search_budget(5.0)
+    (3.0, 5.0)
     """
     return max(BUDGET_MIN_S, BUDGET_FACTOR * float(solve_s))
 
