@@ -93,21 +93,19 @@ def pivot_blocks(problem: Problem, J: sp.spmatrix, ranges: list[tuple[int, int]]
     >>> {k: v.tolist() for k, v in pivot_blocks(p, J, ranges).items()}
     {0: [1]}
     """
-    Jc = sp.csc_matrix(J)
+    J1 = sp.csc_matrix(J)[1:]
+    J1.eliminate_zeros()
+    J1 = sp.csc_matrix(J1)
+    counts = np.diff(J1.indptr)
     out: dict[int, np.ndarray] = {}
     used: set[int] = set()
     for i, (a, b) in enumerate(ranges):
-        rows: list[int] = []
-        for j in range(a, b):
-            lo, hi = Jc.indptr[j], Jc.indptr[j + 1]
-            r = [int(k) for k, v in zip(Jc.indices[lo:hi], Jc.data[lo:hi], strict=True) if k >= 1 and v != 0]
-            if len(r) != 1:
-                break
-            rows.append(r[0])
-        else:
-            if rows and len(set(rows)) == len(rows) and not used.intersection(rows):
-                out[i] = np.array(rows)
-                used.update(rows)
+        if a == b or not np.all(counts[a:b] == 1):
+            continue
+        rows = (J1.indices[J1.indptr[a:b]] + 1).astype(int)
+        if np.unique(rows).size == rows.size and not used.intersection(rows.tolist()):
+            out[i] = rows
+            used.update(rows.tolist())
     return out
 
 
@@ -144,12 +142,15 @@ def lyapunov_structure(problem: Problem) -> dict[str, Any] | None:
         ri, ci = tril_rows_cols(npv)
         if np.any(sp.csr_matrix(Jr[rows][:, ranges[pi][0] : ranges[pi][1]]).diagonal() == 0):
             continue
-        H = {t: tril_unvec(Fx[:, int(k)].toarray().ravel(), d) for t, k in enumerate(rows)}
+
+        def H(t: int, Fx: sp.csc_matrix = Fx, rows: np.ndarray = rows, d: int = d) -> np.ndarray:
+            return tril_unvec(Fx[:, int(rows[t])].toarray().ravel(), d)
+
         Abar = np.zeros((npv, d))
         state = np.zeros(npv, dtype=int)
         for t in range(ri.size):
             if ri[t] == ci[t]:
-                h = H[t]
+                h = H(t)
                 r = int(np.argmax((h != 0).sum(axis=1)))
                 state[ri[t]] = r
                 Abar[ri[t]] = h[r]
@@ -170,7 +171,7 @@ def lyapunov_structure(problem: Problem) -> dict[str, Any] | None:
             exact = all(
                 Fraction(float(Gs[i, j])) == Fraction(float(G[i, j])) + Fraction(float(G[j, i])) for i, j in both
             )
-            if not exact or np.any(Gs != H[t]):
+            if not exact or np.any(Gs != H(t)):
                 ok = False
                 break
         if ok:
