@@ -38,6 +38,7 @@ from lmic.certify.enclosure_repair import (
     SHIFTS,
     _active_of,
     _jacobian,
+    _pack,
     _parse,
     _prepare,
     _scale,
@@ -47,7 +48,10 @@ from lmic.certify.enclosure_repair import (
 from lmic.errors import CertificateError
 from lmic.ir.problem import Problem
 
-__all__ = ["dual_bound", "verify_dual_bound"]
+__all__ = ["dual_bound", "verify_dual_bound", "FACE_SLACK"]
+
+#: a face bound within this (relative) of the solver's dual objective ends the search
+FACE_SLACK = 1e-6
 
 
 def dual_bound(
@@ -143,8 +147,11 @@ def dual_bound(
     # for the repairs below from about 15 states
     face = face_bound(problem, duals)
     if face["proven"]:
-        face["time_s"] = time.perf_counter() - t0
-        return face
+        # as good as the solver's dual objective: done; else the routes below may do better
+        L0 = float(q[0] - (J[0] @ _pack(problem, mats0, y0))[0])
+        if face["lower"] >= L0 - FACE_SLACK * max(1.0, abs(L0)):
+            face["time_s"] = time.perf_counter() - t0
+            return face
     # the solver's dual: the smallest shift, then the largest as a probe (PROBE): when even it
     # fails, the shifts between are not tried (each costs a repair; on a dual whose interior
     # is thinner than the shifts, as the bounded-real lemma's from about 15 states, they all
@@ -198,7 +205,9 @@ def dual_bound(
             out["reason"] = f"{out.get('reason')}; {res['reason']}"
     elif not out.get("proven") and solve_point is not None:
         out["reason"] = f"{out.get('reason')}; time budget {budget_s:g} s spent before the centred route"
-    if exact and out.get("proven"):
+    if face["proven"] and (not out.get("proven") or out["lower"] <= face["lower"]):
+        out = face
+    if exact and out.get("proven") and out.get("method") != "exact":
         mats, y = _parse(problem, out["dual"])
         ex = _prove_exact(problem, J, ranges, q, mats, y)
         out["exact"] = ex
