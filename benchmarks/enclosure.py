@@ -19,6 +19,13 @@ enclosure. Usage::
     python benchmarks/enclosure.py                      # examples + SDPLIB, 3 rounds
     python benchmarks/enclosure.py --repeat 5 --json out.json --backend cvxopt
     python benchmarks/enclosure.py --only control1,truss1
+    python benchmarks/enclosure.py --brl-sizes 10,20,30,40   # the bounded-real lemma instead
+
+``--brl-sizes`` runs the bounded-real lemma (``tutorial.bounded_real``) on random stable systems
+(seed 0) of those sizes, twice: with a random diagonal (the IR's coefficients ``A_aa + A_bb``
+are rounded sums) and with the diagonal rounded to eighths (the sums are exact, so the exact
+face route of :mod:`lmic.certify.enclosure_face` applies); ``inside`` says whether the
+enclosure contains the H-infinity norm from a Hamiltonian bisection.
 
 On a shared machine run it with ``OPENBLAS_NUM_THREADS=1``: the proof does many small dense
 solves (``n x n``), which multi-threaded BLAS slows down ten-fold when the cores are busy
@@ -84,6 +91,48 @@ def _published() -> dict[str, str]:
     return out
 
 
+def hinf_bracket(A: Any, B: Any, C: Any, tol: float = 1e-12) -> tuple[float, float]:
+    """``(lo, hi)`` around the H-infinity norm of ``(A, B, C, 0)``: bisection on the imaginary
+    eigenvalues of the Hamiltonian (no LMI solver involved)."""
+    import numpy as np
+
+    def crosses(g: float) -> bool:
+        H = np.block([[A, B @ B.T / g], [-C.T @ C / g, -A.T]])
+        ev = np.linalg.eigvals(H)
+        return bool(np.any(np.abs(ev.real) < 1e-8 * max(1.0, float(np.abs(ev).max()))))
+
+    lo, hi = 0.0, 1.0
+    while crosses(hi):
+        lo, hi = hi, 2 * hi
+    while hi - lo > tol * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if crosses(mid) else (lo, mid)
+    return lo, hi
+
+
+def brl_problems(sizes: list[int]) -> list[tuple[str, Any, tuple[float, float]]]:
+    """``(label, Problem, H-infinity bracket)`` of the bounded-real lemma, random diagonal and
+    diagonal in eighths, for each size."""
+    import numpy as np
+
+    from lmic.api import load_target
+
+    out = []
+    for n in sizes:
+        for kind in ("random", "eighths"):
+            rng = np.random.default_rng(0)
+            A = rng.standard_normal((n, n))
+            A -= (max(np.linalg.eigvals(A).real) + 0.5) * np.eye(n)
+            if kind == "eighths":
+                A[np.diag_indices(n)] = np.round(A[np.diag_indices(n)] * 8) / 8
+                while max(np.linalg.eigvals(A).real) >= -0.1:
+                    A -= 0.125 * np.eye(n)
+            B, C = rng.standard_normal((n, 2)), rng.standard_normal((2, n))
+            system = {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}
+            out.append((f"brl n={n} {kind}", load_target("tutorial.bounded_real", system)[0], hinf_bracket(A, B, C)))
+    return out
+
+
 def problems(only: set[str] | None = None) -> list[tuple[str, Any]]:
     """``(label, Problem)`` for every benchmark problem (compiled once, outside the timing)."""
     from lmic.api import load_target
@@ -141,11 +190,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", default="", help="comma-separated problem labels")
     ap.add_argument("--json", default=None)
     ap.add_argument("--compare", default="scs", help="a second backend run once for its gap ('' for none)")
+    ap.add_argument("--brl-sizes", default="", help="run the bounded-real lemma at these sizes instead")
     args = ap.parse_args(argv)
     only = {s for s in args.only.split(",") if s} or None
     published = _published()
+    truth: dict[str, tuple[float, float]] = {}
+    if args.brl_sizes:
+        todo = []
+        for label, prob, bracket in brl_problems([int(k) for k in args.brl_sizes.split(",") if k]):
+            todo.append((label, prob))
+            truth[label] = bracket
+    else:
+        todo = problems(only)
     rows = []
-    for label, prob in problems(only):
+    for label, prob in todo:
         times: dict[str, list[float]] = {"plain": [], "enclosure": []}
         last: dict[str, Any] = {}
         for r in range(args.repeat):
@@ -179,6 +237,11 @@ def main(argv: list[str] | None = None) -> int:
                 row["compare_ends"] = (other.get("lower"), other.get("upper"))
             except Exception as exc:  # a benchmark cell, not a crash
                 row["compare_rel_gap"] = f"{type(exc).__name__}"
+        if label in truth:
+            a, b = truth[label]
+            lo, hi = row["lower"], row["upper"]
+            row["published"] = f"{0.5 * (a + b):.12g}"
+            row["inside"] = bool((lo is None or lo <= a) and (hi is None or b <= hi))
         if label in published:
             a, b = rounding_interval(published[label])
             lo, hi = row["lower"], row["upper"]

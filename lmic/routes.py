@@ -163,7 +163,9 @@ def enclosure_of(
         other = _solve_on(backend, other_problem, options)
         return other.x if other is not None and other.status in ("optimal", "inaccurate") else None
 
-    enc = enclosure(problem, sol.duals, x, exact=exact, resolve=resolve, solve_point=solve_point)
+    # solve_s: a failing lower end costs a few solves at most (search_budget)
+    solve_s = float(getattr(sol, "solve_s", 0.0))
+    enc = enclosure(problem, sol.duals, x, exact=exact, resolve=resolve, solve_point=solve_point, solve_s=solve_s)
     enc = tighten(problem, enc, x, exact, backend, options, resolve, solve_point)
     return enc, time.perf_counter() - t0
 
@@ -187,7 +189,14 @@ def tighten(
     """
     from dataclasses import replace
 
-    from lmic.certify.enclosure import GAP_TARGET, TIGHT_TOL, best_of, enclosure, polish_primal, with_primal
+    from lmic.certify.enclosure import (
+        GAP_TARGET,
+        TIGHT_TOL,
+        best_of,
+        enclosure,
+        polish_primal,
+        with_primal,
+    )
     from lmic.options import SolveOptions
 
     gap = enc.get("rel_gap")
@@ -207,7 +216,15 @@ def tighten(
     sol2 = _solve_on(backend, problem, tight)
     if sol2 is None or sol2.status not in ("optimal", "inaccurate") or sol2.x is None:
         return enc
-    enc2 = enclosure(problem, sol2.duals, sol2.x, exact=exact, resolve=resolve, solve_point=solve_point)
+    enc2 = enclosure(
+        problem,
+        sol2.duals,
+        sol2.x,
+        exact=exact,
+        resolve=resolve,
+        solve_point=solve_point,
+        solve_s=sol2.solve_s,
+    )
     inner = enc.get("restored_x") if enc.get("primal") == "restored point" else x
     if enc2.get(key) is None and enc.get(key) is not None and inner is not None:
         # the tight point is met only to round-off: as close to it as the proof allows

@@ -144,6 +144,9 @@ __all__ = [
     "RADIUS_FACTOR",
     "centring_problem",
     "centred_bound",
+    "search_budget",
+    "BUDGET_FACTOR",
+    "BUDGET_MIN_S",
 ]
 
 
@@ -155,6 +158,7 @@ def enclosure(
     exact: bool = False,
     resolve: Callable[[Problem], dict[str, Any] | None] | None = None,
     solve_point: Callable[[Problem], np.ndarray | None] | None = None,
+    solve_s: float = 0.0,
 ) -> dict[str, Any]:
     """The certified enclosure of the optimal value, in the problem's own sense.
 
@@ -173,6 +177,9 @@ def enclosure(
     solve_point : callable, optional
         A solve on the caller's backend returning its primal point (the centred route of
         :func:`dual_bound`).
+    solve_s : float
+        The time of the solve that gave ``duals``: the dual search (:func:`dual_bound`) may
+        take :func:`search_budget` of it, and expects a re-solve to cost as much.
 
     Returns
     -------
@@ -204,7 +211,15 @@ def enclosure(
         dual = {"proven": False, "reason": "the solver returned no dual point"}
     else:
         try:
-            dual = dual_bound(problem, duals, exact=exact, resolve=resolve, solve_point=solve_point)
+            dual = dual_bound(
+                problem,
+                duals,
+                exact=exact,
+                resolve=resolve,
+                solve_point=solve_point,
+                budget_s=search_budget(solve_s),
+                solve_s=solve_s,
+            )
         except CertificateError as exc:
             dual = {"proven": False, "reason": str(exc)}
     out["dual"] = dual
@@ -215,9 +230,10 @@ def enclosure(
         pe = primal_end(problem, x)
         upper_value = pe["value"] if pe["proven"] else None
         out["primal"] = "certified point" if pe["proven"] else "no rigorous primal end: " + pe["reason"]
-        if pe["proven"] and strict and solve_point is not None:
+        if pe["proven"] and strict and solve_point is not None and _gap_above(problem, dual, upper_value):
             # the strict problem's point keeps the solver's margin: move it towards a point of
-            # the closed problem as far as the proof allows
+            # the closed problem as far as the proof allows (a solve: only worth it when there
+            # is a proven lower end and the gap to it is above GAP_TARGET)
             pol = _polish_strict(problem, np.asarray(x, dtype=float), solve_point)
             better = pol.get("proven") and (
                 pol["value"] < upper_value if sense == "min" else pol["value"] > upper_value
@@ -260,6 +276,16 @@ def enclosure(
     return out
 
 
+def _gap_above(problem: Problem, dual: dict[str, Any], primal: float | None) -> bool:
+    """A proven dual end whose relative gap to the primal end ``primal`` is above
+    :data:`GAP_TARGET`."""
+    if not dual.get("proven") or primal is None:
+        return False
+    lo = dual["lower"] if problem.objective.sense == "min" else -dual["lower"]
+    lo, hi = (lo, primal) if problem.objective.sense == "min" else (primal, lo)
+    return bool((hi - lo) / max(1.0, 0.5 * (abs(hi) + abs(lo))) > GAP_TARGET)
+
+
 def _polish_strict(problem: Problem, x: np.ndarray, solve_point: Callable[[Problem], Any]) -> dict[str, Any]:
     """:func:`~lmic.certify.enclosure_float.polish_primal` from ``x`` towards the solver's
     point of the closed problem (every strict constraint made non-strict)."""
@@ -280,6 +306,24 @@ def _polish_strict(problem: Problem, x: np.ndarray, solve_point: Callable[[Probl
     if xb is None:
         return {"proven": False}
     return polish_primal(problem, x, np.asarray(xb, dtype=float))
+
+
+#: the dual search (shifts, perturbed and centring solves) may take this many times the solve
+BUDGET_FACTOR = 1.0
+#: ... and at least this many seconds (a small problem's whole search, perturbed and centring
+#: solves included, takes about 1.5 s on one busy core: twice that is left for contention)
+BUDGET_MIN_S = 3.0
+
+
+def search_budget(solve_s: float) -> float:
+    """The time budget of the dual search after a solve of ``solve_s`` seconds: a failing
+    lower end costs at most a small multiple of the solve (each attempt of the search
+    costs a repair of the dual or a solve of a problem of the dual's size).
+
+    >>> search_budget(0.01), search_budget(5.0)
+    (3.0, 5.0)
+    """
+    return max(BUDGET_MIN_S, BUDGET_FACTOR * float(solve_s))
 
 
 #: relative gap above which a caller may re-solve at :data:`TIGHT_TOL` (:func:`best_of`)
@@ -388,7 +432,9 @@ def describe(record: dict[str, Any] | None) -> list[str]:
     primal_end = "upper" if dual_end == "lower" else "lower"
     if dual.get("proven"):
         how = "exact rational arithmetic" if dual.get("method") == "exact" else "rigorous floating-point error bounds"
-        if dual.get("route") == "centred":
+        if dual.get("route") == "face":
+            where = f"the optimal face W = 0 of a Lyapunov-type LMI, rank {dual.get('rank')}"
+        elif dual.get("route") == "centred":
             where = f"centred dual point, weight {dual.get('theta'):g} at loss {dual.get('centring_loss'):g}"
         else:
             where = f"interior shift {dual.get('shift'):g}"

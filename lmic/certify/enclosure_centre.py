@@ -29,8 +29,10 @@ repair of :mod:`lmic.certify.enclosure_repair`, gives the bound. Nothing about `
 trusted: the solver's point is only a candidate, the proof decides.
 
 Where the interior is thinner than the floating-point resolution (the bounded-real lemma from
-about 15 states), no candidate proves; :mod:`lmic.certify.enclosure_conditional` then gives a
-bound that holds for solutions in a box only, labelled as such.
+about 15 states), no candidate proves: :mod:`lmic.certify.enclosure_face` proves such problems
+exactly on their optimal face when the IR's coefficients have the Lyapunov structure exactly;
+otherwise :mod:`lmic.certify.enclosure_conditional` gives a bound that holds for solutions in a
+box only, labelled as such.
 
 Examples
 --------
@@ -61,7 +63,7 @@ from lmic.ir.svec import tril_rows_cols
 __all__ = ["LOSSES", "THETAS", "centring_problem", "centred_bound"]
 
 #: relative losses ``delta / max(1, |L_0|)`` of dual objective tried, smallest first
-LOSSES = (1e-6, 1e-4, 1e-2)
+LOSSES = (1e-6, 1e-4, 1e-3, 1e-2)
 #: weights ``theta`` of the centred point in the combination, smallest first
 THETAS = (1e-4, 1e-3, 1e-2, 0.03, 0.1, 0.3, 1.0)
 

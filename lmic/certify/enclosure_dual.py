@@ -1,10 +1,14 @@
 """The dual (lower) end of the enclosure: :func:`dual_bound` and :func:`verify_dual_bound`.
 
-:func:`dual_bound` tries, in order, the solver's dual shifted inside the cone (:data:`SHIFTS`),
-the dual of VSDP's perturbed problem, and a centred dual point (the dual problem solved for the
-largest interior margin at a small loss of objective, combined with the solver's dual); each
-candidate is repaired (:mod:`lmic.certify.enclosure_repair`) and proved
-(:mod:`lmic.certify.enclosure_float`, optionally :mod:`lmic.certify.enclosure_exact`).
+:func:`dual_bound` tries, in order, the exact point on the optimal face of a Lyapunov-type
+LMI (:mod:`lmic.certify.enclosure_face`, when the IR's coefficients have that structure
+exactly), the solver's dual shifted inside the cone (:data:`SHIFTS`: the smallest, then the
+largest as a probe, then the ones between), the dual of VSDP's perturbed problem, and a
+centred dual point (the dual problem solved for the largest interior margin at a small loss of
+objective, combined with the solver's dual); each float candidate is repaired
+(:mod:`lmic.certify.enclosure_repair`) and proved (:mod:`lmic.certify.enclosure_float`,
+optionally :mod:`lmic.certify.enclosure_exact`). The search stops at its time budget (an
+attempt is not started when its expected cost would overrun it).
 
 Examples
 --------
@@ -27,12 +31,14 @@ import numpy as np
 
 from lmic.certify.enclosure_centre import centred_bound
 from lmic.certify.enclosure_exact import _prove_exact
+from lmic.certify.enclosure_face import face_bound, verify_face
 from lmic.certify.enclosure_float import _prove_float
 from lmic.certify.enclosure_repair import (
     PERTURBATIONS,
     SHIFTS,
     _active_of,
     _jacobian,
+    _pack,
     _parse,
     _prepare,
     _scale,
@@ -42,7 +48,10 @@ from lmic.certify.enclosure_repair import (
 from lmic.errors import CertificateError
 from lmic.ir.problem import Problem
 
-__all__ = ["dual_bound", "verify_dual_bound"]
+__all__ = ["dual_bound", "verify_dual_bound", "FACE_SLACK"]
+
+#: a face bound within this (relative) of the solver's dual objective ends the search
+FACE_SLACK = 1e-6
 
 
 def dual_bound(
@@ -52,6 +61,7 @@ def dual_bound(
     exact: bool = False,
     resolve: Callable[[Problem], dict[str, Any] | None] | None = None,
     budget_s: float = 20.0,
+    solve_s: float = 0.0,
     solve_point: Callable[[Problem], np.ndarray | None] | None = None,
 ) -> dict[str, Any]:
     """Prove a lower bound of the minimisation form's optimal value from a dual point.
@@ -69,7 +79,13 @@ def dual_bound(
         dual cannot be proved (a degenerate dual: no strictly feasible point near it), the
         dual of :func:`perturbed_problem` is tried (``route`` ``"perturbed"``).
     budget_s : float
-        No new attempt (shift or perturbation) starts after this many seconds.
+        No new attempt (shift, perturbation or centring solve) starts after this many seconds
+        of this process's CPU time
+        (:func:`lmic.certify.enclosure.search_budget` gives the callers' default); an attempt
+        is not started when the time spent plus its expected cost (the last attempt's, plus
+        ``solve_s`` for one that solves) would exceed it.
+    solve_s : float
+        The expected time of a solve on the caller's backend (the original solve's).
     solve_point : callable, optional
         ``solve_point(problem) -> x or None`` (a solve on the caller's backend, its primal
         point). When neither the shifts nor the perturbation prove, the dual problem is solved
@@ -78,7 +94,8 @@ def dual_bound(
     Returns
     -------
     dict
-        ``proven`` (bool), ``route`` (``"solver dual"``, ``"perturbed"`` or ``"centred"``), ``lower`` (a
+        ``proven`` (bool), ``route`` (``"face"``, ``"solver dual"``, ``"perturbed"`` or
+        ``"centred"``), ``lower`` (a
         bound ``<= inf q_0 + q . x``, the minimisation form:
         for ``max`` problems ``-lower`` bounds the maximum from above), ``method``
         (``"rigorous-float"`` or ``"exact"``), ``shift`` (the ``eps_rel`` used), ``reason``,
@@ -97,6 +114,7 @@ def dual_bound(
     (True, True)
     """
     t0 = time.perf_counter()
+    c0 = time.process_time()  # the budget counts this process's CPU time: stable on a busy machine
     if problem.objective.sense == "feasibility":
         raise CertificateError("a feasibility problem has no optimal value to bound")
     mats0, y0 = _parse(problem, duals)
@@ -104,20 +122,13 @@ def dual_bound(
     J, ranges = _jacobian(problem)
     out: dict[str, Any] = {"proven": False, "reason": "no shift gave a provable dual point"}
     top = _scale(problem, mats0, y0)
-    attempts: list[tuple[str, float, Any, Any]] = [("solver dual", e, mats0, y0) for e in SHIFTS]
-    for k, (route, eps_rel, mz, yz) in enumerate(attempts):
-        if k and time.perf_counter() - t0 > budget_s:
-            out["reason"] = f"{out.get('reason')}; time budget {budget_s:g} s spent after {k} attempts"
-            break
-        if route == "perturbed" and mz is None:
-            try:
-                d2 = resolve(perturbed_problem(problem, eps_rel * top)) if resolve is not None else None
-                mz, yz = _parse(problem, d2) if d2 else (None, None)
-            except CertificateError:
-                mz = None
-            if mz is None:
-                continue
-            # Z = Z' + eps I: the perturbed dual shifted back (the shift of _prepare)
+    last = [0.0]  # the duration of the last attempt: the next one is not started if it would overrun
+
+    def spent(solves: bool = False) -> bool:
+        return time.process_time() - c0 + last[0] + (solve_s if solves else 0.0) > budget_s
+
+    def attempt(route: str, eps_rel: float, mz: Any, yz: Any) -> dict[str, Any]:
+        ta = time.process_time()
         try:
             mats, y, active = _prepare(problem, J, ranges, q, mz, yz, eps_rel, top)
             res = _prove_float(problem, J, ranges, q, mats, y, active)
@@ -127,26 +138,76 @@ def dual_bound(
         except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
             res = {"proven": False, "reason": f"numerical failure in the repair: {exc}"}
         res.update(method="rigorous-float", shift=eps_rel, route=route)
-        if res["proven"] or not out.get("proven"):
-            res["dual"] = {"lmis": [Z.tolist() for Z in mats], "linear": y.tolist()} if res["proven"] else None
+        res["dual"] = {"lmis": [Z.tolist() for Z in mats], "linear": y.tolist()} if res["proven"] else None
+        last[0] = time.process_time() - ta
+        return res
+
+    # a Lyapunov-type LMI whose IR coefficients have the exact structure: the exact point on
+    # the optimal face (lmic.certify.enclosure_face), cheap and tight; its interior is too thin
+    # for the repairs below from about 15 states
+    face = face_bound(problem, duals)
+    if face["proven"]:
+        # as good as the solver's dual objective: done; else the routes below may do better
+        L0 = float(q[0] - (J[0] @ _pack(problem, mats0, y0))[0])
+        if face["lower"] >= L0 - FACE_SLACK * max(1.0, abs(L0)):
+            face["time_s"] = time.perf_counter() - t0
+            return face
+    # the solver's dual: the smallest shift, then the largest as a probe (PROBE): when even it
+    # fails, the shifts between are not tried (each costs a repair; on a dual whose interior
+    # is thinner than the shifts, as the bounded-real lemma's from about 15 states, they all
+    # fail), else the smallest proving shift of the ladder, refined
+    n_tried = 1
+    out = attempt("solver dual", SHIFTS[0], mats0, y0)
+    if not out["proven"] and len(SHIFTS) > 1 and not spent():
+        n_tried += 1
+        probe = attempt("solver dual", SHIFTS[-1], mats0, y0)
+        if probe["proven"]:
+            low, high, best = SHIFTS[0], SHIFTS[-1], probe
+            for eps_rel in SHIFTS[1:-1]:
+                if spent():
+                    break
+                n_tried += 1
+                res = attempt("solver dual", eps_rel, mats0, y0)
+                if res["proven"]:
+                    high, best = eps_rel, res
+                    break
+                low = eps_rel
+            out = _refine(problem, J, ranges, q, mats0, y0, top, low, high, best) if not spent() else best
+        else:
+            out = probe
+    if not out["proven"] and resolve is not None:
+        for eps_rel in PERTURBATIONS:
+            if spent(solves=True):
+                out["reason"] = f"{out.get('reason')}; time budget {budget_s:g} s spent after {n_tried} attempts"
+                break
+            ta = time.process_time()
+            try:
+                d2 = resolve(perturbed_problem(problem, eps_rel * top))
+                mz, yz = _parse(problem, d2) if d2 else (None, None)
+            except CertificateError:
+                mz = None
+            if mz is None:
+                continue
+            # Z = Z' + eps I: the perturbed dual shifted back (the shift of _prepare)
+            n_tried += 1
+            res = attempt("perturbed", eps_rel, mz, yz)
+            last[0] = time.process_time() - ta  # a solve and a repair
             out = res
-        if res["proven"]:
-            if route == "solver dual" and 0 < k < len(SHIFTS):
-                out = _refine(problem, J, ranges, q, mz, yz, top, SHIFTS[k - 1], eps_rel, out)
-            break
-        if k == len(SHIFTS) - 1 and resolve is not None:
-            attempts += [("perturbed", e, None, None) for e in PERTURBATIONS]
-    if not out.get("proven") and solve_point is not None and time.perf_counter() - t0 <= budget_s:
-        mats_c, y_c, res = _centred(
-            problem, J, ranges, q, mats0, y0, top, solve_point, lambda: time.perf_counter() - t0 > budget_s
-        )
+            if res["proven"]:
+                break
+    if not out.get("proven") and solve_point is not None and not spent(solves=True):
+        mats_c, y_c, res = _centred(problem, J, ranges, q, mats0, y0, top, solve_point, lambda: spent(solves=True))
         res.update(method="rigorous-float", shift=0.0, route="centred")
         if res["proven"]:
             res["dual"] = {"lmis": [Z.tolist() for Z in mats_c], "linear": y_c.tolist()}
             out = res
         else:
             out["reason"] = f"{out.get('reason')}; {res['reason']}"
-    if exact and out.get("proven"):
+    elif not out.get("proven") and solve_point is not None:
+        out["reason"] = f"{out.get('reason')}; time budget {budget_s:g} s spent before the centred route"
+    if face["proven"] and (not out.get("proven") or out["lower"] <= face["lower"]):
+        out = face
+    if exact and out.get("proven") and out.get("method") != "exact":
         mats, y = _parse(problem, out["dual"])
         ex = _prove_exact(problem, J, ranges, q, mats, y)
         out["exact"] = ex
@@ -217,6 +278,8 @@ def verify_dual_bound(problem: Problem, record: dict[str, Any], *, exact: bool =
     """
     if not record.get("dual") or record.get("lower") is None:
         return {"ok": False, "lower": None, "reason": "no dual point recorded"}
+    if isinstance(record["dual"], dict) and record["dual"].get("form") == "face":
+        return verify_face(problem, record)
     try:
         mats, y = _parse(problem, record["dual"])
     except CertificateError as exc:

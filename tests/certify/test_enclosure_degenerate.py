@@ -184,3 +184,57 @@ def test_strict_examples_gap_within_1e6_and_backends_bracket_each_other(theorem,
             assert audit_certificate(path).ok
     (a_lo, a_hi), (b_lo, b_hi) = ends["clarabel"], ends["cvxopt"]
     assert a_lo <= b_hi and b_lo <= a_hi
+
+
+def test_dual_search_stops_at_its_budget():
+    """With no time left after the first attempt, the search starts no re-solve and says so;
+    with the default budget the same dual point proves (the centred route, test above)."""
+    from lmic.certify.enclosure_dual import dual_bound
+
+    _, r = _brl(10, 0, "clarabel", backoff=0)
+    calls = []
+
+    def solve(p):
+        calls.append(p)
+        return None
+
+    res = dual_bound(r.problem, r.solution.duals, budget_s=0.0, resolve=solve, solve_point=solve)
+    assert not res["proven"] and not calls
+    assert "time budget 0 s spent" in res["reason"]
+
+
+def test_sdplib_hinf2_lower_end_from_the_centred_dual_within_1e3():
+    """hinf2's dual interior is thin (its largest margin grows linearly with the objective
+    loss): the centring level 1e-3 proves a lower end 1e-3 below the upper one, and SDPLIB's
+    published optimum (few digits) meets the enclosure."""
+    from test_enclosure import SDPLIB, _published, _rounding_interval
+
+    a, b = _rounding_interval(_published()["hinf2"])
+    r = lmic.api.solve(str(SDPLIB / "hinf2.dat-s"), backend="clarabel", backoff=0)
+    e = r.enclosure
+    assert e["dual"]["proven"] and e["dual"]["route"] == "centred", e["reason"]
+    assert e["dual"]["centring_loss"] <= 1e-3
+    assert e["lower"] <= b and a <= e["upper"]
+    assert e["rel_gap"] <= 2e-3
+
+
+def test_sdplib_hinf1_dual_has_no_interior_so_no_lower_end():
+    """hinf1's dual has no interior point at all: the centring problem's largest margin is not
+    positive even at a loss of 100 times the objective, so no dual point can be proved and
+    none is claimed; the published optimum is below the certified upper end."""
+    from test_enclosure import SDPLIB, _published, _rounding_interval
+
+    from lmic.certify.enclosure_repair import _pack, _parse, _scale, _target
+
+    a, _ = _rounding_interval(_published()["hinf1"])
+    r = lmic.api.solve(str(SDPLIB / "hinf1.dat-s"), backend="clarabel", backoff=0)
+    e = r.enclosure
+    assert e["lower"] is None and a <= e["upper"]
+    p = r.problem
+    mats, y = _parse(p, r.solution.duals)
+    _, q = _target(p)
+    J, ranges = jacobian(p)
+    L0 = float(q[0] - (J[0] @ _pack(p, mats, y))[0])
+    c, _ = centring_problem(p, J, ranges, q, np.ones(J.shape[1], bool), L0 - 100 * abs(L0), 1e3 * _scale(p, mats, y))
+    t = lmic.api.solve(c, backend="clarabel").solution.x[-1]
+    assert t < 1e-8

@@ -1,0 +1,408 @@
+"""The dual end proved exactly on the optimal face, for Lyapunov-type LMIs whose dual interior is
+thinner than the floating-point resolution.
+
+Why
+---
+The bounded-real lemma is the standard case. Its dual equalities for ``P`` read ``W = A X11 +
+X11 A^T + B X21 + X12 B^T`` (``W``: the multiplier of ``P > 0``, ``X``: the main LMI's), so with
+``W >= 0`` and ``A`` Hurwitz ``X11 <= gram(B X21 + X12 B^T)``, a Gramian driven by a term of
+rank ``<= 2m`` whose eigenvalues decay geometrically: *every* dual feasible point has
+``lambda_min(X11) / lambda_max(X11)`` about ``1e-11`` at 20 states and below ``1e-16`` at 40,
+and ``W``'s eigenvalues are as small (``lambda_min(W) <= 2 ||A|| lambda_min(gram(...))``). No
+dual point can be proved in floating point: ``W`` is the difference of terms of size
+``||A|| ||X||`` that cancel to below the rounding of their evaluation.
+
+What is proved instead
+----------------------
+The dual point is built on the face ``W = 0`` *exactly*, in rational arithmetic. When the
+main LMI's coefficient of ``P`` has the Lyapunov (KYP) form ``E^T P Abar + Abar^T P E``
+(``E`` selects the state rows, ``Abar = [A B ...]``; checked on the IR's coefficients,
+:func:`lyapunov_structure`), a factored multiplier ``X = S S^T`` has
+
+    ``sym(Abar X E^T) = sym((Abar S)(E S)^T) = 0``  whenever  ``Abar S = (E S) K``, ``K = -K^T``,
+
+so ``W = 0``. Given ``K`` (``r x r`` skew; for the bounded-real lemma the rotation of the
+worst frequency, ``r = 2``, or ``K = 0``, ``r = 1``, when the peak is at zero frequency) and the
+non-state rows ``S_R`` of ``S``, the state rows ``S_E`` solve the Sylvester equation ``A_E S_E
+- S_E K = -A_R S_R`` (``A_E``: ``Abar``'s state columns, Hurwitz in the bounded-real lemma, so
+the solution is unique): an ``(n r) x (n r)`` rational solve (python-flint). ``X = S S^T / t``
+(``t > 0`` so that the one remaining equality row, ``tr X22 + tr X33 = 1``, holds) is PSD by
+construction, every other multiplier is zero, and the proof (:func:`prove_face`) checks every
+dual equality *exactly*: the pivot block ``W`` is computed from its rows and must be PSD
+(here: exactly zero), every other row must hold. The bound ``L = q_0 - g_0(u)`` is exact
+(reported rounded down). ``K`` and ``S_R`` are read off the solver's multiplier (its rank-``r``
+part: ``S_0 = V_r Lambda_r^(1/2)``, ``K`` the skew part of ``lstsq(E S_0, Abar S_0)``); the
+solver's point is only a candidate: the exact checks decide.
+
+The record (``dual`` of the result, ``form`` ``"face"``) holds ``K``, ``S_R``, the block and
+the pivot block; :func:`verify_face` re-runs the exact proof from it alone.
+
+Examples
+--------
+>>> import numpy as np, scipy.sparse as sp
+>>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+>>> # the H-infinity norm of 1/(s + 1) (= 1): min t s.t. p > 0, [[2p, -p, -1], [-p, t, 0], [-1, 0, t]] > 0
+>>> F = sp.csc_matrix(np.array([[0, 2, 0], [0, -1, 0], [-1, 0, 0], [0, 0, 1], [0, 0, 0], [0, 0, 1]], float))
+>>> p = Problem([Variable("p", "scalar", (1, 1)), Variable("t", "scalar", (1, 1), offset=1)],
+...             [LMI("p > 0", 1, sp.csc_matrix([[0.0, 1.0, 0.0]])), LMI("brl", 3, F)],
+...             LinearConstraints.empty(2), Objective("min", [0.0, 0.0, 1.0]))
+>>> st = lyapunov_structure(p)
+>>> st["Abar"].tolist(), st["state"].tolist()
+([[1.0, -1.0, 0.0]], [0])
+>>> r = prove_face(p, st, np.zeros((1, 1)), np.array([[1.0], [1.0]]))  # w = 1, z = 1: |G(0)| = 1
+>>> r["proven"], r["lower_exact"]
+(True, '1')
+"""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from lmic.certify.enclosure_float import down
+from lmic.certify.enclosure_repair import jacobian
+from lmic.errors import CertificateError
+from lmic.ir.problem import Problem
+from lmic.ir.svec import tril_rows_cols, tril_unvec
+
+__all__ = ["MAX_RANK", "pivot_blocks", "lyapunov_structure", "face_bound", "prove_face", "verify_face"]
+
+#: largest rank ``r`` of the factored multiplier tried
+MAX_RANK = 4
+
+
+def _target(problem: Problem) -> np.ndarray:
+    s = -1.0 if problem.objective.sense == "max" else 1.0
+    return s * np.asarray(problem.objective.c, dtype=float)
+
+
+def pivot_blocks(problem: Problem, J: sp.spmatrix, ranges: list[tuple[int, int]]) -> dict[int, np.ndarray]:
+    """LMI blocks whose every entry appears in exactly one dual equality row (``k >= 1``), all
+    rows distinct: ``{block: row of each tril entry}`` (the multiplier of ``P > 0``, each
+    entry of which absorbs one equality of ``P`` with an exact coefficient).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0.0, 1.0]]))],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+    >>> J, ranges = jacobian(p)
+    >>> {k: v.tolist() for k, v in pivot_blocks(p, J, ranges).items()}
+    {0: [1]}
+    """
+    J1 = sp.csc_matrix(J)[1:]
+    J1.eliminate_zeros()
+    J1 = sp.csc_matrix(J1)
+    counts = np.diff(J1.indptr)
+    out: dict[int, np.ndarray] = {}
+    used: set[int] = set()
+    for i, (a, b) in enumerate(ranges):
+        if a == b or not np.all(counts[a:b] == 1):
+            continue
+        rows = (J1.indices[J1.indptr[a:b]] + 1).astype(int)
+        if np.unique(rows).size == rows.size and not used.intersection(rows.tolist()):
+            out[i] = rows
+            used.update(rows.tolist())
+    return out
+
+
+def lyapunov_structure(problem: Problem) -> dict[str, Any] | None:
+    """The Lyapunov (KYP) structure of the module docstring, or ``None``.
+
+    Returns ``pivot`` (the block of ``P > 0``), ``block`` (the main LMI, the only other block
+    the pivot rows touch), ``state`` (the state row of each index of ``P``: ``E``), ``Abar``
+    (``n_P x d``, from the coefficients of ``P``'s diagonal entries) and ``rows`` (the pivot
+    row of each tril entry of ``P``'s block), after checking that every pivot row's
+    coefficients are those of ``E^T P Abar + Abar^T P E`` exactly (a coefficient that is a
+    sum, ``A_aa + A_bb`` in ``A^T P + P A``, must be exact in floating point: with random
+    diagonal entries it is not, and the face ``W = 0`` of the IR's problem is not this one).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0.0, 1.0]]))],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+    >>> lyapunov_structure(p) is None
+    True
+    """
+    J, ranges = jacobian(problem)
+    pivots = pivot_blocks(problem, J, ranges)
+    Jr = sp.csr_matrix(J)
+    for pi, rows in pivots.items():
+        touched = [
+            i for i, (a, b) in enumerate(ranges) if i != pi and a < b and sp.csr_matrix(Jr[rows][:, a:b]).nnz > 0
+        ]
+        if len(touched) != 1:
+            continue
+        xi = touched[0]
+        npv, d = problem.lmis[pi].dim, problem.lmis[xi].dim
+        Fx = problem.lmis[xi].coeffs.tocsc()
+        ri, ci = tril_rows_cols(npv)
+        if np.any(sp.csr_matrix(Jr[rows][:, ranges[pi][0] : ranges[pi][1]]).diagonal() == 0):
+            continue
+
+        def H(t: int, Fx: sp.csc_matrix = Fx, rows: np.ndarray = rows, d: int = d) -> np.ndarray:
+            return tril_unvec(Fx[:, int(rows[t])].toarray().ravel(), d)
+
+        Abar = np.zeros((npv, d))
+        state = np.zeros(npv, dtype=int)
+        for t in range(ri.size):
+            if ri[t] == ci[t]:
+                h = H(t)
+                r = int(np.argmax((h != 0).sum(axis=1)))
+                state[ri[t]] = r
+                Abar[ri[t]] = h[r]
+                Abar[ri[t], r] = h[r, r] / 2.0
+        if np.unique(state).size != npv:
+            continue
+        ok = True
+        for t in range(ri.size):
+            a, b = ri[t], ci[t]
+            G = np.zeros((d, d))
+            G[state[a]] += Abar[b]
+            if a != b:
+                G[state[b]] += Abar[a]
+            Gs = G + G.T
+            both = np.argwhere((G != 0) & (G.T != 0))
+            # a coefficient that is the rounded sum of two entries of Abar (A_aa + A_bb) breaks
+            # the structure unless the sum is exact
+            exact = all(
+                Fraction(float(Gs[i, j])) == Fraction(float(G[i, j])) + Fraction(float(G[j, i])) for i, j in both
+            )
+            if not exact or np.any(Gs != H(t)):
+                ok = False
+                break
+        if ok:
+            return {"pivot": pi, "block": xi, "state": state, "Abar": Abar, "rows": rows}
+    return None
+
+
+def _fq(flint: Any, v: float) -> Any:
+    f = Fraction(float(v))
+    return flint.fmpq(f.numerator, f.denominator)
+
+
+def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_rest: np.ndarray) -> dict[str, Any]:
+    """The exact proof of the module docstring from ``K`` (``r x r``, skew) and ``S_rest``
+    (the non-state rows of ``S``, ``(d - n_P) x r``). Returns ``proven``, ``lower`` (rounded
+    down), ``lower_exact`` and ``reason``."""
+    from lmic.certify.psd import load_flint, prove_psd
+
+    flint = load_flint()
+    P = problem
+    pi, xi, state, Abar = structure["pivot"], structure["block"], structure["state"], structure["Abar"]
+    npv, d = P.lmis[pi].dim, P.lmis[xi].dim
+    rest = np.setdiff1d(np.arange(d), state)
+    K = np.asarray(K, dtype=float)
+    S_rest = np.asarray(S_rest, dtype=float)
+    r = K.shape[0] if K.ndim == 2 else -1
+    if r < 1 or K.shape != (r, r) or S_rest.shape != (rest.size, r):
+        return {"proven": False, "reason": "the face point's K or S_R has the wrong shape"}
+    if not (np.all(np.isfinite(K)) and np.all(np.isfinite(S_rest))) or np.any(K != -K.T):
+        return {"proven": False, "reason": "K is not a finite skew-symmetric matrix"}
+    # A_E S_E - S_E K = -A_R S_R, as (I (x) A_E - K^T (x) I) vec(S_E) = vec(-A_R S_R)
+    AE, AR = Abar[:, state], Abar[:, rest]
+    nr = npv * r
+    M = flint.fmpq_mat(nr, nr)
+    for c in range(r):
+        for i in range(npv):
+            row = c * npv + i
+            for j in range(npv):
+                if AE[i, j] != 0:
+                    M[row, c * npv + j] = _fq(flint, AE[i, j])
+            for c2 in range(r):
+                if K[c2, c] != 0:
+                    M[row, c2 * npv + i] = M[row, c2 * npv + i] - _fq(flint, K[c2, c])
+    SRq = [[_fq(flint, S_rest[i, c]) for c in range(r)] for i in range(rest.size)]
+    rhs = flint.fmpq_mat(nr, 1)
+    for c in range(r):
+        for i in range(npv):
+            s = flint.fmpq(0)
+            for j in range(rest.size):
+                if AR[i, j] != 0:
+                    s -= _fq(flint, AR[i, j]) * SRq[j][c]
+            rhs[c * npv + i, 0] = s
+    try:
+        sol = M.solve(rhs)
+    except ZeroDivisionError:
+        return {"proven": False, "reason": "the Sylvester equation of the face is singular"}
+    # S = N / D with integers N (python ints) and one common denominator D
+    Sq: list[list[Fraction]] = [[Fraction(0)] * r for _ in range(d)]
+    for c in range(r):
+        for i in range(npv):
+            v = sol[c * npv + i, 0]
+            Sq[int(state[i])][c] = Fraction(int(v.p), int(v.q))
+        for j in range(rest.size):
+            Sq[int(rest[j])][c] = Fraction(float(S_rest[j, c]))
+    D = 1
+    for row_ in Sq:
+        for f in row_:
+            D = D * f.denominator // math.gcd(D, f.denominator)
+    N = flint.fmpz_mat([[int(f * D) for f in row_] for row_ in Sq])
+    XN = N * N.transpose()  # X = XN / D^2, exactly
+    J, ranges = jacobian(P)
+    Jr = sp.csr_matrix(J)
+    q = _target(P)
+    a, b = ranges[xi]
+    ti, tj = tril_rows_cols(d)
+    xn = [int(XN[int(ti[k]), int(tj[k])]) for k in range(b - a)]
+    pa, pb = ranges[pi]
+    D2 = D * D
+
+    def g(k: int) -> Fraction:
+        """``g_k(X)`` over the main block, exactly (``J``'s floats are dyadic rationals)."""
+        lo, hi = Jr.indptr[k], Jr.indptr[k + 1]
+        num, den = 0, 1
+        for j, v in zip(Jr.indices[lo:hi], Jr.data[lo:hi], strict=True):
+            if a <= j < b and xn[j - a]:
+                vn, vd = float(v).as_integer_ratio()  # vd a power of 2
+                if vd > den:
+                    num *= vd // den
+                    den = vd
+                num += vn * (den // vd) * xn[j - a]
+        return Fraction(num, den * D2)
+
+    prow = {int(k): t for t, k in enumerate(structure["rows"])}
+    others = [k for k in range(1, 1 + P.n) if k not in prow]
+    gv = {k: g(k) for k in others}
+    # X / t meets the rows without a pivot: one scale t > 0 for all of them
+    t = None
+    for k in others:
+        if q[k] != 0:
+            t = gv[k] / Fraction(float(q[k]))
+            break
+    if t is None or not t > 0:
+        return {"proven": False, "reason": "no positive scale meets the equality rows without a pivot"}
+    for k in others:
+        if gv[k] != t * Fraction(float(q[k])):
+            return {"proven": False, "reason": f"equality row {k} does not hold on the face"}
+    # the pivot block from its rows: W_j = (q_k - g_k(X) / t) / J_kj, exactly
+    w = [Fraction(0)] * (pb - pa)
+    for k, tt in prow.items():
+        gk = g(k)
+        if gk or q[k]:
+            w[tt] = (Fraction(float(q[k])) - gk / t) / Fraction(float(Jr[k, pa + tt]))
+    if any(w):
+        den = 1
+        for f in w:
+            den = den * f.denominator // math.gcd(den, f.denominator)
+        Wm = [[0] * npv for _ in range(npv)]
+        pr, pc = tril_rows_cols(npv)
+        for f, r_, c_ in zip(w, pr, pc, strict=True):
+            Wm[r_][c_] = Wm[c_][r_] = int(f * den)
+        if not prove_psd(Wm)["proven"]:
+            return {"proven": False, "reason": f"the pivot multiplier of '{P.lmis[pi].name}' is not PSD on the face"}
+    Lf = Fraction(float(q[0])) - g(0) / t
+    lo0, hi0 = Jr.indptr[0], Jr.indptr[1]
+    for j, v in zip(Jr.indices[lo0:hi0], Jr.data[lo0:hi0], strict=True):
+        if pa <= j < pb:
+            Lf -= Fraction(float(v)) * w[int(j) - pa]
+    lower = float(Lf)
+    if Fraction(lower) > Lf:
+        lower = down(lower)
+    return {
+        "proven": True,
+        "lower": lower,
+        "lower_exact": f"{Lf.numerator}/{Lf.denominator}" if Lf.denominator != 1 else str(Lf.numerator),
+        "rank": r,
+        "reason": "dual point on the face W = 0 proved feasible in exact rational arithmetic",
+    }
+
+
+def _candidates(structure: dict[str, Any], X0: np.ndarray) -> list[tuple[float, np.ndarray, np.ndarray]]:
+    """``(float estimate of L's loss, K, S_R)`` for ranks ``1 .. MAX_RANK`` of the solver's
+    multiplier, best first (the estimate: the relative change of ``S_E`` by the Sylvester
+    solve)."""
+    import scipy.linalg as sla
+
+    state, Abar = structure["state"], structure["Abar"]
+    d = X0.shape[0]
+    rest = np.setdiff1d(np.arange(d), state)
+    w, V = np.linalg.eigh(0.5 * (X0 + X0.T))
+    out = []
+    for r in range(1, min(MAX_RANK, d) + 1):
+        if not w[-r] > 0:
+            break
+        S0 = V[:, -r:] * np.sqrt(w[-r:])
+        S1 = S0[state]
+        Kt = np.linalg.lstsq(S1, Abar @ S0, rcond=None)[0]
+        K = (Kt - Kt.T) / 2.0
+        try:
+            S1n = sla.solve_sylvester(Abar[:, state], -K, -Abar[:, rest] @ S0[rest])
+        except (np.linalg.LinAlgError, ValueError):
+            continue
+        change = float(np.linalg.norm(S1n - S1)) / max(float(np.linalg.norm(S1)), 1e-300)
+        if np.isfinite(change):
+            out.append((change, K, S0[rest]))
+    out.sort(key=lambda c: c[0])
+    return out
+
+
+def face_bound(problem: Problem, duals: dict[str, Any], *, tries: int = 2) -> dict[str, Any]:
+    """Prove a lower bound of the minimisation form's optimum on the face ``W = 0`` (module
+    docstring), from the solver's multiplier of the main LMI: the ranks are tried best first
+    (at most ``tries``), the first proven bound kept.
+
+    Returns
+    -------
+    dict
+        As :func:`lmic.certify.enclosure_dual.dual_bound`: ``proven``, ``lower``,
+        ``lower_exact``, ``method`` (``"exact"``), ``route`` (``"face"``), ``reason``, ``dual``
+        (``{"form": "face", "block", "pivot", "K", "S_rest"}``).
+    """
+    from lmic.certify.multipliers import parse_multipliers
+
+    if problem.objective.sense == "feasibility":
+        raise CertificateError("a feasibility problem has no optimal value to bound")
+    st = lyapunov_structure(problem)
+    if st is None:
+        return {"proven": False, "route": "face", "reason": "no Lyapunov structure for the face route"}
+    mats, _ = parse_multipliers(problem, duals, "dual point", missing_is_zero=False)
+    best: dict[str, Any] = {"proven": False, "route": "face", "reason": "no face candidate"}
+    for _, K, SR in _candidates(st, mats[st["block"]])[:tries]:
+        res = prove_face(problem, st, K, SR)
+        res.update(route="face", method="exact", shift=0.0)
+        if res["proven"]:
+            res["dual"] = {
+                "form": "face",
+                "block": int(st["block"]),
+                "pivot": int(st["pivot"]),
+                "K": K.tolist(),
+                "S_rest": SR.tolist(),
+            }
+            return res
+        best = res
+    return best
+
+
+def verify_face(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
+    """Re-run :func:`prove_face` from a recorded point (``record["dual"]``, form ``"face"``)
+    alone; the recorded ``lower`` must not exceed the re-proved bound. Returns ``ok``,
+    ``lower`` and ``reason``."""
+    d = record.get("dual")
+    if not isinstance(d, dict) or d.get("form") != "face" or record.get("lower") is None:
+        return {"ok": False, "lower": None, "reason": "no face dual point recorded"}
+    st = lyapunov_structure(problem)
+    if st is None or d.get("block") != st["block"] or d.get("pivot") != st["pivot"]:
+        return {"ok": False, "lower": None, "reason": "the recorded face does not match the problem's structure"}
+    try:
+        K = np.asarray(d.get("K"), dtype=float)
+        SR = np.asarray(d.get("S_rest"), dtype=float)
+        if K.ndim != 2 or SR.ndim != 2:
+            raise ValueError("K and S_rest must be matrices")
+        res = prove_face(problem, st, K, SR)
+    except (ValueError, TypeError) as exc:
+        return {"ok": False, "lower": None, "reason": f"the recorded face point is unusable: {exc}"}
+    if not res["proven"]:
+        why = "the recorded dual point does not prove a bound: " + res["reason"]
+        return {"ok": False, "lower": None, "reason": why}
+    rec = float(record["lower"])
+    if rec > res["lower"]:
+        return {
+            "ok": False,
+            "lower": res["lower"],
+            "reason": f"recorded lower bound {rec:.17g} exceeds the bound the dual point proves ({res['lower']:.17g})",
+        }
+    return {"ok": True, "lower": res["lower"], "reason": "lower bound re-proved exactly on the face"}
