@@ -22,6 +22,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from dataclasses import dataclass, field
@@ -344,6 +345,8 @@ def solve(
     >>> r.status, round(r.objective, 6)
     ('optimal', 0.585786)
     """
+    if backoff is not None and not (isinstance(backoff, int | float) and 0 <= backoff < math.inf):
+        raise LmicError(f"backoff must be a non-negative number, got {backoff}")
     if system is not None and not isinstance(target, Problem):
         from lmic.plant import as_system
 

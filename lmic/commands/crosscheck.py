@@ -87,13 +87,12 @@ def _progress_bar(enabled: bool) -> Iterator[Any]:
 
 def run(args: argparse.Namespace) -> int:
     """Cross-check and print the table (or JSON)."""
-    from lmic.backends.registry import get_backend
-    from lmic.commands._common import check_executor_args, parse_params, print_json, solve_options
-    from lmic.studies.crosscheck import DEFAULT_RTOL, crosscheck
+    from lmic.commands._common import backend_names, check_executor_args, parse_params, print_json, solve_options
+    from lmic.studies.crosscheck import DEFAULT_RTOL, check_rtol, crosscheck
 
-    names = [b.strip() for b in args.backends.split(",") if b.strip()] if args.backends else None
-    for name in names or []:
-        get_backend(name)  # an unknown or missing backend is bad input (exit 2)
+    names = backend_names(args.backends)
+    if args.rtol is not None:
+        check_rtol(args.rtol)
     params = parse_params(args.param)
     check_executor_args(args)
     with _progress_bar(enabled=not args.json) as progress:

@@ -20,6 +20,7 @@ from lmic.errors import DataError, LmicError, TemplateError
 from lmic.system import System, UnusedDataNote, near_miss
 from lmic.template.builder import normalise_option
 from lmic.template.convert import as_expr
+from lmic.template.decls import in_domain as _in_domain
 
 __all__ = ["Inputs", "dim_value", "resolve_inputs"]
 
@@ -46,14 +47,6 @@ def dim_value(expr: Any, dims: Mapping[sympy.Symbol, int]) -> int | None:
         return expr
     v = as_expr(as_expr(expr).xreplace(dict(dims)))
     return int(v) if v.is_Integer else None
-
-
-def _in_domain(value: float, domain: sympy.Set) -> bool:
-    """Whether ``value`` lies in ``domain`` (integer sets are decided on integral values)."""
-    verdict = domain.contains(sympy.Float(value))
-    if verdict not in (sympy.true, sympy.false) and float(value).is_integer():
-        verdict = domain.contains(sympy.Integer(int(value)))
-    return verdict == sympy.true
 
 
 def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | None = None) -> Inputs:

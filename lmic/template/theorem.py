@@ -76,6 +76,8 @@ def _build_location(err: BaseException, build: Callable[..., Any]) -> str:
     home = os.path.abspath(code.co_filename) if code is not None else None
     frames = traceback.extract_tb(err.__traceback__)
     mine = [f for f in frames if home and os.path.abspath(f.filename) == home]
+    if not mine and code is not None and len(frames) <= 1:  # build itself could not be called
+        return f"{os.path.basename(code.co_filename)}:{code.co_firstlineno}"
     frame = mine[-1] if mine else (frames[-1] if frames else None)
     if frame is None:
         return ""
@@ -130,6 +132,14 @@ class Theorem:
     def __post_init__(self) -> None:
         if not isinstance(self.id, str) or "." not in self.id:
             raise TemplateError(f"theorem id {self.id!r} must look like '<family>.<item>'")
+        for name in ("title", "citation", "objective", "system_class", "notes"):
+            value = getattr(self, name)
+            if not isinstance(value, str):
+                raise TemplateError(f"theorem {self.id}: {name} must be a string, not {type(value).__name__}")
+            if name in ("title", "citation") and not value.strip():
+                raise TemplateError(
+                    f"theorem {self.id}: {name} is empty (say what the theorem is and where it is from)"
+                )
         self.kind = _KIND_WORDS.get(self.kind, self.kind)
         if self.kind not in KINDS:
             raise TemplateError(f"theorem {self.id}: kind must be 'synthesis' or 'analysis' (or 'S', 'A')")

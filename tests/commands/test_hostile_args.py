@@ -36,3 +36,59 @@ def test_bad_audit_tolerance_is_exit_2(capsys, tmp_path):
     for bad in ("rel=-1", "rel=nan", "nope=1", "rel"):
         assert main(["audit", str(tmp_path / "c.json"), "--tol", bad]) == 2
         assert capsys.readouterr().err.startswith("lmic: error: --tol")
+
+
+def _one_error_line(capsys, *fragments: str) -> None:
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("lmic: error:"), err
+    for fragment in fragments:
+        assert fragment in err, err
+
+
+@pytest.mark.parametrize("command", ["show", "check"])
+def test_unknown_option_name_of_show_and_check_is_exit_2(command, capsys):
+    assert main([command, "qib.thm1", "-p", "zzz=1"]) == 2
+    _one_error_line(capsys, "unknown parameter 'zzz'", "beta, fixed_L, gamma")
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (["--backends", ""], "--backends '': name at least one backend"),
+        (["--backends", " , "], "name at least one backend"),
+        (["--rtol", "-1"], "rtol must be a non-negative number"),
+        (["--rtol", "nan"], "rtol must be a non-negative number"),
+        (["--rtol", "-1", "--executor", "local"], "rtol must be a non-negative number"),
+    ],
+)
+def test_bad_crosscheck_arguments_are_exit_2_before_any_solve(args, fragment, capsys, monkeypatch):
+    import lmic.studies.crosscheck as cc
+
+    monkeypatch.setattr(cc, "backend_row", lambda *a, **k: pytest.fail("a backend ran"))
+    assert main(["crosscheck", "qib.thm1", SYSTEM, *args]) == 2
+    _one_error_line(capsys, fragment)
+
+
+def test_report_with_an_empty_backend_list_is_exit_2(tmp_path, capsys):
+    out = tmp_path / "r.html"
+    assert main(["report", "qib.thm1", SYSTEM, "-o", str(out), "--backends", ","]) == 2
+    _one_error_line(capsys, "name at least one backend")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("value", ["-1", "nan", "inf"])
+def test_bad_backoff_is_exit_2_before_solving(value, capsys, monkeypatch):
+    import lmic.routes
+
+    monkeypatch.setattr(lmic.routes, "decide_route", lambda *a, **k: pytest.fail("solved"))
+    assert main(["solve", "qib.thm1", SYSTEM, f"--backoff={value}"]) == 2
+    _one_error_line(capsys, "backoff must be a non-negative number")
+
+
+def test_reproduce_pattern_matching_nothing_is_exit_2(tmp_path, capsys):
+    out = tmp_path / "r.md"
+    assert main(["reproduce", "--only", "nope.*", "--no-progress", "-o", str(out)]) == 2
+    _one_error_line(capsys, "--only 'nope.*': no example file matches")
+    assert not out.exists()
+    assert main(["reproduce", "--only", "nope.*", "--no-progress", "--executor", "local"]) == 2
+    _one_error_line(capsys, "no example file matches")
