@@ -92,3 +92,29 @@ def test_reproduce_pattern_matching_nothing_is_exit_2(tmp_path, capsys):
     assert not out.exists()
     assert main(["reproduce", "--only", "nope.*", "--no-progress", "--executor", "local"]) == 2
     _one_error_line(capsys, "no example file matches")
+
+
+STUDY = str(Path(__file__).resolve().parents[2] / "examples" / "studies" / "qib_sup_beta.yaml")
+
+
+@pytest.mark.parametrize(
+    ("extra", "fragment"),
+    [
+        (["--map", "m.txt"], "--map m.txt: the map is a PNG image"),
+        (["--map", "{tmp}/dir.png"], "dir.png: is a directory"),
+        (["--export", "{tmp}/no/x.csv"], "folder {tmp}/no does not exist"),
+    ],
+)
+def test_bad_batch_output_files_are_refused_before_any_job(tmp_path, capsys, extra, fragment):
+    (tmp_path / "dir.png").mkdir()
+    out = tmp_path / "study"
+    args = [a.format(tmp=tmp_path) for a in extra]
+    assert main(["batch", STUDY, "-o", str(out), "--no-progress", *args]) == 2
+    _one_error_line(capsys, fragment.format(tmp=tmp_path))
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("extra", [["--export", "x.csv"], ["--map", "m.png"]])
+def test_batch_status_refuses_export_and_map_instead_of_ignoring_them(tmp_path, capsys, extra):
+    assert main(["batch", "--status", str(tmp_path), *extra]) == 2
+    _one_error_line(capsys, "--status DIR takes no study file, -o, --export or --map")
