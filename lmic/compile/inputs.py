@@ -49,6 +49,21 @@ def dim_value(expr: Any, dims: Mapping[sympy.Symbol, int]) -> int | None:
     return int(v) if v.is_Integer else None
 
 
+def _real_array(value: Any, what: str) -> np.ndarray:
+    """``value`` as a float array; a text, object or complex value (non-zero imaginary part) is a TemplateError."""
+    try:
+        arr = np.asarray(value)
+        if np.iscomplexobj(arr):
+            if np.any(arr.imag != 0):
+                raise TemplateError(f"{what} is complex ({value!r:.60}): an LMI needs real numbers")
+            arr = arr.real
+        if arr.dtype == object and any(e is None for e in arr.flat):  # None would become nan
+            raise TypeError
+        return arr.astype(float)
+    except (TypeError, ValueError):
+        raise TemplateError(f"{what} is not a number or a matrix of numbers: {value!r:.60}") from None
+
+
 def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | None = None) -> Inputs:
     """Validate data and parameters against the template and compute the constants.
 
@@ -114,6 +129,8 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
                     raw = float(raw)
                 except ValueError:
                     raise DataError(f"{where}: parameter '{p.name}' = {raw!r} is not a number") from None
+            elif np.ndim(raw) != 0 or np.asarray(raw).dtype.kind not in "iuf":  # not bool, complex, text
+                raise DataError(f"{where}: parameter '{p.name}' = {raw!r:.60} is not a number")
         elif p.default is not None:
             raw = p.default
         else:
@@ -215,8 +232,8 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
             raise
         except Exception as err:
             raise DataError(f"{where}: constant '{c.name}' cannot be computed: {type(err).__name__}: {err}") from None
+        arr = _real_array(computed, f"{tid}: constant '{c.name}'")
         if c.shape is None:
-            arr = np.asarray(computed, dtype=float)
             if arr.size != 1:
                 raise TemplateError(f"{tid}: constant '{c.name}' is declared scalar but has shape {arr.shape}")
             scalar = float(arr.reshape(-1)[0])
@@ -224,7 +241,7 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
                 raise DataError(f"{where}: constant '{c.name}' is {scalar} for this data")
             out.values[c.name] = scalar
         else:
-            matrix = np.atleast_2d(np.asarray(computed, dtype=float))
+            matrix = np.atleast_2d(arr)
             exp = tuple(dim_value(size, out.dims) for size in c.shape)
             if matrix.shape != exp:
                 raise TemplateError(f"{tid}: constant '{c.name}' has shape {matrix.shape}, declared {exp}")
