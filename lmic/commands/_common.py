@@ -148,12 +148,22 @@ def check_executor_args(args: argparse.Namespace) -> None:
     Traceback (most recent call last):
     ...
     lmic.errors.DataError: --executor ssh://h: use local, dask or tcp://HOST:PORT
+    >>> check_executor_args(argparse.Namespace(executor="local", workers=10**5))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    lmic.errors.DataError: --workers 100000: at most ... on this machine (... cores; each worker is a process)
     """
     if args.workers is not None and args.workers < 1:
         raise DataError(f"--workers {args.workers}: give at least 1")
     spec = args.executor
     if spec is not None and not (spec in ("local", "dask") or spec.startswith("tcp://")):
         raise DataError(f"--executor {spec}: use local, dask or tcp://HOST:PORT")
+    cores = os.cpu_count() or 1
+    most = max(16, 8 * cores)
+    if args.workers is not None and args.workers > most and not (spec or "").startswith("tcp://"):
+        raise DataError(
+            f"--workers {args.workers}: at most {most} on this machine ({cores} cores; each worker is a process)"
+        )
 
 
 def __getattr__(name: str) -> Any:

@@ -118,3 +118,20 @@ def test_bad_batch_output_files_are_refused_before_any_job(tmp_path, capsys, ext
 def test_batch_status_refuses_export_and_map_instead_of_ignoring_them(tmp_path, capsys, extra):
     assert main(["batch", "--status", str(tmp_path), *extra]) == 2
     _one_error_line(capsys, "--status DIR takes no study file, -o, --export or --map")
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["crosscheck", "qib.thm1", SYSTEM, "--executor", "local"],
+        ["reproduce", "--only", "qib.thm1*", "--executor", "dask"],
+        ["batch", STUDY, "-o", "{tmp}/out"],
+    ],
+)
+def test_a_worker_count_far_above_the_cores_is_refused_before_any_process_starts(argv, tmp_path, capsys, monkeypatch):
+    import lmic.studies.executors as executors
+
+    monkeypatch.setattr(executors.LocalExecutor, "__init__", lambda *a, **k: pytest.fail("workers started"))
+    args = [a.format(tmp=tmp_path) for a in argv]
+    assert main([*args, "--workers", "100000"]) == 2
+    _one_error_line(capsys, "--workers 100000: at most", "each worker is a process")
