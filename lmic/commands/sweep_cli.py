@@ -12,6 +12,7 @@ Examples
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from typing import TYPE_CHECKING, Any
 
@@ -104,6 +105,11 @@ def run_cli(args: argparse.Namespace) -> int:
         raise LmicError("--maximize, --minimize and --sweep need THEOREM SYSTEM (a theorem and its system file)")
     if getattr(args, "output", None) and args.sweep:
         raise LmicError("-o is not available with --sweep (use --json for the full record)")
+    for flag, value in (("--xtol", args.xtol), ("--rtol", args.rtol)):
+        if not (math.isfinite(value) and value >= 0):
+            raise LmicError(f"{flag} {value}: give a non-negative number")
+    if args.max_evals < 1:
+        raise LmicError(f"--max-evals {args.max_evals}: give at least 1")
     if getattr(args, "exact", False):
         sys.stderr.write("lmic: note: exact proofs are used automatically where float margins are too small\n")
     params = parse_params(args.param)

@@ -135,3 +135,20 @@ def test_a_worker_count_far_above_the_cores_is_refused_before_any_process_starts
     args = [a.format(tmp=tmp_path) for a in argv]
     assert main([*args, "--workers", "100000"]) == 2
     _one_error_line(capsys, "--workers 100000: at most", "each worker is a process")
+
+
+@pytest.mark.parametrize(
+    ("option", "value", "fragment"),
+    [
+        ("--rtol", "nan", "--rtol nan: give a non-negative number"),
+        ("--xtol", "inf", "--xtol inf: give a non-negative number"),
+        ("--xtol", "-1", "--xtol -1.0: give a non-negative number"),
+        ("--max-evals", "0", "--max-evals 0: give at least 1"),
+    ],
+)
+def test_bad_bisection_tolerances_are_exit_2_before_solving(option, value, fragment, capsys, monkeypatch):
+    import lmic.studies.sweep as sweep
+
+    monkeypatch.setattr(sweep, "maximize", lambda *a, **k: pytest.fail("solved"))
+    assert main(["solve", "qib.thm1", SYSTEM, "--maximize", "beta", f"{option}={value}"]) == 2
+    _one_error_line(capsys, fragment)
