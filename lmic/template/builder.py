@@ -409,7 +409,8 @@ class Template:
         declared = self._declared()
         shaped: list[DataDecl | VarDecl] = [*self.data_decls, *self.variables]
         for sd in shaped:
-            self._undeclared([as_expr(x) for x in sd.shape], f"the shape of '{sd.name}'", declared)
+            what = f"theorem {self.theorem_id}: the shape of '{sd.name}'"
+            self._undeclared([as_expr(x, what) for x in sd.shape], f"the shape of '{sd.name}'", declared)
         for lmi in self.lmis:
             ents = [e for row in lmi.spec.block.rows for e in row if e is not STAR and isinstance(e, sympy.Basic)]
             self._undeclared(ents, f"LMI '{lmi.name}'", declared)

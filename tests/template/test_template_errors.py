@@ -207,3 +207,12 @@ def test_matrix_objective_is_a_template_error():
 
     with pytest.raises(TemplateError, match=r"test.bad.*the objective 'P' is a matrix"):
         analyse(_thm(build))
+
+
+def test_a_dims_tuple_used_as_a_dimension_names_the_theorem_and_the_fix():
+    def build(t):
+        n = t.dims("n")  # a tuple: the newcomer meant ``n, = t.dims("n")``
+        t.data("A", n, n)
+
+    with pytest.raises(TemplateError, match=r"^theorem test.bad: the shape of 'A': \(n,\) .*write n, = t.dims"):
+        analyse(_thm(build))
