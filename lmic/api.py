@@ -223,7 +223,8 @@ def load_target(
     text = os.fspath(target)
     if text.endswith(_FILE_SUFFIXES) or (Path(text).is_file() and system is None):
         if system is not None:
-            raise LmicError(f"{text}: an IR or SDPA file takes no system file (got '{system}')")
+            shown = getattr(system, "label", None) or (system if isinstance(system, str | os.PathLike) else "a system")
+            raise LmicError(f"{text}: an IR or SDPA file takes no system file (got '{shown}')")
         if params:
             raise LmicError(f"{text}: -p parameters apply to a theorem, not to an IR or SDPA file")
         if not Path(text).is_file():

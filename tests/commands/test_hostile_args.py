@@ -152,3 +152,11 @@ def test_bad_bisection_tolerances_are_exit_2_before_solving(option, value, fragm
     monkeypatch.setattr(sweep, "maximize", lambda *a, **k: pytest.fail("solved"))
     assert main(["solve", "qib.thm1", SYSTEM, "--maximize", "beta", f"{option}={value}"]) == 2
     _one_error_line(capsys, fragment)
+
+
+def test_simulate_with_an_ir_file_names_the_system_file_not_its_contents(tmp_path, capsys):
+    ir = tmp_path / "p.json"
+    assert main(["compile", "qib.thm1", SYSTEM, "-o", str(ir)]) == 0
+    capsys.readouterr()
+    assert main(["simulate", str(ir), SYSTEM]) == 2
+    _one_error_line(capsys, "p.json: an IR or SDPA file takes no system file (got 'qib.thm1.flexible-joint.yaml')")
