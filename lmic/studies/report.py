@@ -249,13 +249,22 @@ def status(out_dir: str) -> dict[str, Any]:
     manifest = store.manifest()
     if manifest is None:
         raise DataError(f"{out_dir}: not a study folder (no study.json)")
-    wanted = {j["hash"] for j in manifest.get("jobs", [])}
+    jobs = manifest.get("jobs", []) if isinstance(manifest, dict) else None
+    if not isinstance(jobs, list) or not all(isinstance(j, dict) and isinstance(j.get("hash"), str) for j in jobs):
+        raise DataError(f"{out_dir}: study.json is not a study manifest (edited or damaged?)")
+    wanted = {j["hash"] for j in jobs}
     records = [r for r in read_results(Path(out_dir) / "results.jsonl") if r["hash"] in wanted]
+    for r in records:
+        if r.get("outcome", "error") not in OUTCOMES or not isinstance(r.get("finished_at", ""), str):
+            raise DataError(
+                f"{out_dir}: results.jsonl: the record of job {r['hash'][:12]} is damaged "
+                f"(outcome {r.get('outcome')!r:.40}, finished_at {r.get('finished_at')!r:.40})"
+            )
     counts = Counter(r.get("outcome", "error") for r in records)
     return {
         "name": manifest.get("name"),
         "task": manifest.get("task"),
-        "total": manifest.get("total", len(wanted)),
+        "total": manifest["total"] if isinstance(manifest.get("total"), int) else len(wanted),
         "done": len(records),
         "counts": {o: counts.get(o, 0) for o in OUTCOMES},
         "running_pid": store.running_pid(),
