@@ -93,6 +93,7 @@ def _whole_record(rec: Any) -> bool:
         and isinstance(rec.get("hash"), str)
         and rec.get("outcome", "error") in OUTCOMES
         and isinstance(rec.get("finished_at", ""), str)
+        and isinstance(rec.get("params") or {}, dict)
     )
 
 

@@ -24,7 +24,9 @@ def test_a_good_folder_is_summarised(tmp_path):
     assert (st["total"], st["done"], st["counts"]["certified"]) == (2, 1, 1)  # unknown jobs and junk ignored
 
 
-@pytest.mark.parametrize("damage", [{"outcome": ["weird"]}, {"outcome": "great"}, {"finished_at": None}])
+@pytest.mark.parametrize(
+    "damage", [{"outcome": ["weird"]}, {"outcome": "great"}, {"finished_at": None}, {"params": "x"}]
+)
 def test_a_damaged_record_counts_as_not_done(tmp_path, damage):
     good_b = {**RECORD, "hash": "b" * 64}
     st = status(_folder(tmp_path, GOOD, [{**RECORD, **damage}, good_b]))
