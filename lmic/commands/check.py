@@ -23,6 +23,7 @@ Examples
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib.util
 import itertools
 import sys
@@ -413,7 +414,8 @@ def load_module_theorems(path: str | Path) -> tuple[list[Theorem], list[str]]:
         raise DataError(f"{p}: cannot be imported as a Python module")
     module = importlib.util.module_from_spec(spec)
     try:
-        spec.loader.exec_module(module)
+        with contextlib.redirect_stdout(sys.stderr):  # the module's prints never mix into --json
+            spec.loader.exec_module(module)
     except KeyboardInterrupt:
         raise
     except BaseException as err:  # noqa: BLE001 - the user's module, reported in one line

@@ -15,7 +15,9 @@ Examples
 
 from __future__ import annotations
 
+import contextlib
 import os
+import sys
 import traceback
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -156,11 +158,13 @@ class Theorem:
 
         A Python error inside ``build`` becomes one :class:`TemplateError` line naming the
         theorem and the file and line of the plugin where it happened (``--debug`` shows the
-        traceback: the original error is chained).
+        traceback: the original error is chained). What ``build`` prints goes to standard error
+        (standard output is lmic's: tables, ``--json``).
         """
         t = Template(self.id, options)
         try:
-            self.build(t)
+            with contextlib.redirect_stdout(sys.stderr):  # a plugin's print never mixes into lmic's output
+                self.build(t)
         except LmicError as err:
             if self.id in str(err):
                 raise

@@ -25,6 +25,8 @@ NEWBIE = """
 import sympy
 from lmic.template import theorem, block, STAR, I
 
+print("newbie plugin loaded")  # a newcomer's debugging print, at import
+
 
 def _lyap(t):
     (n,) = t.dims("n")
@@ -36,6 +38,7 @@ def _lyap(t):
 @theorem(id="newbie.good", title="fine", citation="c", kind="analysis")
 def good(t):
     n, A, P = _lyap(t)
+    print("building", A)  # and while building
     t.lmi("L", A.T * P + P * A < 0)
 
 
@@ -140,6 +143,7 @@ def runs(tmp_path_factory):
     ids = ["bilinear", "nonsym", "dims", "raises", "noargs", "undeclared", "matobj", "baddefault", "good"]
     argvs = [["theorems", "--json"], ["theorems", "--json"], ["solve", "qib.thm1", str(system)]]
     argvs += [["solve", f"newbie.{i}", str(system)] for i in ids]
+    argvs += [["solve", "newbie.good", str(system), "--json"]]
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join([str(site), str(ROOT), str(ROOT / "plugins"), env.get("PYTHONPATH", "")])
     env["LMIC_CACHE_DIR"] = str(tmp / "cache")
@@ -153,7 +157,8 @@ def runs(tmp_path_factory):
     return {
         "theorems": results[:2],
         "clash": results[2],
-        "solve": dict(zip(ids, results[3:], strict=True)),
+        "solve": dict(zip(ids, results[3:-1], strict=True)),
+        "json": results[-1],
         "cache": tmp / "cache",
     }
 
@@ -200,3 +205,13 @@ def test_each_newcomer_mistake_is_one_line_exit_2(runs, name, fragments):
 def test_the_good_theorem_of_a_plugin_with_mistakes_still_solves(runs):
     code, out, _ = runs["solve"]["good"]
     assert code == 0 and "certified" in out
+
+
+def test_what_a_plugin_prints_goes_to_stderr_never_into_json(runs):
+    code, out, err = runs["solve"]["good"]  # the first build of newbie.good
+    assert code == 0 and "building A" in err and "building" not in out
+    code, out, err = runs["json"]
+    assert code == 0 and json.loads(out)["verdict"] == "certified"
+    _, out, err = runs["theorems"][0]  # the registry imports the plugins once per process
+    assert "newbie plugin loaded" in err
+    json.loads(out)  # the import-time print is not in it
