@@ -8,6 +8,8 @@ and the key at fault.
 
 from __future__ import annotations
 
+import contextlib
+import sys
 import warnings
 from collections.abc import Mapping
 from typing import Any
@@ -191,7 +193,9 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
         if n_rows is None or n_cols is None:
             raise DataError(f"{where}: cannot size the default of data '{d.name}' (dimensions unknown)")
         if callable(d.default):
-            arr = np.atleast_2d(np.asarray(d.default({**out.values, **arrays}, n_rows, n_cols), dtype=float))
+            with contextlib.redirect_stdout(sys.stderr):  # plugin code: its prints go to stderr
+                value = d.default({**out.values, **arrays}, n_rows, n_cols)
+            arr = np.atleast_2d(np.asarray(value, dtype=float))
         else:
             arr = float(d.default) * np.eye(n_rows, n_cols)
         arrays[d.name] = arr
@@ -224,7 +228,8 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
     # data-derived constants, in order
     for c in t.consts:
         try:
-            computed = c.fn(dict(out.values))
+            with contextlib.redirect_stdout(sys.stderr):
+                computed = c.fn(dict(out.values))
         except DataError as err:
             msg = str(err)
             raise DataError(msg if msg.startswith(f"theorem {tid}") else f"{where}: {msg}") from None
@@ -250,7 +255,8 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
             out.values[c.name] = matrix
     for req in t.requirements:
         try:
-            ok = bool(req.predicate(dict(out.values)))
+            with contextlib.redirect_stdout(sys.stderr):
+                ok = bool(req.predicate(dict(out.values)))
         except LmicError:
             raise
         except Exception as err:

@@ -39,7 +39,8 @@ def _lyap(t):
 def good(t):
     n, A, P = _lyap(t)
     print("building", A)  # and while building
-    t.lmi("L", A.T * P + P * A < 0)
+    k = t.const("k", lambda v: print("computing k") or 1.0)  # and in a constant (at every bind)
+    t.lmi("L", A.T * P + P * A - k * P < 0)
 
 
 @theorem(id="newbie.bilinear", title="t", citation="c")
@@ -211,7 +212,7 @@ def test_what_a_plugin_prints_goes_to_stderr_never_into_json(runs):
     code, out, err = runs["solve"]["good"]  # the first build of newbie.good
     assert code == 0 and "building A" in err and "building" not in out
     code, out, err = runs["json"]
-    assert code == 0 and json.loads(out)["verdict"] == "certified"
+    assert code == 0 and json.loads(out)["verdict"] == "certified" and "computing k" in err
     _, out, err = runs["theorems"][0]  # the registry imports the plugins once per process
     assert "newbie plugin loaded" in err
     json.loads(out)  # the import-time print is not in it
