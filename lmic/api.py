@@ -22,6 +22,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from dataclasses import dataclass, field
@@ -222,7 +223,8 @@ def load_target(
     text = os.fspath(target)
     if text.endswith(_FILE_SUFFIXES) or (Path(text).is_file() and system is None):
         if system is not None:
-            raise LmicError(f"{text}: an IR or SDPA file takes no system file (got '{system}')")
+            shown = getattr(system, "label", None) or (system if isinstance(system, str | os.PathLike) else "a system")
+            raise LmicError(f"{text}: an IR or SDPA file takes no system file (got '{shown}')")
         if params:
             raise LmicError(f"{text}: -p parameters apply to a theorem, not to an IR or SDPA file")
         if not Path(text).is_file():
@@ -344,6 +346,8 @@ def solve(
     >>> r.status, round(r.objective, 6)
     ('optimal', 0.585786)
     """
+    if backoff is not None and not (isinstance(backoff, int | float) and 0 <= backoff < math.inf):
+        raise LmicError(f"backoff must be a non-negative number, got {backoff}")
     if system is not None and not isinstance(target, Problem):
         from lmic.plant import as_system
 

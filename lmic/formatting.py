@@ -137,22 +137,38 @@ def inline_matrix(value: Any, digits: int = 4) -> str:
     return "[" + "; ".join(" ".join(f"{float(e):.{digits}g}" for e in row) for row in arr) + "]"
 
 
-def value_text(value: Any, digits: int = 4, scalar_digits: int | None = None) -> str:
-    """A short text for a value: a number (``scalar_digits``, default ``digits``), a matrix on one line, or ``str``.
+def value_text(
+    value: Any,
+    digits: int = 4,
+    scalar_digits: int | None = None,
+    *,
+    spec: str | None = None,
+    none: str = "-",
+    width: int | None = None,
+) -> str:
+    """A short text for a value: the one number formatter of lmic's tables and messages.
+
+    ``none`` for ``None``; a number with ``scalar_digits`` (default ``digits``) significant
+    digits, or with the format ``spec`` (e.g. ``".3f"``, ``".2e"``); a list, tuple or array on one
+    line (:func:`inline_matrix`, cut to ``width`` characters with ``...``); a boolean or anything
+    else as ``str``.
 
     >>> value_text(None), value_text(True), value_text(1 / 3), value_text(1 / 3, scalar_digits=6)
     ('-', 'True', '0.3333', '0.333333')
-    >>> value_text([[1.0, 0.5]]), value_text("n/a")
-    ('[1 0.5]', 'n/a')
+    >>> value_text([[1.0, 0.5]]), value_text("n/a"), value_text(None, none="")
+    ('[1 0.5]', 'n/a', '')
+    >>> value_text(0.123456, spec=".3f"), value_text(list(range(30)), width=20)
+    ('0.123', '[0 1 2 3 4 5 6 7 ...')
     """
     if value is None:
-        return "-"
+        return none
     if isinstance(value, bool):
         return str(value)
     if isinstance(value, int | float | np.floating | np.integer):
-        return f"{float(value):.{scalar_digits or digits}g}"
+        return format(float(value), spec) if spec else f"{float(value):.{scalar_digits or digits}g}"
     if isinstance(value, list | tuple | np.ndarray):
-        return inline_matrix(value, digits)
+        text = inline_matrix(value, digits)
+        return text if width is None or len(text) <= width else text[: width - 3] + "..."
     return str(value)
 
 

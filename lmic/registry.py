@@ -28,8 +28,10 @@ True
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import os
+import sys
 import types
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
@@ -171,7 +173,8 @@ class Registry:
             name = f"{ep.name} ({ep.value})"
             provider = _provider(ep)
             try:
-                thms = self._collect(ep.load())
+                with contextlib.redirect_stdout(sys.stderr):  # plugin code never prints into lmic's output
+                    thms = self._collect(ep.load())
                 for thm in thms:
                     if not isinstance(thm, Theorem):
                         raise LmicError(_not_a_theorem(thm))

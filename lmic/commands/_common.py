@@ -30,6 +30,7 @@ __all__ = [
     "solve_options",
     "add_executor_options",
     "check_executor_args",
+    "backend_names",
 ]
 
 
@@ -52,6 +53,30 @@ def parse_params(items: list[str] | None) -> dict[str, float | str]:
             raise DataError(f"-p {item!r}: {value} is not a finite number")
         out[key] = num
     return out
+
+
+def backend_names(text: str | None) -> list[str] | None:
+    """The backends of ``--backends a,b,...``, each checked (``None``: the option was not given).
+
+    An unknown or unavailable backend, or a list naming none, is bad input (:class:`DataError`).
+
+    >>> backend_names("clarabel, scs"), backend_names(None)
+    (['clarabel', 'scs'], None)
+    >>> backend_names(",")
+    Traceback (most recent call last):
+    ...
+    lmic.errors.DataError: --backends ',': name at least one backend (or leave the option out)
+    """
+    if text is None:
+        return None
+    names = [b.strip() for b in text.split(",") if b.strip()]
+    if not names:
+        raise DataError(f"--backends {text!r}: name at least one backend (or leave the option out)")
+    from lmic.backends.registry import get_backend
+
+    for name in names:
+        get_backend(name)  # an unknown or missing backend is bad input (exit 2)
+    return names
 
 
 def add_param_option(parser: Any) -> None:
@@ -123,12 +148,22 @@ def check_executor_args(args: argparse.Namespace) -> None:
     Traceback (most recent call last):
     ...
     lmic.errors.DataError: --executor ssh://h: use local, dask or tcp://HOST:PORT
+    >>> check_executor_args(argparse.Namespace(executor="local", workers=10**5))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    lmic.errors.DataError: --workers 100000: at most ... on this machine (... cores; each worker is a process)
     """
     if args.workers is not None and args.workers < 1:
         raise DataError(f"--workers {args.workers}: give at least 1")
     spec = args.executor
     if spec is not None and not (spec in ("local", "dask") or spec.startswith("tcp://")):
         raise DataError(f"--executor {spec}: use local, dask or tcp://HOST:PORT")
+    cores = os.cpu_count() or 1
+    most = max(16, 8 * cores)
+    if args.workers is not None and args.workers > most and not (spec or "").startswith("tcp://"):
+        raise DataError(
+            f"--workers {args.workers}: at most {most} on this machine ({cores} cores; each worker is a process)"
+        )
 
 
 def __getattr__(name: str) -> Any:

@@ -90,18 +90,13 @@ def exit_code(result: AuditResult) -> int:
     return 1
 
 
-def _fmt(v: object) -> str:
-    if isinstance(v, float):
-        return f"{v:.4g}"
-    return "" if v is None else str(v)
-
-
 def run(args: argparse.Namespace) -> int:
     """Audit the certificate; print a table (or JSON); return the exit code."""
     from rich.console import Console
     from rich.table import Table
 
     from lmic.certify.certificate import audit_certificate
+    from lmic.formatting import value_text
 
     result = audit_certificate(args.certificate, exact=args.exact, tol=_tolerances(args.tol) or None)
     code = exit_code(result)
@@ -134,8 +129,8 @@ def run(args: argparse.Namespace) -> int:
                 e["name"],
                 str(e["dim"]),
                 str(e["strict"]),
-                _fmt(e["min_eig"]),
-                _fmt(e["rel_margin"]),
+                value_text(e["min_eig"], none=""),
+                value_text(e["rel_margin"], none=""),
                 "ok" if e.get("float_ok", e["ok"]) else "below threshold",
                 e.get("exact") or "-",
                 ("[green]yes[/green]" if e["ok"] else "[red]no[/red]")
@@ -147,7 +142,12 @@ def run(args: argparse.Namespace) -> int:
         for col in ("name", "kind", "value", "ok"):
             t.add_column(col)
         for e in cert.checks:
-            t.add_row(e["name"], e["kind"], _fmt(e["value"]), "[green]yes[/green]" if e["ok"] else "[red]no[/red]")
+            t.add_row(
+                e["name"],
+                e["kind"],
+                value_text(e["value"], none=""),
+                "[green]yes[/green]" if e["ok"] else "[red]no[/red]",
+            )
         console.print(t)
     if cert is not None and cert.exact is not None:
         e = cert.exact

@@ -21,7 +21,6 @@ True
 from __future__ import annotations
 
 import argparse
-from typing import Any
 
 __all__ = ["register", "run"]
 
@@ -51,25 +50,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _fmt(v: Any, digits: int = 4) -> str:
-    if v is None:
-        return "-"
-    if isinstance(v, float):
-        return f"{v:.{digits}g}"
-    if isinstance(v, list):
-        from lmic.formatting import inline_matrix
-
-        text = inline_matrix(v)
-        return text if len(text) <= 60 else text[:57] + "..."
-    return str(v)
-
-
 def run(args: argparse.Namespace) -> int:
     """Audit and report; the exit code follows the decisive claims."""
     from rich.console import Console
     from rich.table import Table
 
     from lmic.commands._common import parse_params, print_json, solve_options
+    from lmic.formatting import value_text
     from lmic.studies.published import audit_published
 
     report = audit_published(
@@ -101,14 +88,18 @@ def run(args: argparse.Namespace) -> int:
     }
     for c in report.claims:
         if c.kind == "value":
-            info = f"printed {_fmt(c.published)}, computed {_fmt(c.computed)}"
+            info = f"printed {value_text(c.published, width=60)}, computed {value_text(c.computed, width=60)}"
             if c.difference is not None:
-                info += f" (diff {_fmt(c.difference, 3)})"
+                info += f" (diff {value_text(c.difference, 3, width=60)})"
         else:
-            parts = [f"{e['name']}: {e['which']} {_fmt(e['extreme'])}" for e in c.lmis if e.get("extreme") is not None]
-            parts += [f"{k} {_fmt(v)}" for k, v in c.derived.items()]
+            parts = [
+                f"{e['name']}: {e['which']} {value_text(e['extreme'], width=60)}"
+                for e in c.lmis
+                if e.get("extreme") is not None
+            ]
+            parts += [f"{k} {value_text(v, width=60)}" for k, v in c.derived.items()]
             if c.objective is not None:
-                parts.append(f"objective {_fmt(c.objective)}")
+                parts.append(f"objective {value_text(c.objective, width=60)}")
             info = "; ".join(parts)
         finding = f"[{colour.get(c.finding, 'white')}]{c.finding}[/]"
         if c.agrees is False:

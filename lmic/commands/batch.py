@@ -94,8 +94,11 @@ def run(args: argparse.Namespace) -> int:
     from lmic.errors import DataError
 
     if args.status:
-        if args.study or args.output:
-            raise DataError("--status DIR takes no study file and no -o")
+        if args.study or args.output or args.export or args.map:
+            raise DataError(
+                "--status DIR takes no study file, -o, --export or --map (to export or map a finished study, "
+                "run it again: lmic batch STUDY.yaml -o DIR --export FILE; nothing is solved twice)"
+            )
         return _status(args)
     if not args.study:
         raise DataError("give a study file: lmic batch STUDY.yaml -o DIR (or lmic batch --status DIR)")
@@ -106,6 +109,13 @@ def run(args: argparse.Namespace) -> int:
     check_executor_args(args)
     if args.export and os.path.splitext(args.export)[1].lower() not in (".csv", ".parquet", ".pq"):
         raise DataError(f"--export {args.export}: use a .csv or .parquet file name")
+    if args.map and os.path.splitext(args.map)[1].lower() != ".png":
+        raise DataError(f"--map {args.map}: the map is a PNG image: use a .png file name")
+    from lmic.output import check_output_path
+
+    for path in (args.export, args.map):
+        if path:
+            check_output_path(path)  # a folder, a missing folder, ...: before any job runs
     from lmic.studies.driver import run_study
     from lmic.studies.report import export, print_table
     from lmic.studies.spec import load_study

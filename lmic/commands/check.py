@@ -23,6 +23,7 @@ Examples
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib.util
 import itertools
 import sys
@@ -333,6 +334,24 @@ def _one(
     return findings, dims, t
 
 
+def check_option_names(t: Template, options: dict[str, Any]) -> None:
+    """Refuse a ``-p`` name that is neither an option nor a parameter of the template (:class:`DataError`).
+
+    >>> from lmic.registry import get_theorem
+    >>> thm = get_theorem("qib.thm1")
+    >>> check_option_names(thm.template(), {"fixed_L": "1"})
+    >>> check_option_names(thm.template(), {"zzz": 1})
+    Traceback (most recent call last):
+    ...
+    lmic.errors.DataError: theorem qib.thm1: unknown parameter 'zzz' (the theorem takes: beta, fixed_L, gamma)
+    """
+    known = {o.name for o in t.options} | {p.name for p in t.params}
+    for key in options:
+        if key not in known:
+            accepted = ", ".join(sorted(known)) or "none"
+            raise DataError(f"theorem {t.theorem_id}: unknown parameter '{key}' (the theorem takes: {accepted})")
+
+
 def check_theorem(thm: Theorem, options: dict[str, Any] | None = None, seed: int = 0) -> CheckReport:
     """Analyse ``thm`` (default options, then every other option value) without data.
 
@@ -395,7 +414,8 @@ def load_module_theorems(path: str | Path) -> tuple[list[Theorem], list[str]]:
         raise DataError(f"{p}: cannot be imported as a Python module")
     module = importlib.util.module_from_spec(spec)
     try:
-        spec.loader.exec_module(module)
+        with contextlib.redirect_stdout(sys.stderr):  # the module's prints never mix into --json
+            spec.loader.exec_module(module)
     except KeyboardInterrupt:
         raise
     except BaseException as err:  # noqa: BLE001 - the user's module, reported in one line
@@ -464,6 +484,8 @@ def run(args: argparse.Namespace) -> int:
         from lmic.registry import get_theorem
 
         thms = [get_theorem(target)]
+        if options:
+            check_option_names(thms[0].template(options), options)
     if getattr(args, "json", False):
         from lmic.commands._common import print_json
 

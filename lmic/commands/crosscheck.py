@@ -37,63 +37,36 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _fmt(v: Any, spec: str = ".6g") -> str:
-    return "-" if v is None else format(v, spec)
-
-
 @contextlib.contextmanager
 def _progress_bar(enabled: bool) -> Iterator[Any]:
-    """A rich progress bar on stderr (one step per backend, gone when done); ``None`` if off."""
+    """A progress bar on stderr (one step per backend, gone when done; a log line per backend when
+    stderr is not a terminal); ``None`` if off."""
     if not enabled:
         yield None
         return
-    import sys
+    from lmic.progressbar import ProgressBar
 
-    from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+    with ProgressBar("crosscheck", transient=True, log=True) as bar:
 
-    console = Console(stderr=True)
-    if not console.is_terminal:  # a log: one line per backend instead of a redrawn bar
+        def update(done: int, total: int, name: str, row: dict | None) -> None:
+            if row is None:
+                bar.update(completed=done, total=total, description=f"solving with {name}")
+            else:
+                text = f"{name}: {row['status']}, {row['decision']}"
+                bar.update(completed=done, total=total, description=text, line=f"[{done}/{total}] {text}")
 
-        def log(done: int, total: int, name: str, row: dict | None) -> None:
-            if row is not None:
-                sys.stderr.write(f"[{done}/{total}] {name}: {row['status']}, {row['decision']}\n")
-                sys.stderr.flush()
-
-        yield log
-        return
-    bar = Progress(
-        TextColumn("{task.description}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeElapsedColumn(),
-        console=console,
-        transient=True,
-    )
-    task = None
-
-    def update(done: int, total: int, name: str, row: dict | None) -> None:
-        nonlocal task
-        if task is None:
-            task = bar.add_task("crosscheck", total=total)
-        if row is None:
-            bar.update(task, completed=done, description=f"solving with {name}")
-        else:
-            bar.update(task, completed=done, description=f"{name}: {row['status']}, {row['decision']}")
-
-    with bar:
         yield update
 
 
 def run(args: argparse.Namespace) -> int:
     """Cross-check and print the table (or JSON)."""
-    from lmic.backends.registry import get_backend
-    from lmic.commands._common import check_executor_args, parse_params, print_json, solve_options
-    from lmic.studies.crosscheck import DEFAULT_RTOL, crosscheck
+    from lmic.commands._common import backend_names, check_executor_args, parse_params, print_json, solve_options
+    from lmic.formatting import value_text
+    from lmic.studies.crosscheck import DEFAULT_RTOL, check_rtol, crosscheck
 
-    names = [b.strip() for b in args.backends.split(",") if b.strip()] if args.backends else None
-    for name in names or []:
-        get_backend(name)  # an unknown or missing backend is bad input (exit 2)
+    names = backend_names(args.backends)
+    if args.rtol is not None:
+        check_rtol(args.rtol)
     params = parse_params(args.param)
     check_executor_args(args)
     with _progress_bar(enabled=not args.json) as progress:
@@ -145,18 +118,18 @@ def run(args: argparse.Namespace) -> int:
             "rejected": "red",
         }.get(r["decision"], "yellow")
         strategy = r.get("strategy")
-        strict = f"{strategy}: {_fmt(r.get('margin'), '.3g')}" if strategy not in (None, "none") else "-"
+        strict = f"{strategy}: {value_text(r.get('margin'), spec='.3g')}" if strategy not in (None, "none") else "-"
         cells = [r["backend"], r["status"]]
         if with_objective:
-            cells.append(_fmt(r["objective"], ".8g"))
+            cells.append(value_text(r["objective"], spec=".8g"))
         decision = r["decision"]
         if decision == "infeasible-bounded" and r.get("radius") is not None:
             decision += f" (R = {r['radius']:.3g})"
         cells += [
             f"[{colour}]{decision}[/{colour}]",
             strict,
-            _fmt(r["min_margin"], ".3g"),
-            _fmt(r["solve_s"], ".3f"),
+            value_text(r["min_margin"], spec=".3g"),
+            value_text(r["solve_s"], spec=".3f"),
         ]
         table.add_row(*cells)
     console = Console(soft_wrap=True)
@@ -172,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
         verdict = "[yellow]no decision[/yellow]"
     console.print(
         f"{verdict}: {report.decisions} decision(s), {report.failures} failure(s); "
-        f"max relative gap of certified optima {_fmt(gap, '.2e')} (rtol {report.rtol:g})"
+        f"max relative gap of certified optima {value_text(gap, spec='.2e')} (rtol {report.rtol:g})"
     )
     for c in report.conflicts:
         console.print(f"  conflict: {c}", markup=False)

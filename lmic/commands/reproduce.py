@@ -56,38 +56,25 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run, report, optionally write the Markdown file."""
     from rich.console import Console
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
     from rich.table import Table
 
     from lmic.commands._common import check_executor_args, print_json, solve_options, write_atomic
 
     check_executor_args(args)
     from lmic.present.reproduction import render_markdown
+    from lmic.progressbar import ProgressBar
     from lmic.studies.reproduce import reproduce
 
     if args.output:
         from lmic.output import check_output_path
 
         check_output_path(args.output)  # before any work
-    err = Console(stderr=True)
-    bar = Progress(
-        TextColumn("[bold]reproduce"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TimeElapsedColumn(),
-        TextColumn("{task.fields[info]}"),
-        console=err,
-        disable=args.json or args.no_progress or not err.is_terminal,
-    )
-    with bar:
-        task = bar.add_task("reproduce", total=None, info="")
+    with ProgressBar("reproduce", enabled=not (args.json or args.no_progress)) as bar:
 
         def progress(ev: dict[str, Any]) -> None:
             row = ev["row"]
             mark = "[green]ok[/]" if row.ok else "[red]differs[/]"
-            bar.update(
-                task, total=ev["total"], completed=ev["done"], info=f"{ev['file']}: {row.row.quantity[:40]} {mark}"
-            )
+            bar.update(total=ev["total"], completed=ev["done"], info=f"{ev['file']}: {row.row.quantity[:40]} {mark}")
 
         if args.executor:  # one job per example file (lmic.studies.parallel)
             from lmic.studies.parallel import reproduce_parallel

@@ -45,12 +45,14 @@ def run(args: argparse.Namespace) -> int:
     """Print the theorem's declarations and LMIs."""
     from rich.console import Console
 
+    from lmic.commands.check import check_option_names
     from lmic.registry import get_theorem
     from lmic.template.render import describe, theorem_latex
 
     thm = get_theorem(args.theorem)
     options = parse_params(args.param)
     t = thm.template(options)
+    check_option_names(t, options)
     if args.json:
         print_json(describe(thm, t))
         return _validate(thm, options)

@@ -88,10 +88,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _fmt(v: Any) -> str:
-    return "-" if v is None else (f"{v:.6g}" if isinstance(v, float) else str(v))
-
-
 def _write_certificate(path: str, result: Any, system: Any) -> None:
     from lmic.certify import write_certificate
     from lmic.system import load_system

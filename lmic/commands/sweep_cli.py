@@ -12,6 +12,7 @@ Examples
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from typing import TYPE_CHECKING, Any
 
@@ -63,55 +64,34 @@ def add_cli_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
-def _fmt(v: Any, digits: int = 7) -> str:
-    if v is None:
-        return "-"
-    if isinstance(v, float):
-        return f"{v:.{digits}g}"
-    return str(v)
-
-
 class _Bar:
-    """A rich progress bar on stderr (silent when stderr is not a terminal)."""
+    """The progress of a bisection or a sweep (:class:`lmic.progressbar.ProgressBar`, with a spinner)."""
 
     def __init__(self, title: str, enabled: bool) -> None:
-        from rich.console import Console
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+        from lmic.progressbar import ProgressBar
 
-        console = Console(stderr=True)
-        self.progress = Progress(
-            SpinnerColumn(),
-            TextColumn("[bold]{task.description}"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            TimeElapsedColumn(),
-            TextColumn("{task.fields[info]}"),
-            console=console,
-            transient=False,
-            disable=not (enabled and console.is_terminal),
-        )
-        self.task = self.progress.add_task(title, total=None, info="")
+        self.bar = ProgressBar(title, enabled=enabled, spinner=True)
 
     def __enter__(self) -> _Bar:
-        self.progress.__enter__()
+        self.bar.__enter__()
         return self
 
     def __exit__(self, *exc: Any) -> None:
-        self.progress.__exit__(*exc)
+        self.bar.__exit__(*exc)
 
     def __call__(self, ev: dict[str, Any]) -> None:
+        from lmic.formatting import value_text
+
         pt: PointResult = ev["point"]
         mark = {"feasible": "[green]certified", "infeasible": "[red]infeasible"}.get(pt.outcome, "[yellow]undecided")
         if ev["phase"] == "sweep":
-            info = f"{_fmt(pt.value)}: {mark}[/]"
-            self.progress.update(self.task, total=ev.get("total"), completed=ev.get("iteration", 0), info=info)
+            info = f"{value_text(pt.value, 7)}: {mark}[/]"
+            self.bar.update(total=ev.get("total"), completed=ev.get("iteration", 0), info=info)
             return
         lo, hi = ev.get("lower"), ev.get("upper")
-        info = f"[{_fmt(lo)}, {_fmt(hi)}]  last {_fmt(pt.value)}: {mark}[/]"
+        info = f"[{value_text(lo, 7)}, {value_text(hi, 7)}]  last {value_text(pt.value, 7)}: {mark}[/]"
         desc = "bracketing" if ev["phase"] == "bracket" else "bisection"
-        self.progress.update(
-            self.task, description=desc, total=ev.get("total"), completed=ev.get("iteration", 0), info=info
-        )
+        self.bar.update(description=desc, total=ev.get("total"), completed=ev.get("iteration", 0), info=info)
 
 
 def run_cli(args: argparse.Namespace) -> int:
@@ -125,6 +105,11 @@ def run_cli(args: argparse.Namespace) -> int:
         raise LmicError("--maximize, --minimize and --sweep need THEOREM SYSTEM (a theorem and its system file)")
     if getattr(args, "output", None) and args.sweep:
         raise LmicError("-o is not available with --sweep (use --json for the full record)")
+    for flag, value in (("--xtol", args.xtol), ("--rtol", args.rtol)):
+        if not (math.isfinite(value) and value >= 0):
+            raise LmicError(f"{flag} {value}: give a non-negative number")
+    if args.max_evals < 1:
+        raise LmicError(f"--max-evals {args.max_evals}: give at least 1")
     if getattr(args, "exact", False):
         sys.stderr.write("lmic: note: exact proofs are used automatically where float margins are too small\n")
     params = parse_params(args.param)
@@ -186,6 +171,8 @@ def run_cli(args: argparse.Namespace) -> int:
 def _print_sup(r: SupResult, written: str | None = None) -> None:
     from rich.console import Console
 
+    from lmic.formatting import value_text
+
     out = Console(highlight=False, soft_wrap=True)
     if not out.is_terminal:
         out.width = 160
@@ -206,20 +193,22 @@ def _print_sup(r: SupResult, written: str | None = None) -> None:
     else:
         lo_hi = (c, o) if is_max else (o, c)
         if r.upper_kind in ("infeasible-certified", "dual-bound"):
-            out.print(f"[bold]{op} {r.param} in [{_fmt(lo_hi[0], 10)}, {_fmt(lo_hi[1], 10)}][/]   ({tol})")
+            out.print(f"[bold]{op} {r.param} in [{value_text(lo_hi[0], 10)}, {value_text(lo_hi[1], 10)}][/]   ({tol})")
         elif r.upper_proven is not None:
             ends = (c, r.upper_proven) if is_max else (r.upper_proven, c)
-            out.print(f"[bold]{op} {r.param} in [{_fmt(ends[0], 10)}, {_fmt(ends[1], 10)}][/]   (proven ends)")
+            out.print(
+                f"[bold]{op} {r.param} in [{value_text(ends[0], 10)}, {value_text(ends[1], 10)}][/]   (proven ends)"
+            )
         else:
             rel, more = (">=", "larger, even infinite") if is_max else ("<=", "smaller")
             out.print(
-                f"[bold]{op} {r.param} {rel} {_fmt(c, 10)}[/]   "
+                f"[bold]{op} {r.param} {rel} {value_text(c, 10)}[/]   "
                 f"(no proven {'upper' if is_max else 'lower'} end: may be {more})"
             )
         cert_pt = next((p for p in r.points if p.value == c and p.outcome == "feasible"), None)
         how = cert_pt.proof if cert_pt else "certified"
         side, other_side = ("lower", "upper") if is_max else ("upper", "lower")
-        out.print(f"  {side:<8} {_fmt(c, 10)}  {how} (evidence: a certified point)")
+        out.print(f"  {side:<8} {value_text(c, 10)}  {how} (evidence: a certified point)")
         if o is not None:
             kind = {
                 "undecided": f"not certified (neither certified nor proven infeasible): not an {other_side} bound",
@@ -229,13 +218,13 @@ def _print_sup(r: SupResult, written: str | None = None) -> None:
                 "dual-bound": "proven dual bound (dual point proved feasible: no value beyond it)",
             }.get(r.upper_kind, r.upper_kind)
             label = "dual" if r.method == "enclosure" else "bisection"
-            out.print(f"  {label} {other_side} {_fmt(o, 10)}  {kind}")
+            out.print(f"  {label} {other_side} {value_text(o, 10)}  {kind}")
         if r.upper_proven is not None and r.upper_proven != o:
-            out.print(f"  proven infeasible (global) from {_fmt(r.upper_proven, 10)}")
+            out.print(f"  proven infeasible (global) from {value_text(r.upper_proven, 10)}")
         _print_end(out, r)
     if written:
         out.print(
-            f"  certificate of the point at {r.param} = {_fmt(c, 10)} written to {written} "
+            f"  certificate of the point at {r.param} = {value_text(c, 10)} written to {written} "
             f"(check: lmic audit {written})"
         )
     if r.message:
@@ -253,13 +242,16 @@ def _print_end(out: Any, r: SupResult) -> None:
     """The certified end's point: how it was certified, its derived scalars and gain norms."""
     import numpy as np
 
+    from lmic.formatting import value_text
+
     end = r.end
     if end is None:
         out.print("  [yellow]the certified end's point could not be re-certified on the theorem's problem: no gains[/]")
         return
     extra = f", objective within {end.backoff:g} relative" if end.backoff else ""
     out.print(
-        f"  point at {r.param} = {_fmt(end.value, 10)}: {end.source}{extra}, {end.proof}, ||x||_inf {end.norm_inf:.3g}"
+        f"  point at {r.param} = {value_text(end.value, 10)}: {end.source}{extra}, {end.proof}, "
+        f"||x||_inf {end.norm_inf:.3g}"
     )
     for note in end.notes:
         out.print(f"    note: {note}")
@@ -269,7 +261,7 @@ def _print_end(out: Any, r: SupResult) -> None:
             shape = "x".join(str(d) for d in np.atleast_2d(np.asarray(v, dtype=float)).shape)
             out.print(f"    {name:<12} {shape} matrix, ||.||_2 = {norms[name]:.4g}")
         elif isinstance(v, float):
-            out.print(f"    {name:<12} {_fmt(v, 10)}")
+            out.print(f"    {name:<12} {value_text(v, 10)}")
     if norms:
         out.print("    (the matrices in full: --json, or the certificate file with -o)")
 
@@ -277,6 +269,8 @@ def _print_end(out: Any, r: SupResult) -> None:
 def _print_sweep(r: SweepResult) -> None:
     from rich.console import Console
     from rich.table import Table
+
+    from lmic.formatting import value_text
 
     out = Console(highlight=False, soft_wrap=True)
     if not out.is_terminal:
@@ -287,12 +281,12 @@ def _print_sweep(r: SweepResult) -> None:
     for p in r.points:
         star = " *" if p is r.best else ""
         table.add_row(
-            _fmt(p.value) + star,
+            value_text(p.value, 7) + star,
             p.outcome,
             p.status,
             p.verdict,
-            _fmt(p.objective),
-            _fmt(p.rel_margin, 3),
+            value_text(p.objective, 7),
+            value_text(p.rel_margin, 3),
             p.proof[:60],
             f"{1e3 * p.bind_s:.1f}",
             f"{p.solve_s:.3f}",
@@ -302,13 +296,13 @@ def _print_sweep(r: SweepResult) -> None:
         out.print(f"no certified point on the grid of {r.param}")
     else:
         what = (
-            "objective " + _fmt(r.best.objective)
+            "objective " + value_text(r.best.objective, 7)
             if r.sense in ("min", "max")
-            else "relative margin " + _fmt(r.best.rel_margin, 3)
+            else "relative margin " + value_text(r.best.rel_margin, 3)
         )
         if r.best_rule == "edge of the certified range":
             what = f"the edge of the certified range; {what}"
-        out.print(f"best certified point: {r.param} = {_fmt(r.best.value)} ({what})")
+        out.print(f"best certified point: {r.param} = {value_text(r.best.value, 7)} ({what})")
     binds = [p.bind_s for p in r.points]
     out.print(
         f"{len(r.points)} points, {r.total_s:.2f} s (analysis once {r.plan_s * 1e3:.0f} ms, "

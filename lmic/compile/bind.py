@@ -207,7 +207,11 @@ class _Binder:
         L = self.product(term.left)
         R = self.product(term.right)
         if (L is not None and L.shape[1] != vr) or (R is not None and R.shape[0] != vc):
-            raise TemplateError(f"theorem {self.tid}: term '{term.text}' has inconsistent shapes")
+            shapes = " * ".join(
+                f"{a}x{b}"
+                for a, b in [*([L.shape] if L is not None else []), (vr, vc), *([R.shape] if R is not None else [])]
+            )
+            raise TemplateError(f"theorem {self.tid}: term '{term.text}' has inconsistent shapes ({shapes})")
         out_r = vr if L is None else L.shape[0]
         out_c = vc if R is None else R.shape[1]
         if (out_r, out_c) != (rows, cols):
@@ -259,7 +263,8 @@ class _Binder:
                 try:
                     entries[(i, j)] = self.entry_pieces(lp.entries[(i, j)].terms, sizes[i], sizes[j])
                 except TemplateError as err:
-                    raise TemplateError(f"{where(i, j)}: {err}") from None
+                    msg = str(err).removeprefix(f"theorem {self.tid}: ")
+                    raise TemplateError(f"{where(i, j)}: {msg}") from None
             return entries[(i, j)]
 
         # which entry fills each lower block, in a fixed order; symmetry checks every bind

@@ -8,6 +8,8 @@ and the key at fault.
 
 from __future__ import annotations
 
+import contextlib
+import sys
 import warnings
 from collections.abc import Mapping
 from typing import Any
@@ -20,6 +22,7 @@ from lmic.errors import DataError, LmicError, TemplateError
 from lmic.system import System, UnusedDataNote, near_miss
 from lmic.template.builder import normalise_option
 from lmic.template.convert import as_expr
+from lmic.template.decls import in_domain as _in_domain
 
 __all__ = ["Inputs", "dim_value", "resolve_inputs"]
 
@@ -48,12 +51,19 @@ def dim_value(expr: Any, dims: Mapping[sympy.Symbol, int]) -> int | None:
     return int(v) if v.is_Integer else None
 
 
-def _in_domain(value: float, domain: sympy.Set) -> bool:
-    """Whether ``value`` lies in ``domain`` (integer sets are decided on integral values)."""
-    verdict = domain.contains(sympy.Float(value))
-    if verdict not in (sympy.true, sympy.false) and float(value).is_integer():
-        verdict = domain.contains(sympy.Integer(int(value)))
-    return verdict == sympy.true
+def _real_array(value: Any, what: str) -> np.ndarray:
+    """``value`` as a float array; a text, object or complex value (non-zero imaginary part) is a TemplateError."""
+    try:
+        arr = np.asarray(value)
+        if np.iscomplexobj(arr):
+            if np.any(arr.imag != 0):
+                raise TemplateError(f"{what} is complex ({value!r:.60}): an LMI needs real numbers")
+            arr = arr.real
+        if arr.dtype == object and any(e is None for e in arr.flat):  # None would become nan
+            raise TypeError
+        return arr.astype(float)
+    except (TypeError, ValueError):
+        raise TemplateError(f"{what} is not a number or a matrix of numbers: {value!r:.60}") from None
 
 
 def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | None = None) -> Inputs:
@@ -121,6 +131,8 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
                     raw = float(raw)
                 except ValueError:
                     raise DataError(f"{where}: parameter '{p.name}' = {raw!r} is not a number") from None
+            elif np.ndim(raw) != 0 or np.asarray(raw).dtype.kind not in "iuf":  # not bool, complex, text
+                raise DataError(f"{where}: parameter '{p.name}' = {raw!r:.60} is not a number")
         elif p.default is not None:
             raw = p.default
         else:
@@ -181,7 +193,9 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
         if n_rows is None or n_cols is None:
             raise DataError(f"{where}: cannot size the default of data '{d.name}' (dimensions unknown)")
         if callable(d.default):
-            arr = np.atleast_2d(np.asarray(d.default({**out.values, **arrays}, n_rows, n_cols), dtype=float))
+            with contextlib.redirect_stdout(sys.stderr):  # plugin code: its prints go to stderr
+                value = d.default({**out.values, **arrays}, n_rows, n_cols)
+            arr = np.atleast_2d(np.asarray(value, dtype=float))
         else:
             arr = float(d.default) * np.eye(n_rows, n_cols)
         arrays[d.name] = arr
@@ -214,7 +228,8 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
     # data-derived constants, in order
     for c in t.consts:
         try:
-            computed = c.fn(dict(out.values))
+            with contextlib.redirect_stdout(sys.stderr):
+                computed = c.fn(dict(out.values))
         except DataError as err:
             msg = str(err)
             raise DataError(msg if msg.startswith(f"theorem {tid}") else f"{where}: {msg}") from None
@@ -222,8 +237,8 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
             raise
         except Exception as err:
             raise DataError(f"{where}: constant '{c.name}' cannot be computed: {type(err).__name__}: {err}") from None
+        arr = _real_array(computed, f"{tid}: constant '{c.name}'")
         if c.shape is None:
-            arr = np.asarray(computed, dtype=float)
             if arr.size != 1:
                 raise TemplateError(f"{tid}: constant '{c.name}' is declared scalar but has shape {arr.shape}")
             scalar = float(arr.reshape(-1)[0])
@@ -231,7 +246,7 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
                 raise DataError(f"{where}: constant '{c.name}' is {scalar} for this data")
             out.values[c.name] = scalar
         else:
-            matrix = np.atleast_2d(np.asarray(computed, dtype=float))
+            matrix = np.atleast_2d(arr)
             exp = tuple(dim_value(size, out.dims) for size in c.shape)
             if matrix.shape != exp:
                 raise TemplateError(f"{tid}: constant '{c.name}' has shape {matrix.shape}, declared {exp}")
@@ -240,7 +255,8 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
             out.values[c.name] = matrix
     for req in t.requirements:
         try:
-            ok = bool(req.predicate(dict(out.values)))
+            with contextlib.redirect_stdout(sys.stderr):
+                ok = bool(req.predicate(dict(out.values)))
         except LmicError:
             raise
         except Exception as err:

@@ -23,6 +23,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -38,6 +39,7 @@ from lmic.ir.problem import Problem
 __all__ = [
     "CrosscheckReport",
     "crosscheck",
+    "check_rtol",
     "backend_row",
     "error_row",
     "assemble",
@@ -140,6 +142,19 @@ def conflicts(rows: list[dict[str, Any]], sense: str, rtol: float) -> tuple[list
     return found, gap
 
 
+def check_rtol(rtol: float) -> None:
+    """Refuse an agreement tolerance that is negative or not a number (:class:`LmicError`).
+
+    >>> check_rtol(1e-4)
+    >>> check_rtol(-1)
+    Traceback (most recent call last):
+    ...
+    lmic.errors.LmicError: rtol must be a non-negative number, got -1
+    """
+    if not (isinstance(rtol, int | float) and math.isfinite(rtol) and rtol >= 0):
+        raise LmicError(f"rtol must be a non-negative number, got {rtol}")
+
+
 def crosscheck(
     target: str | os.PathLike[str] | Problem,
     system: Any = None,
@@ -173,6 +188,7 @@ def crosscheck(
     """
     from lmic.backends.registry import available_backend_names
 
+    check_rtol(rtol)
     problem, _theorem, _ = load_target(target, system, params)
     names = backends or available_backend_names()
     if not names:

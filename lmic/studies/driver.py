@@ -85,43 +85,12 @@ def manifest_of(study: Study) -> dict[str, Any]:
 
 
 class _Bar:
-    """A rich progress bar on stderr with rate, ETA and the outcome counts so far."""
+    """A progress bar on stderr with rate, ETA and the outcome counts so far (:mod:`lmic.progressbar`)."""
 
     def __init__(self, total: int, done: int, label: str) -> None:
-        from rich.console import Console
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            TextColumn,
-            TimeElapsedColumn,
-            TimeRemainingColumn,
-        )
+        from lmic.progressbar import ProgressBar
 
-        class _Rate(TextColumn):
-            def __init__(self) -> None:
-                super().__init__("")
-
-            def render(self, task: Any) -> Any:
-                from rich.text import Text
-
-                speed = task.finished_speed or task.speed
-                return Text("-- jobs/s" if speed is None else f"{speed:.2f} jobs/s", style="cyan")
-
-        self._progress = Progress(
-            TextColumn("[bold]{task.description}"),
-            BarColumn(),
-            MofNCompleteColumn(),
-            _Rate(),
-            TimeElapsedColumn(),
-            TextColumn("ETA"),
-            TimeRemainingColumn(),
-            TextColumn("{task.fields[counts]}"),
-            console=Console(stderr=True),
-            transient=False,
-        )
-        self._progress.start()
-        self._task = self._progress.add_task(label, total=total, completed=done, counts="")
+        self._bar = ProgressBar(label, total, completed=done, rate="jobs", eta=True, summary=True).__enter__()
 
     def advance(self, counts: Counter[str]) -> None:
         short = {
@@ -133,10 +102,10 @@ class _Bar:
             "error": "err",
         }
         text = " ".join(f"{short[k]} {counts[k]}" for k in OUTCOMES if counts.get(k))
-        self._progress.update(self._task, advance=1, counts=text)
+        self._bar.update(advance=1, info=text)
 
     def close(self) -> None:
-        self._progress.stop()
+        self._bar.__exit__(None, None, None)
 
 
 def run_study(

@@ -21,14 +21,11 @@ Examples
 
 from __future__ import annotations
 
-import fnmatch
 import os
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
-
-from lmic.errors import DataError
 
 __all__ = ["reproduce_parallel", "crosscheck_parallel"]
 
@@ -68,22 +65,11 @@ def reproduce_parallel(
     ReproductionReport
     """
     from lmic.studies.executors import make_executor
-    from lmic.studies.reproduce import ReproductionReport, RowResult, default_examples_dir, load_expectations
+    from lmic.studies.reproduce import ReproductionReport, RowResult, select_examples
 
     t0 = time.perf_counter()
-    folder = Path(examples) if examples is not None else default_examples_dir()
-    if not folder.is_dir():
-        raise DataError(f"{folder}: no examples folder")
-    exp_path = Path(expectations) if expectations is not None else folder / "reproduction.yaml"
-    spec = load_expectations(exp_path)
-    files = sorted(p.name for p in folder.iterdir() if p.suffix in (".yaml", ".yml") and p.name.count(".") >= 3)
-
-    def wanted(name: str) -> bool:
-        return not only or any(fnmatch.fnmatch(name, pat) for pat in only)
-
-    files = [f for f in files if wanted(f)]
-    missing = sorted(f for f in spec if wanted(f) and f not in files)
-    unlisted = [f for f in files if f not in spec]
+    sel = select_examples(examples, expectations, only)
+    spec, files, folder, exp_path = sel.spec, sel.files, sel.folder, sel.expectations
     listed = [f for f in files if f in spec]
     total = sum(len(spec[f]) for f in listed)
     jobs = [
@@ -138,8 +124,8 @@ def reproduce_parallel(
         ex.close()
     return ReproductionReport(
         results=[r for f in listed for r in by_file.get(f, [])],
-        unlisted=unlisted,
-        missing=missing,
+        unlisted=sel.unlisted,
+        missing=sel.missing,
         backend=used,
         total_s=time.perf_counter() - t0,
         file_times=file_times,
@@ -203,9 +189,10 @@ def crosscheck_parallel(
     from lmic.api import load_target
     from lmic.backends.registry import available_backend_names
     from lmic.errors import LmicError
-    from lmic.studies.crosscheck import DEFAULT_RTOL, assemble, error_row, target_label
+    from lmic.studies.crosscheck import DEFAULT_RTOL, assemble, check_rtol, error_row, target_label
     from lmic.studies.executors import make_executor
 
+    check_rtol(DEFAULT_RTOL if rtol is None else rtol)
     problem, _theorem, _ = load_target(target, system, params)
     names = backends or available_backend_names()
     if not names:

@@ -156,10 +156,6 @@ def _axis_values(records: list[dict[str, Any]], name: str) -> list[Any]:
         return sorted(vals, key=str)
 
 
-def _fmt(v: Any) -> str:
-    return f"{v:.3g}" if isinstance(v, float) else str(v)
-
-
 def region_map(
     records: list[dict[str, Any]], x: str, y: str | None, path: str, title: str = "", ylabel: str = ""
 ) -> str:
@@ -171,6 +167,8 @@ def region_map(
     value found not certified are drawn against ``x``.
     """
     import matplotlib
+
+    from lmic.formatting import value_text
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -201,8 +199,8 @@ def region_map(
                 share = counts.get("certified", 0) / sum(counts.values())
                 ax.text(i, j, f"{share:.0%}", ha="center", va="center", fontsize=7, color="white")
         step_x, step_y = max(1, math.ceil(len(xs) / 8)), max(1, math.ceil(len(ys) / 12))
-        ax.set_xticks(range(0, len(xs), step_x), [_fmt(v) for v in xs[::step_x]], rotation=45)
-        ax.set_yticks(range(0, len(ys), step_y), [_fmt(v) for v in ys[::step_y]])
+        ax.set_xticks(range(0, len(xs), step_x), [value_text(v, 3) for v in xs[::step_x]], rotation=45)
+        ax.set_yticks(range(0, len(ys), step_y), [value_text(v, 3) for v in ys[::step_y]])
         ax.set_xlabel(x)
         ax.set_ylabel(y)
         present = [o for o in OUTCOMES if any(o in c for c in cells.values())]
@@ -251,13 +249,16 @@ def status(out_dir: str) -> dict[str, Any]:
     manifest = store.manifest()
     if manifest is None:
         raise DataError(f"{out_dir}: not a study folder (no study.json)")
-    wanted = {j["hash"] for j in manifest.get("jobs", [])}
+    jobs = manifest.get("jobs", []) if isinstance(manifest, dict) else None
+    if not isinstance(jobs, list) or not all(isinstance(j, dict) and isinstance(j.get("hash"), str) for j in jobs):
+        raise DataError(f"{out_dir}: study.json is not a study manifest (edited or damaged?)")
+    wanted = {j["hash"] for j in jobs}
     records = [r for r in read_results(Path(out_dir) / "results.jsonl") if r["hash"] in wanted]
     counts = Counter(r.get("outcome", "error") for r in records)
     return {
         "name": manifest.get("name"),
         "task": manifest.get("task"),
-        "total": manifest.get("total", len(wanted)),
+        "total": manifest["total"] if isinstance(manifest.get("total"), int) else len(wanted),
         "done": len(records),
         "counts": {o: counts.get(o, 0) for o in OUTCOMES},
         "running_pid": store.running_pid(),

@@ -84,8 +84,22 @@ def write_json_atomic(path: str | os.PathLike[str], document: Any) -> None:
     write_atomic(path, lambda fh: fh.write(text))
 
 
+def _whole_record(rec: Any) -> bool:
+    """A job record as the runners write it (a damaged one means: the job is not done)."""
+    from lmic.studies.tasks import OUTCOMES
+
+    return (
+        isinstance(rec, dict)
+        and isinstance(rec.get("hash"), str)
+        and rec.get("outcome", "error") in OUTCOMES
+        and isinstance(rec.get("finished_at", ""), str)
+        and isinstance(rec.get("params") or {}, dict)
+    )
+
+
 def read_results(path: str | os.PathLike[str]) -> list[dict[str, Any]]:
-    """Every whole, parseable line of a ``results.jsonl`` (first line per job hash wins).
+    """Every whole, parseable line of a ``results.jsonl`` (first line per job hash wins; a
+    damaged record, e.g. an edited outcome, counts as not done: a resumed study runs it again).
 
     >>> read_results("/nonexistent/results.jsonl")
     []
@@ -103,7 +117,7 @@ def read_results(path: str | os.PathLike[str]) -> list[dict[str, Any]]:
                 rec = json.loads(raw)
             except (json.JSONDecodeError, UnicodeDecodeError):
                 continue
-            if isinstance(rec, dict) and isinstance(rec.get("hash"), str) and rec["hash"] not in seen:
+            if _whole_record(rec) and rec["hash"] not in seen:
                 seen.add(rec["hash"])
                 out.append(rec)
     return out

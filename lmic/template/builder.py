@@ -54,6 +54,7 @@ from lmic.template.decls import (
     ParamDecl,
     RequireDecl,
     VarDecl,
+    in_domain,
     normalise_option,
     template_hash,
 )
@@ -161,6 +162,13 @@ class Template:
             if domain not in _DOMAINS:
                 raise TemplateError(f"{self.theorem_id}: unknown domain '{domain}' for parameter '{name}'")
             domain = _DOMAINS[domain]
+        if default is not None:
+            ok = isinstance(default, int | float | np.integer | np.floating) and not isinstance(default, bool)
+            if not ok or not np.isfinite(default) or not in_domain(float(default), domain):
+                raise TemplateError(
+                    f"{self.theorem_id}: the default {default!r} of parameter '{name}' is not a number "
+                    f"in its domain {domain}"
+                )
         sym = sympy.Symbol(name, real=True)
         self.params.append(ParamDecl(name, sym, default, domain, doc))
         return sym
@@ -262,11 +270,20 @@ class Template:
 
     def minimize(self, expr: Any) -> None:
         """Minimise a scalar expression linear in the decision variables."""
-        self.objective = ("min", as_expr(expr))
+        self.objective = ("min", self._scalar_objective(expr))
 
     def maximize(self, expr: Any) -> None:
         """Maximise a scalar expression linear in the decision variables."""
-        self.objective = ("max", as_expr(expr))
+        self.objective = ("max", self._scalar_objective(expr))
+
+    def _scalar_objective(self, expr: Any) -> Any:
+        e = as_expr(expr)
+        if getattr(e, "is_Matrix", False) or isinstance(e, sympy.MatrixExpr):
+            raise TemplateError(
+                f"{self.theorem_id}: the objective '{e}' is a matrix; minimise or maximise a scalar "
+                "(a t.scalar variable, or a sum of them)"
+            )
+        return e
 
     def derive(self, name: str, expr: Any, doc: str = "", *, fixes: Any = None) -> Any:
         """A derived quantity ``name = expr`` (e.g. ``L = P^-1 G``); returns a symbol for it.
@@ -392,7 +409,8 @@ class Template:
         declared = self._declared()
         shaped: list[DataDecl | VarDecl] = [*self.data_decls, *self.variables]
         for sd in shaped:
-            self._undeclared([as_expr(x) for x in sd.shape], f"the shape of '{sd.name}'", declared)
+            what = f"theorem {self.theorem_id}: the shape of '{sd.name}'"
+            self._undeclared([as_expr(x, what) for x in sd.shape], f"the shape of '{sd.name}'", declared)
         for lmi in self.lmis:
             ents = [e for row in lmi.spec.block.rows for e in row if e is not STAR and isinstance(e, sympy.Basic)]
             self._undeclared(ents, f"LMI '{lmi.name}'", declared)

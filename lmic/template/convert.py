@@ -36,4 +36,5 @@ def as_expr(value: Any, what: str = "expression") -> sympy.Basic:
         return sympy.Float(value)
     if isinstance(value, Fraction):
         return sympy.Rational(value.numerator, value.denominator)
-    raise TemplateError(f"{what}: {value!r} is not a sympy expression or a number (text is never parsed)")
+    hint = " (t.dims returns a tuple: write n, = t.dims('n'))" if isinstance(value, tuple) else ""
+    raise TemplateError(f"{what}: {value!r} is not a sympy expression or a number (text is never parsed){hint}")

@@ -26,6 +26,7 @@ from lmic.template.checks import CheckSpec
 __all__ = [
     "SIGNS",
     "DOMAINS",
+    "in_domain",
     "normalise_option",
     "template_hash",
     "DataDecl",
@@ -53,6 +54,18 @@ DOMAINS = {
     "natural": sympy.S.Naturals,
     "natural0": sympy.S.Naturals0,
 }
+
+
+def in_domain(value: float, domain: sympy.Set) -> bool:
+    """Whether ``value`` lies in ``domain`` (integer sets are decided on integral values).
+
+    >>> in_domain(2.0, DOMAINS["natural"]), in_domain(-1, DOMAINS["positive"])
+    (True, False)
+    """
+    verdict = domain.contains(sympy.Float(value))
+    if verdict not in (sympy.true, sympy.false) and float(value).is_integer():
+        verdict = domain.contains(sympy.Integer(int(value)))
+    return verdict == sympy.true
 
 
 @dataclass

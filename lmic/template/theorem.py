@@ -15,7 +15,9 @@ Examples
 
 from __future__ import annotations
 
+import contextlib
 import os
+import sys
 import traceback
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -76,6 +78,8 @@ def _build_location(err: BaseException, build: Callable[..., Any]) -> str:
     home = os.path.abspath(code.co_filename) if code is not None else None
     frames = traceback.extract_tb(err.__traceback__)
     mine = [f for f in frames if home and os.path.abspath(f.filename) == home]
+    if not mine and code is not None and len(frames) <= 1:  # build itself could not be called
+        return f"{os.path.basename(code.co_filename)}:{code.co_firstlineno}"
     frame = mine[-1] if mine else (frames[-1] if frames else None)
     if frame is None:
         return ""
@@ -130,6 +134,14 @@ class Theorem:
     def __post_init__(self) -> None:
         if not isinstance(self.id, str) or "." not in self.id:
             raise TemplateError(f"theorem id {self.id!r} must look like '<family>.<item>'")
+        for name in ("title", "citation", "objective", "system_class", "notes"):
+            value = getattr(self, name)
+            if not isinstance(value, str):
+                raise TemplateError(f"theorem {self.id}: {name} must be a string, not {type(value).__name__}")
+            if name in ("title", "citation") and not value.strip():
+                raise TemplateError(
+                    f"theorem {self.id}: {name} is empty (say what the theorem is and where it is from)"
+                )
         self.kind = _KIND_WORDS.get(self.kind, self.kind)
         if self.kind not in KINDS:
             raise TemplateError(f"theorem {self.id}: kind must be 'synthesis' or 'analysis' (or 'S', 'A')")
@@ -146,11 +158,13 @@ class Theorem:
 
         A Python error inside ``build`` becomes one :class:`TemplateError` line naming the
         theorem and the file and line of the plugin where it happened (``--debug`` shows the
-        traceback: the original error is chained).
+        traceback: the original error is chained). What ``build`` prints goes to standard error
+        (standard output is lmic's: tables, ``--json``).
         """
         t = Template(self.id, options)
         try:
-            self.build(t)
+            with contextlib.redirect_stdout(sys.stderr):  # a plugin's print never mixes into lmic's output
+                self.build(t)
         except LmicError as err:
             if self.id in str(err):
                 raise

@@ -224,3 +224,14 @@ def test_point_certificate_is_the_certifiers():
     claim = audit_published("uio_dt.thm3_1", raw).claim("P")
     assert cert.verdict == claim.verdict == "certified"
     assert claim.margin == pytest.approx(cert.min_margin) == pytest.approx(0.2445, abs=1e-3)
+
+
+def test_published_text_or_matrix_where_a_number_belongs_is_skipped_with_the_reason():
+    """A word in place of a variable, or a matrix in place of a parameter, is named as such."""
+    raw = _raw("qib.thm1.flexible-joint.yaml")
+    raw["published"] = {"omega": "see eq. (40)", "beta": [[1.0, 2.0]], "gamma": "zero"}
+    rep = audit_published("qib.thm1", raw)
+    omega, beta, gamma = rep.claim("omega"), rep.claim("beta"), rep.claim("gamma")
+    assert omega.finding == "skipped" and omega.reason == "'see eq. (40)' is not a number"
+    assert gamma.finding == "skipped" and gamma.reason == "'zero' is not a number"
+    assert beta.finding == "skipped" and beta.reason == "parameter 'beta' is a number, not a (1, 2) matrix"

@@ -139,3 +139,80 @@ def test_a_buggy_build_function_is_reported_with_the_theorem_id():
     where = r"at test_template_errors.py:\d+"  # the file and line of the bug in the plugin
     with pytest.raises(TemplateError, match=rf"theorem test.bad: template failed to build {where}: KeyError"):
         analyse(_thm(build))
+
+
+def test_build_function_without_the_template_argument_points_at_its_definition():
+    def build():  # a newcomer forgets ``t``: the error is raised calling build, not inside it
+        pass
+
+    line = build.__code__.co_firstlineno
+    with pytest.raises(TemplateError, match=rf"at test_template_errors.py:{line}: TypeError: .*0 positional"):
+        analyse(_thm(build))
+
+
+def test_term_with_inconsistent_shapes_names_them_once():
+    def build(t):
+        n, p = t.dims("n p")
+        t.data("A", n, n)
+        C = t.data("C", p, n)
+        P = t.symmetric("P", n)
+        t.lmi("L", block([[P * C]]) < 0)  # P is n x n, C is p x n
+
+    with pytest.raises(TemplateError) as err:
+        bind(analyse(_thm(build)), DATA)
+    msg = str(err.value)
+    assert msg.count("theorem test.bad") == 1
+    assert "LMI 'L' block (1,1): term" in msg and "inconsistent shapes (2x2 * 1x2)" in msg
+
+
+@pytest.mark.parametrize(
+    ("meta", "pattern"),
+    [
+        ({"title": None}, "title must be a string, not NoneType"),
+        ({"title": 3}, "title must be a string, not int"),
+        ({"citation": ["a"]}, "citation must be a string, not list"),
+        ({"title": "  "}, "title is empty"),
+        ({"citation": ""}, "citation is empty"),
+        ({"objective": None}, "objective must be a string"),
+    ],
+)
+def test_theorem_metadata_of_the_wrong_type_is_one_line(meta, pattern):
+    full = {"id": "test.meta", "title": "t", "citation": "c", **meta}
+    with pytest.raises(TemplateError, match=rf"^theorem test.meta: {pattern}"):
+        theorem(**full)(lambda t: None)
+
+
+@pytest.mark.parametrize(
+    ("default", "domain"), [(-1, "positive"), (0.5, "natural"), (float("nan"), "real"), ("1", "real"), (True, "real")]
+)
+def test_parameter_default_outside_its_domain_is_rejected(default, domain):
+    def build(t):
+        (n,) = t.dims("n")
+        A = t.data("A", n, n)
+        a = t.param("a", default=default, domain=domain)
+        P = t.symmetric("P", n)
+        t.lmi("L", A.T * P + P * A + a * P < 0)
+
+    with pytest.raises(TemplateError, match=r"test.bad: the default .* of parameter 'a' is not a number in its domain"):
+        analyse(_thm(build))
+
+
+def test_matrix_objective_is_a_template_error():
+    def build(t):
+        (n,) = t.dims("n")
+        A = t.data("A", n, n)
+        P = t.symmetric("P", n)
+        t.lmi("L", A.T * P + P * A < 0)
+        t.minimize(P)
+
+    with pytest.raises(TemplateError, match=r"test.bad.*the objective 'P' is a matrix"):
+        analyse(_thm(build))
+
+
+def test_a_dims_tuple_used_as_a_dimension_names_the_theorem_and_the_fix():
+    def build(t):
+        n = t.dims("n")  # a tuple: the newcomer meant ``n, = t.dims("n")``
+        t.data("A", n, n)
+
+    with pytest.raises(TemplateError, match=r"^theorem test.bad: the shape of 'A': \(n,\) .*write n, = t.dims"):
+        analyse(_thm(build))

@@ -81,13 +81,17 @@ def audit_published(
     for key, value in pub.items():
         if key in used:
             continue
-        if key in a.param_names and not isinstance(value, str | np.ndarray):
-            param_claim(a, key, float(value))
-        elif key in a.derived_names or key in a.const_names:
-            if isinstance(value, str):
-                a.claims.append(Claim([key], "skipped", "-", "skipped", reason=f"{value!r} is not a number"))
+        known = {*a.param_names, *a.derived_names, *a.const_names, *a.var_names}
+        if isinstance(value, str) and key in known:
+            a.claims.append(Claim([key], "skipped", "-", "skipped", reason=f"{value!r} is not a number"))
+        elif key in a.param_names:
+            if np.size(value) == 1:
+                param_claim(a, key, float(np.asarray(value).reshape(-1)[0]))
             else:
-                value_keys.append(key)
+                reason = f"parameter '{key}' is a number, not a {np.shape(value)} matrix"
+                a.claims.append(Claim([key], "skipped", "-", "skipped", published=short(value), reason=reason))
+        elif key in a.derived_names or key in a.const_names:
+            value_keys.append(key)
         else:
             what = (
                 "input data of the system file"

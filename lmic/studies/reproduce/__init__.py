@@ -44,9 +44,11 @@ from lmic.studies.reproduce.rows import (
     ReproductionReport,
     Row,
     RowResult,
+    Selection,
     default_examples_dir,
     load_expectations,
     register,
+    select_examples,
     theorem_of,
 )
 from lmic.studies.reproduce.run import judge, reproduce
@@ -57,6 +59,8 @@ __all__ = [
     "ReproductionReport",
     "theorem_of",
     "load_expectations",
+    "select_examples",
+    "Selection",
     "reproduce",
     "default_examples_dir",
     "register",

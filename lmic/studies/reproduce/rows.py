@@ -12,8 +12,9 @@ Examples
 
 from __future__ import annotations
 
+import fnmatch
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -27,6 +28,8 @@ __all__ = [
     "theorem_of",
     "load_expectations",
     "default_examples_dir",
+    "Selection",
+    "select_examples",
     "register",
     "HANDLERS",
     "VERDICTS",
@@ -243,3 +246,58 @@ def load_expectations(path: str | os.PathLike[str]) -> dict[str, list[Row]]:
             raise DataError(f"{p.name}: {file}: a list of rows is expected")
         out[str(file)] = [Row.from_dict(str(file), r) for r in rows]
     return out
+
+
+@dataclass
+class Selection:
+    """The example files a reproduction runs (:func:`select_examples`)."""
+
+    folder: Path
+    expectations: Path
+    spec: dict[str, list[Row]]
+    #: example files matching ``only`` (sorted)
+    files: list[str]
+    #: files the expectations list (matching ``only``) but the folder lacks
+    missing: list[str]
+    #: example files the expectations do not list
+    unlisted: list[str]
+
+
+def select_examples(
+    examples: str | os.PathLike[str] | None = None,
+    expectations: str | os.PathLike[str] | None = None,
+    only: Sequence[str] = (),
+) -> Selection:
+    """The examples folder, its expectations and the example files matching the globs ``only``.
+
+    Raises :class:`DataError` for a missing folder, bad expectations, or patterns that match
+    no example file and no expectation (a typo in ``--only`` is not an empty success).
+
+    Examples
+    --------
+    >>> from lmic.studies.reproduce import select_examples  # the shipped compute kinds registered
+    >>> sel = select_examples(only=["thesis.lyapunov.*"])
+    >>> sel.files, sel.missing
+    (['thesis.lyapunov.ex2_3_2.yaml'], [])
+    >>> select_examples(only=["nope.*"])
+    Traceback (most recent call last):
+    ...
+    lmic.errors.DataError: --only 'nope.*': no example file matches (in examples)
+    """
+    folder = Path(examples) if examples is not None else default_examples_dir()
+    if not folder.is_dir():
+        raise DataError(f"{folder}: no examples folder")
+    exp_path = Path(expectations) if expectations is not None else folder / "reproduction.yaml"
+    spec = load_expectations(exp_path)
+    names = sorted(p.name for p in folder.iterdir() if p.suffix in (".yaml", ".yml") and p.name.count(".") >= 3)
+
+    def wanted(name: str) -> bool:
+        return not only or any(fnmatch.fnmatch(name, pat) for pat in only)
+
+    files = [f for f in names if wanted(f)]
+    missing = sorted(f for f in spec if wanted(f) and f not in files)
+    if only and not files and not missing:
+        pats = " ".join(f"--only {p!r}" for p in only)
+        raise DataError(f"{pats}: no example file matches (in {folder.name})")
+    unlisted = [f for f in files if f not in spec]
+    return Selection(folder, exp_path, spec, files, missing, unlisted)

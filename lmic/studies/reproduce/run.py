@@ -8,18 +8,16 @@ Examples
 
 from __future__ import annotations
 
-import fnmatch
 import os
 import time
 from collections.abc import Callable, Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from lmic.errors import DataError, LmicError
+from lmic.errors import LmicError
 from lmic.studies.reproduce.handlers import Runner, compute_row, scalar
-from lmic.studies.reproduce.rows import ReproductionReport, Row, RowResult, default_examples_dir, load_expectations
+from lmic.studies.reproduce.rows import ReproductionReport, Row, RowResult, select_examples
 
 __all__ = ["reproduce", "judge"]
 
@@ -78,20 +76,10 @@ def reproduce(
     ['certified', 'certified', 'certified']
     """
     t0 = time.perf_counter()
-    folder = Path(examples) if examples is not None else default_examples_dir()
-    if not folder.is_dir():
-        raise DataError(f"{folder}: no examples folder")
-    spec = load_expectations(expectations if expectations is not None else folder / "reproduction.yaml")
-    files = sorted(p.name for p in folder.iterdir() if p.suffix in (".yaml", ".yml") and p.name.count(".") >= 3)
-
-    def wanted(name: str) -> bool:
-        return not only or any(fnmatch.fnmatch(name, pat) for pat in only)
-
-    files = [f for f in files if wanted(f)]
-    missing = sorted(f for f in spec if wanted(f) and f not in files)
-    unlisted = [f for f in files if f not in spec]
+    sel = select_examples(examples, expectations, only)
+    spec, files = sel.spec, sel.files
     rows = [row for f in files for row in spec.get(f, [])]
-    runner = Runner(folder, backend, options)
+    runner = Runner(sel.folder, backend, options)
     results: list[RowResult] = []
     file_times: dict[str, float] = {}
     for k, row in enumerate(rows):
@@ -108,8 +96,8 @@ def reproduce(
             progress({"done": k + 1, "total": len(rows), "file": row.file, "row": res})
     return ReproductionReport(
         results=results,
-        unlisted=unlisted,
-        missing=missing,
+        unlisted=sel.unlisted,
+        missing=sel.missing,
         backend=backend,
         total_s=time.perf_counter() - t0,
         file_times=file_times,
