@@ -6,7 +6,7 @@ a parameter sweep re-binds, it does not re-analyse. A one-shot process whose pla
 process analysed binds the frozen plan read from the cache, without sympy or the plugin module
 (:mod:`lmic.compile.frozen`).
 
-Importing this package is cheap: ``analyse``, ``bind`` and ``Plan`` are imported on first use.
+Importing this package does not import sympy: ``analyse`` and ``Plan`` are imported on first use.
 
 Examples
 --------
@@ -23,8 +23,11 @@ import os
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
+# bind is sympy-free (and a submodule of the same name: imported here, so that the package
+# attribute is the function, whatever imports lmic.compile.bind later)
+from lmic.compile.bind import bind
+
 if TYPE_CHECKING:
-    from lmic.compile.bind import bind
     from lmic.compile.plan import Plan, analyse
     from lmic.ir.problem import Problem
     from lmic.system import System
@@ -35,11 +38,11 @@ __all__ = ["compile_theorem", "plan_for", "analyse", "bind", "Plan"]
 _PLANS: dict[tuple[str, int, tuple[tuple[str, str], ...]], Plan] = {}
 #: per theorem: its structural options and their defaults (learnt at the first analysis)
 _OPTION_DEFAULTS: dict[tuple[str, int], dict[str, str]] = {}
-_LAZY = {"bind": "lmic.compile.bind", "analyse": "lmic.compile.plan", "Plan": "lmic.compile.plan"}
+_LAZY = {"analyse": "lmic.compile.plan", "Plan": "lmic.compile.plan"}
 
 
 def __getattr__(name: str) -> Any:
-    """``analyse``, ``bind`` and ``Plan`` (sympy) are imported on first use (PEP 562)."""
+    """``analyse`` and ``Plan`` (sympy) are imported on first use (PEP 562)."""
     if name in _LAZY:
         value = getattr(importlib.import_module(_LAZY[name]), name)
         globals()[name] = value
@@ -93,7 +96,6 @@ def compile_theorem(
         The IR; ``meta`` records the theorem, parameters and data hash (no timings, so that
         compiling the same inputs twice gives the same IR and the same hash).
     """
-    from lmic.compile.bind import bind
     from lmic.system import load_system
 
     sysobj = load_system(system)

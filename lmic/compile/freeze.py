@@ -213,40 +213,37 @@ def freeze(plan: Plan, parts: Mapping[str, str] | None = None) -> dict[str, Any]
 
 
 def remember(plan: Plan) -> bool:
-    """Store the frozen form of ``plan`` for the next process's :func:`~lmic.compile.frozen.warm_plan`.
+    """Store the frozen form of ``plan`` for the next process's :func:`~lmic.compile.warm.warm_plan`.
 
     Only for a theorem installed through an entry point, never ambiguous, and only when no
     plugin or lmic file changed since this process computed its fingerprint (before importing
     any plugin). Returns ``True`` when written.
     """
     from lmic import cache
-    from lmic.compile import warm as frozen
-    from lmic.plugin_index import fingerprint
+    from lmic.compile import warm
     from lmic.registry import conflicts
 
     if plan.cache.get("frozen_stored") is not None:
         return bool(plan.cache["frozen_stored"])
     plan.cache["frozen_stored"] = False  # tried once per plan and process
     provider = plan.theorem.provider
-    if not frozen._FINGERPRINT or frozen._FINGERPRINT[0] is None or provider is None or provider.is_api:
+    if provider is None or provider.is_api or any(c.id == plan.id for c in conflicts()):
         return False
-    if cache.cache_dir() is None or any(c.id == plan.id for c in conflicts()):
-        return False
-    before, after = frozen._FINGERPRINT[0], fingerprint()
-    if after is None or any(after[k] != before[k] for k in ("entry_points", "files")):
+    after = warm.stable_fingerprint()
+    if after is None:
         return False
     try:
         payload = freeze(plan)
         # what the next process reads must be what this one would bind
-        check = frozen.from_payload(payload, provider.to_dict())
+        check = warm.from_payload(payload, provider.to_dict())
     except (Unsupported, LmicError, ValueError, TypeError, KeyError):
         return False
     if check.options != plan.options:
         return False
     options = [[o.name, o.default] for o in plan.template.options]
-    cache.store(frozen.OPTIONS_KIND, {"fingerprint": after, "theorem": plan.id}, {"options": options})
+    cache.store(warm.OPTIONS_KIND, {"fingerprint": after, "theorem": plan.id}, {"options": options})
     stored = cache.store(
-        frozen.KIND, frozen.plan_key(after, plan.id, plan.options), {"plan": payload, "provider": provider.to_dict()}
+        warm.KIND, warm.plan_key(after, plan.id, plan.options), {"plan": payload, "provider": provider.to_dict()}
     )
     plan.cache["frozen_stored"] = stored
     return stored

@@ -42,6 +42,9 @@ __all__ = [
     "warm_plan",
     "plan_key",
     "fingerprint",
+    "stable_fingerprint",
+    "load_extra",
+    "store_extra",
 ]
 
 #: cache kinds: frozen plans, and each theorem's structural options (to key its plans)
@@ -340,6 +343,41 @@ def fingerprint() -> Any:
 
         _FINGERPRINT.append(compute())
     return _FINGERPRINT[0]
+
+
+def stable_fingerprint() -> Any:
+    """The fingerprint to store entries under, or ``None`` when storing is unsafe.
+
+    The fingerprint this process computed before importing any plugin must still describe the
+    same files and entry points (nothing was edited meanwhile); the entry goes under the state
+    now (importing may have written ``__pycache__`` folders into ``sys.path``), which is what the
+    next process computes first.
+    """
+    if not _FINGERPRINT or _FINGERPRINT[0] is None or cache.cache_dir() is None:
+        return None
+    from lmic.plugin_index import fingerprint as compute
+
+    before, after = _FINGERPRINT[0], compute()
+    if after is None or any(after[k] != before[k] for k in ("entry_points", "files")):
+        return None
+    return after
+
+
+def load_extra(kind: str, theorem_id: str) -> Any:
+    """Another per-theorem cache entry of the warm path (e.g. a study's template hash), or ``None``.
+
+    Valid under the same rules as the frozen plans (the plugin fingerprint is in the key).
+    """
+    if not _usable():
+        return None
+    fp = fingerprint()
+    return None if fp is None else cache.load(kind, {"fingerprint": fp, "theorem": theorem_id})
+
+
+def store_extra(kind: str, theorem_id: str, payload: Any) -> bool:
+    """Store what :func:`load_extra` reads (when :func:`stable_fingerprint` allows it)."""
+    fp = stable_fingerprint()
+    return fp is not None and cache.store(kind, {"fingerprint": fp, "theorem": theorem_id}, payload)
 
 
 def plan_key(fp: Any, theorem_id: str, options: Mapping[str, str]) -> dict[str, Any]:

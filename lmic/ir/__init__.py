@@ -17,18 +17,41 @@ Examples
 
 from __future__ import annotations
 
-from lmic.ir.io import load_problem, save_problem
-from lmic.ir.jsonio import problem_from_dict, problem_hash, problem_to_dict
-from lmic.ir.problem import (
-    LMI,
-    Check,
-    LinearConstraints,
-    NamedExpr,
-    Objective,
-    Problem,
-    Variable,
-)
-from lmic.ir.sdpa import read_sdpa, write_sdpa
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from lmic.ir.io import load_problem, save_problem
+    from lmic.ir.jsonio import problem_from_dict, problem_hash, problem_to_dict
+    from lmic.ir.problem import (
+        LMI,
+        Check,
+        LinearConstraints,
+        NamedExpr,
+        Objective,
+        Problem,
+        Variable,
+    )
+    from lmic.ir.sdpa import read_sdpa, write_sdpa
+
+# imported on first use (PEP 562): a process that needs lmic.ir.expr or lmic.ir.problem alone
+# does not load the file formats (JSON reader and writer, SDPA)
+_WHERE = {
+    "load_problem": "io",
+    "save_problem": "io",
+    "problem_from_dict": "jsonio",
+    "problem_hash": "jsonio",
+    "problem_to_dict": "jsonio",
+    "LMI": "problem",
+    "Check": "problem",
+    "LinearConstraints": "problem",
+    "NamedExpr": "problem",
+    "Objective": "problem",
+    "Problem": "problem",
+    "Variable": "problem",
+    "read_sdpa": "sdpa",
+    "write_sdpa": "sdpa",
+}
 
 __all__ = [
     "Problem",
@@ -46,3 +69,12 @@ __all__ = [
     "read_sdpa",
     "write_sdpa",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """The names above, imported from their module on first use."""
+    if name in _WHERE:
+        value = getattr(importlib.import_module(f"lmic.ir.{_WHERE[name]}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'lmic.ir' has no attribute {name!r}")

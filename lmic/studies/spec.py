@@ -194,30 +194,57 @@ def _number(v: Any) -> Any:
     return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else v
 
 
+#: the warm path's cache kind of a theorem's study template hash (lmic.compile.warm.load_extra)
+HASH_KIND = "study-template-hash"
+
+
 class _TheoremInfo:
-    """Declarations of one theorem (built once, default options plus the study's)."""
+    """Declarations of one theorem (built once, default options plus the study's).
+
+    When an earlier process analysed the theorem, its frozen plan (:mod:`lmic.compile.warm`)
+    gives the declarations and the cache the template hash: no plugin module, no sympy.
+    """
 
     def __init__(self, theorem_id: str, options: dict[str, Any], where: str) -> None:
-        from lmic.registry import get_theorem
+        from lmic.compile.warm import load_extra, store_extra, warm_plan
 
-        try:
-            self.theorem = get_theorem(theorem_id)
-        except LmicError:
-            raise DataError(f"{where}: theorem '{theorem_id}' is not registered (see lmic theorems)") from None
         self.id = theorem_id
-        self.template = self.theorem.template({k: v for k, v in options.items() if isinstance(v, str)})
+        chosen = {k: v for k, v in options.items() if isinstance(v, str)}
+        plan = warm_plan(theorem_id, chosen)
+        cached = load_extra(HASH_KIND, theorem_id) if plan is not None else None
+        if plan is not None and isinstance(cached, dict) and isinstance(cached.get("hash"), str):
+            self.template: Any = plan.template
+            self.hash = cached["hash"]
+        else:
+            from lmic.registry import get_theorem
+
+            try:
+                theorem = get_theorem(theorem_id)
+            except LmicError:
+                raise DataError(f"{where}: theorem '{theorem_id}' is not registered (see lmic theorems)") from None
+            self.template = theorem.template(chosen)
+            self.hash = template_hash(theorem_id)
+            if theorem.provider is not None and not theorem.provider.is_api:
+                store_extra(HASH_KIND, theorem_id, {"hash": self.hash})
         self.param_names = {p.name for p in self.template.params} | {o.name for o in self.template.options}
-        self.hash = template_hash(theorem_id)
 
     def check_values(self, values: dict[str, Any], where: str, what: str) -> None:
         """Numbers outside a parameter's declared domain are bad input (before any job runs)."""
-        import sympy
+        from lmic.compile.frozen import Domain
 
         decls = {p.name: p for p in self.template.params}
         for name, v in values.items():
             decl = decls.get(name)
             if decl is None or not isinstance(v, float):
                 continue
+            if isinstance(decl.domain, Domain):  # a frozen plan's (decisive)
+                if not decl.domain.contains_number(v):
+                    raise DataError(
+                        f"{where}: {what} '{name}' = {v:g} is outside its domain {decl.domain} in {self.id}"
+                    )
+                continue
+            import sympy
+
             inside = decl.domain.contains(sympy.Float(v))
             if inside not in (sympy.true, sympy.false) and v.is_integer():
                 inside = decl.domain.contains(sympy.Integer(int(v)))
