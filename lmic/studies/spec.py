@@ -226,6 +226,7 @@ class _TheoremInfo:
             self.hash = template_hash(theorem_id)
             if theorem.provider is not None and not theorem.provider.is_api:
                 store_extra(HASH_KIND, theorem_id, {"hash": self.hash})
+                _freeze_for_next_time(theorem, chosen)
         self.param_names = {p.name for p in self.template.params} | {o.name for o in self.template.options}
 
     def check_values(self, values: dict[str, Any], where: str, what: str) -> None:
@@ -256,6 +257,18 @@ class _TheoremInfo:
             if name not in self.param_names:
                 known = ", ".join(sorted(self.param_names)) or "none"
                 raise DataError(f"{where}: {what} '{name}' is not a parameter of {self.id} (its parameters: {known})")
+
+
+def _freeze_for_next_time(theorem: Any, options: dict[str, Any]) -> None:
+    """Store the theorem's frozen plan under this process's fingerprint (the next study loads
+    without sympy); the runners store theirs too, but a runner's ``sys.path`` may differ."""
+    from lmic.compile import plan_for
+    from lmic.compile.freeze import remember
+
+    try:
+        remember(plan_for(theorem, options))
+    except LmicError:  # a template that does not analyse: its jobs report it
+        pass
 
 
 def _files(spec: dict[str, Any], base: Path, where: str) -> list[Path]:
