@@ -8,6 +8,10 @@ system files, grids are well formed) and expands the jobs, each with a content h
 (theorem template, system data, parameters, task, backend, task options). Anything wrong is one
 :class:`~lmic.errors.DataError` line naming the study file and the key.
 
+Warm runs (lmic's cache, :mod:`lmic.cache`): a document that passed the schema before is not
+validated again, and a theorem an earlier process analysed is read from its frozen plan
+(:mod:`lmic.compile.warm`): a warm study loads without jsonschema, sympy or the plugin module.
+
 Examples
 --------
 >>> study = load_study({"theorem": "thesis.lyapunov",
@@ -170,20 +174,49 @@ def _read(path: Path) -> Any:
         raise DataError(f"{path.name}: malformed YAML{line}: {problem}") from None
 
 
-def _validate(raw: Any, where: str) -> None:
-    import jsonschema
+#: the cache kind of study documents known to pass the schema (lmic.cache)
+VALID_KIND = "study-valid"
 
+
+def _validation_key(raw: Any, schema: Any) -> dict[str, Any] | None:
+    """What a successful validation of ``raw`` depends on: the document, the schema, jsonschema's
+    version (``None`` when the document is not plain JSON: then it is always validated)."""
+    from importlib import metadata
+
+    try:
+        doc = json.dumps(raw, sort_keys=True, separators=(",", ":"), allow_nan=False)
+        version = metadata.version("jsonschema")
+    except (TypeError, ValueError, metadata.PackageNotFoundError):
+        return None
+    digest = hashlib.sha256(doc.encode()).hexdigest()
+    return {
+        "document": digest,
+        "schema": hashlib.sha256(canonical_json(schema).encode()).hexdigest(),
+        "jsonschema": version,
+    }
+
+
+def _validate(raw: Any, where: str) -> None:
+    from lmic import cache
     from lmic.schemas import load_schema
 
     if not isinstance(raw, dict):
         raise DataError(f"{where}: a study file is a mapping with keys theorem, systems, grid, task ...")
-    validator = jsonschema.Draft202012Validator(load_schema("study"))
+    schema = load_schema("study")
+    key = _validation_key(raw, schema)
+    if key is not None and cache.load(VALID_KIND, key) is True:
+        return  # this very document passed this very schema before: jsonschema is not imported
+    import jsonschema
+
+    validator = jsonschema.Draft202012Validator(schema)
     errors = sorted(validator.iter_errors(raw), key=lambda e: (len(e.absolute_path), list(map(str, e.absolute_path))))
     if errors:
         err = errors[0]
         loc = "/".join(str(p) for p in err.absolute_path) or "(top level)"
         msg = err.message if len(err.message) < 160 else err.message[:157] + "..."
         raise DataError(f"{where}: {loc}: {msg}")
+    if key is not None:
+        cache.store(VALID_KIND, key, True)
 
 
 def _jsonable(obj: Any) -> Any:

@@ -32,8 +32,14 @@ LOAD = textwrap.dedent(
         bad = None
     except DataError as err:
         bad = str(err)
+    jsonschema = "jsonschema" in sys.modules
+    try:
+        load_study({"theorem": "qib.thm1", "task": "solve", "systems": {"random": {"count": 0}}, "colour": 1})
+        invalid = None
+    except DataError as err:
+        invalid = str(err)
     print(json.dumps({"hashes": [j.hash for j in study.jobs], "systems": [j.system for j in study.jobs[:3]],
-                      "bad": bad, "sympy": "sympy" in sys.modules}))
+                      "bad": bad, "invalid": invalid, "sympy": "sympy" in sys.modules, "jsonschema": jsonschema}))
     """
 )
 
@@ -55,6 +61,10 @@ def test_a_warm_study_load_imports_no_sympy_and_expands_the_same_jobs(tmp_path):
     assert warm["systems"] == cold["systems"]
     # a parameter outside its declared domain (lambda > 0): the same one line
     assert "outside its domain" in cold["bad"] and warm["bad"] == cold["bad"]
+    # a document that passed the schema once is not validated again (jsonschema not imported);
+    # one that fails is never remembered: the same one line every time
+    assert cold["jsonschema"] is True and warm["jsonschema"] is False
+    assert cold["invalid"] and warm["invalid"] == cold["invalid"]
 
 
 def test_a_warm_batch_gives_the_cold_outcomes(tmp_path):
