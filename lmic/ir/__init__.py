@@ -10,6 +10,7 @@
 
 Examples
 --------
+>>> from lmic.ir import problem_from_dict, problem_to_dict, read_sdpa
 >>> p = read_sdpa("1\\n1\\n1\\n1.0\\n0 1 1 1 2.0\\n1 1 1 1 1.0\\n")
 >>> problem_from_dict(problem_to_dict(p)).lmis[0].name
 'block 1'
