@@ -58,16 +58,18 @@ def rotate(items: list[str], k: int) -> list[str]:
     return items[k:] + items[:k]
 
 
-#: the cache folder of every run (set by main)
+#: the cache folder of every run (set by main), and the checkout compared with (--compare)
 CACHE: dict[str, str] = {}
+COMPARE: dict[str, Path] = {}
 
 
-def _env() -> dict[str, str]:
-    paths = [str(REPO), str(REPO / "plugins")]
+def _env(root: Path = REPO) -> dict[str, str]:
+    paths = [str(root), str(root / "plugins")]
     old = os.environ.get("PYTHONPATH")
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(paths + ([old] if old else []))}
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(paths + ([old] if old and root == REPO else []))}
     env.pop("LMIC_NO_CACHE", None)
-    return {**env, **CACHE}
+    cache = {k: v + ("-compare" if root != REPO else "") for k, v in CACHE.items()}
+    return {**env, **cache}
 
 
 def _write_plants(folder: Path) -> tuple[list[Path], dict[str, Any]]:
@@ -93,10 +95,10 @@ def _cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def _run(cmd: list[str], timeout: float) -> tuple[float, float]:
+def _run(cmd: list[str], timeout: float, root: Path = REPO) -> tuple[float, float]:
     """Wall and CPU seconds of ``cmd`` (CPU: every process it started and waited for)."""
     c0, t0 = _cpu(), time.perf_counter()
-    proc = subprocess.run(cmd, env=_env(), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, timeout=timeout)
+    proc = subprocess.run(cmd, env=_env(root), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, timeout=timeout)
     elapsed, cpu = time.perf_counter() - t0, _cpu() - c0
     if proc.returncode not in (0, 1, 3):
         raise RuntimeError(f"{' '.join(cmd[:4])}...: exit {proc.returncode}: {proc.stderr.decode()[-300:]}")
@@ -104,21 +106,29 @@ def _run(cmd: list[str], timeout: float) -> tuple[float, float]:
 
 
 def measure(method: str, plants: list[Path], params: dict[str, Any], loop_jobs: int, work: Path) -> dict[str, Any]:
-    """One timed run of ``method``: ``{"jobs", "seconds", "cpu_s", "jobs_per_s", "load"}``."""
+    """One timed run of ``method``: ``{"jobs", "seconds", "cpu_s", "jobs_per_s", "load"}``.
+
+    ``METHOD@compare`` runs ``METHOD`` with the code of the ``--compare`` checkout.
+    """
     lmic = [sys.executable, "-m", "lmic.cli"]
+    root = REPO
+    if method.endswith("@compare"):
+        method, root = method[: -len("@compare")], COMPARE["root"]
     load_before = os.getloadavg()[0]
     if method == "shell":
         sel = plants[:loop_jobs]
         pflags = " ".join(f"-p {k}={v}" for k, v in params.items())
         script = "; ".join(f"{' '.join(lmic)} solve qib.thm1 {p} {pflags} --json >/dev/null" for p in sel)
-        seconds, cpu = _run(["bash", "-c", script], timeout=3600)
+        seconds, cpu = _run(["bash", "-c", script], timeout=3600, root=root)
         jobs = len(sel)
     else:
         out = Path(tempfile.mkdtemp(dir=work, prefix=f"{method}-"))
         workers = method.split("-")[1]
         extra = ["--executor", "dask"] if method.startswith("dask") else []
         seconds, cpu = _run(
-            [*lmic, "batch", str(STUDY), "-o", str(out), "--workers", workers, "--no-progress", *extra], timeout=3600
+            [*lmic, "batch", str(STUDY), "-o", str(out), "--workers", workers, "--no-progress", *extra],
+            timeout=3600,
+            root=root,
         )
         lines = (out / "results.jsonl").read_text(encoding="utf-8").splitlines()
         jobs = len(lines)
@@ -134,14 +144,14 @@ def measure(method: str, plants: list[Path], params: dict[str, Any], loop_jobs: 
     }
 
 
-def _warm_up(plant: Path, params: dict[str, Any], work: Path) -> None:
+def _warm_up(plant: Path, params: dict[str, Any], work: Path, root: Path = REPO) -> None:
     """Fill the cache folder: a 2-job version of the study and one ``lmic solve``."""
     small = work / "warm-up.yaml"
     small.write_text(STUDY.read_text(encoding="utf-8").replace("count: 200", "count: 2"), encoding="utf-8")
     lmic = [sys.executable, "-m", "lmic.cli"]
-    _run([*lmic, "batch", str(small), "-o", str(work / "warm-up"), "--workers", "1", "--no-progress"], 600)
+    _run([*lmic, "batch", str(small), "-o", str(work / "warm-up"), "--workers", "1", "--no-progress"], 600, root)
     pflags = [f"-p{k}={v}" for k, v in params.items()]
-    _run([*lmic, "solve", "qib.thm1", str(plant), *pflags, "--json"], 600)
+    _run([*lmic, "solve", "qib.thm1", str(plant), *pflags, "--json"], 600, root)
     shutil.rmtree(work / "warm-up", ignore_errors=True)
 
 
@@ -152,13 +162,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--loop-jobs", type=int, default=20)
     ap.add_argument("--methods", default=",".join(METHODS))
     ap.add_argument("--json", default=None)
+    ap.add_argument("--compare", default=None, help="another checkout: its batch-1 and batch-2 too (before/after)")
     args = ap.parse_args(argv)
     methods = args.methods.split(",")
+    if args.compare:
+        COMPARE["root"] = Path(args.compare).resolve()
+        methods += [f"{m}@compare" for m in ("batch-1", "batch-2")]
     work = Path(tempfile.mkdtemp(prefix="lmic-batch-bench-"))
     CACHE["LMIC_CACHE_DIR"] = str(work / "cache")
     try:
         plants, params = _write_plants(work)
         _warm_up(plants[0], params, work)
+        if args.compare:
+            _warm_up(plants[0], params, work, COMPARE["root"])
         runs: dict[str, list[dict[str, Any]]] = {m: [] for m in methods}
         for r in range(args.repeat):
             for m in rotate(methods, r):
@@ -192,6 +208,16 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"batch-2 / batch-1: {summary['scaling_1_to_2']:.2f}x, efficiency "
             f"{summary['scaling_1_to_2'] / 2:.0%} (target > 1.7x)"
+        )
+    if "batch-1@compare" in med:
+        comp = med["batch-2@compare"] / med["batch-1@compare"]
+        per = [
+            b["jobs_per_s"] / a["jobs_per_s"]
+            for a, b in zip(runs["batch-1@compare"], runs["batch-2@compare"], strict=True)
+        ]
+        print(
+            f"--compare {COMPARE['root']}: batch-2 / batch-1 {comp:.2f}x; per round "
+            + ", ".join(f"{x:.2f}x" for x in per)
         )
     if "dask-2" in med and "batch-2" in med:
         print(f"dask-2 / batch-2: {med['dask-2'] / med['batch-2']:.2f}x")

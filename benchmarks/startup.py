@@ -34,7 +34,7 @@ Every process runs the code of this checkout (``PYTHONPATH`` = the checkout and 
 
     python benchmarks/startup.py                # 7 rounds
     python benchmarks/startup.py --rounds 11 --n 30
-    python benchmarks/startup.py --rounds 5 --split 10,20,30,40,50 --only split
+    python benchmarks/startup.py --rounds 5 --split 10,20,30,40,50 --only split --compare /work/main
 
 Examples
 --------
@@ -104,11 +104,12 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--n", type=int, default=0, help="also a warm solve of a random N-state qib.thm1 system")
     ap.add_argument("--split", default="", help="sizes n of the one-shot split (e.g. 10,30,50)")
     ap.add_argument("--only", default="startup,plans,split", help="tables to run")
+    ap.add_argument("--compare", default="", help="--split: also another checkout (before/after), interleaved")
     args = ap.parse_args(argv)
     work = Path(tempfile.mkdtemp(prefix="lmic-startup-"))
     only = set(args.only.split(","))
     if args.split and "split" in only:
-        split_table([int(v) for v in args.split.split(",") if v], args.rounds, work)
+        split_table([int(v) for v in args.split.split(",") if v], args.rounds, work, args.compare)
     if "startup" not in only:
         shutil.rmtree(work, ignore_errors=True)
         return
@@ -270,32 +271,46 @@ def split_parts(rec: dict[str, Any]) -> dict[str, float]:
     return parts
 
 
-def split_table(sizes: list[int], rounds: int, work: Path) -> None:
-    """Print the one-shot split of warm ``lmic solve qib.thm1`` runs (interleaved over sizes)."""
-    warm = work / "split-cache"
-    env = _env(LMIC_CACHE_DIR=str(warm))
+def split_table(sizes: list[int], rounds: int, work: Path, compare: str = "") -> None:
+    """Print the one-shot split of warm ``lmic solve qib.thm1`` runs (interleaved over sizes).
+
+    ``compare``: another checkout (e.g. ``/work/main``) run the same way in the same rounds, for
+    a before/after table (its own cache folder, warmed the same way).
+    """
+    roots = {"this": ROOT} | ({"compare": Path(compare).resolve()} if compare else {})
+    envs = {}
+    for label, root in roots.items():
+        env = _env(LMIC_CACHE_DIR=str(work / f"split-cache-{label}"))
+        env["PYTHONPATH"] = os.pathsep.join([str(root), str(root / "plugins")])
+        envs[label] = env
     systems = {}
-    modules: dict[int, list[str]] = {}
+    modules: dict[tuple[str, int], list[str]] = {}
     for n in sizes:
         systems[n] = work / f"split-qib{n}.json"
         _random_qib_system(n, systems[n])
         argv = ["solve", "qib.thm1", str(systems[n]), "--json"]
-        one_shot(argv, env)  # cold: analyses and stores the plan
-        modules[n] = one_shot(argv, env)["modules"]  # warm: what the warm path imports
-    recs: dict[int, list[dict[str, Any]]] = {n: [] for n in sizes}
+        for label, env in envs.items():
+            one_shot(argv, env)  # cold: analyses and stores the plan
+            modules[(label, n)] = one_shot(argv, env)["modules"]  # warm: what the warm path imports
+    keys = [(label, n) for n in sizes for label in envs]
+    recs: dict[tuple[str, int], list[dict[str, Any]]] = {k: [] for k in keys}
     for r in range(rounds):
-        for n in sizes[r % len(sizes) :] + sizes[: r % len(sizes)]:
-            recs[n].append(one_shot(["solve", "qib.thm1", str(systems[n]), "--json"], env, modules[n]))
+        for label, n in keys[r % len(keys) :] + keys[: r % len(keys)]:
+            argv = ["solve", "qib.thm1", str(systems[n]), "--json"]
+            recs[(label, n)].append(one_shot(argv, envs[label], modules[(label, n)]))
     cols = ["python", "imports", "load/bind", "lower", "solver", "certify", "output", "wall"]
     print(f"one-shot 'lmic solve qib.thm1 SYSTEM --json', warm plan cache, {rounds} interleaved rounds, medians (s)")
-    print(f"{'n':>3} " + " ".join(f"{c:>9}" for c in cols) + f" {'share':>6} {'share ex.':>9} {'sympy':>6} verdict")
-    for n in sizes:
-        parts = [split_parts(x) for x in recs[n]]
+    if compare:
+        print(f"  this = {ROOT}, compare = {roots['compare']}")
+    head = f"{'n':>3} {'code':>7} " + " ".join(f"{c:>9}" for c in cols)
+    print(head + f" {'share':>6} {'share ex.':>9} {'sympy':>6} verdict")
+    for label, n in keys:
+        parts = [split_parts(x) for x in recs[(label, n)]]
         med = {k: statistics.median(p[k] for p in parts) for k in parts[0]}
-        sympy = any(x["sympy"] for x in recs[n])
+        sympy = any(x["sympy"] for x in recs[(label, n)])
         cells = " ".join(f"{med[c]:9.3f}" for c in cols)
-        verdict = recs[n][-1]["verdict"]
-        print(f"{n:3d} {cells} {med['share']:6.0%} {med['share ex.']:9.0%} {str(sympy):>6} {verdict}")
+        verdict = recs[(label, n)][-1]["verdict"]
+        print(f"{n:3d} {label:>7} {cells} {med['share']:6.0%} {med['share ex.']:9.0%} {str(sympy):>6} {verdict}")
     load = os.getloadavg() if hasattr(os, "getloadavg") else None
     print(f"load average {load}; share = 1 - solver/wall; share ex. leaves out python start and numpy/scipy imports")
 
