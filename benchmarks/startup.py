@@ -225,17 +225,20 @@ sys.stderr.write("\\nSPLIT " + json.dumps({
 """
 
 
-def one_shot(argv: list[str], env: dict[str, str], modules: list[str] | None = None) -> dict[str, Any]:
+def one_shot(
+    argv: list[str], env: dict[str, str], modules: list[str] | None = None, cwd: Path = ROOT
+) -> dict[str, Any]:
     """One ``lmic`` process run through :data:`SPLIT_DRIVER`: its wall time and its split.
 
     ``modules``: imported up front (a first run's ``modules``); ``None`` imports nothing first.
+    ``cwd``: the working folder (``python -c`` puts it first on ``sys.path``: the checkout run).
     Returns the driver's record plus ``wall_s``, the JSON result's ``timings`` and ``verdict``.
     """
     t0 = time.perf_counter()
     out = subprocess.run(
         [sys.executable, "-c", SPLIT_DRIVER, json.dumps(modules or []), *argv],
         env=env,
-        cwd=ROOT,
+        cwd=cwd,
         capture_output=True,
         text=True,
     )
@@ -290,14 +293,14 @@ def split_table(sizes: list[int], rounds: int, work: Path, compare: str = "") ->
         _random_qib_system(n, systems[n])
         argv = ["solve", "qib.thm1", str(systems[n]), "--json"]
         for label, env in envs.items():
-            one_shot(argv, env)  # cold: analyses and stores the plan
-            modules[(label, n)] = one_shot(argv, env)["modules"]  # warm: what the warm path imports
+            one_shot(argv, env, cwd=roots[label])  # cold: analyses and stores the plan
+            modules[(label, n)] = one_shot(argv, env, cwd=roots[label])["modules"]  # warm: what it imports
     keys = [(label, n) for n in sizes for label in envs]
     recs: dict[tuple[str, int], list[dict[str, Any]]] = {k: [] for k in keys}
     for r in range(rounds):
         for label, n in keys[r % len(keys) :] + keys[: r % len(keys)]:
             argv = ["solve", "qib.thm1", str(systems[n]), "--json"]
-            recs[(label, n)].append(one_shot(argv, envs[label], modules[(label, n)]))
+            recs[(label, n)].append(one_shot(argv, envs[label], modules[(label, n)], roots[label]))
     cols = ["python", "imports", "load/bind", "lower", "solver", "certify", "output", "wall"]
     print(f"one-shot 'lmic solve qib.thm1 SYSTEM --json', warm plan cache, {rounds} interleaved rounds, medians (s)")
     if compare:
