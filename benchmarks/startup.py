@@ -17,13 +17,24 @@ theorems`` at most 6x). Methods:
   solver's own time, from the JSON) -- for the small example (where start-up dominates) and,
   with ``--n N``, for a random ``N``-state ``qib.thm1`` system;
 * ``plan_for`` alone in a new process (imports excluded): template build plus analysis with the
-  cache off, with an empty cache (analysis + storing) and warm (cache read), for three theorems.
+  cache off, with an empty cache (analysis + storing) and warm (cache read), for three theorems;
+* the **one-shot split** (``--split 10,30,50``): a warm ``lmic solve qib.thm1 SYSTEM --json`` on
+  random ``n``-state systems, each process split into *python* (interpreter start and exit:
+  the wall time minus what the driver measures inside), *imports* (every module the solve
+  imports, imported up front in the order a first run imported them), *load/bind*
+  (``compile_s``: system file, warm plan, bind), *lower* (``lower_s``), *solver* (``solve_s``,
+  the solver's own time), *certify* (``certify_s`` + ``enclosure_s``) and *output* (the rest of
+  ``main``: arguments, the JSON written). ``share`` is lmic's share, everything but the solver
+  (``1 - solver / wall``); ``share ex.`` leaves out the interpreter and the imports of numpy and
+  scipy too (what a process must pay before any lmic code runs); ``sympy`` says whether the
+  process imported sympy (it must not when warm).
 
 Every process runs the code of this checkout (``PYTHONPATH`` = the checkout and its
 ``plugins/``). Usage::
 
     python benchmarks/startup.py                # 7 rounds
     python benchmarks/startup.py --rounds 11 --n 30
+    python benchmarks/startup.py --rounds 5 --split 10,20,30,40,50 --only split --compare /work/main
 
 Examples
 --------
@@ -91,8 +102,17 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--n", type=int, default=0, help="also a warm solve of a random N-state qib.thm1 system")
+    ap.add_argument("--split", default="", help="sizes n of the one-shot split (e.g. 10,30,50)")
+    ap.add_argument("--only", default="startup,plans,split", help="tables to run")
+    ap.add_argument("--compare", default="", help="--split: also another checkout (before/after), interleaved")
     args = ap.parse_args(argv)
     work = Path(tempfile.mkdtemp(prefix="lmic-startup-"))
+    only = set(args.only.split(","))
+    if args.split and "split" in only:
+        split_table([int(v) for v in args.split.split(",") if v], args.rounds, work, args.compare)
+    if "startup" not in only:
+        shutil.rmtree(work, ignore_errors=True)
+        return
     warm_dir = work / "warm"
     solve = [*LMIC, "solve", "qib.thm1", str(EXAMPLE), "--json"]
     methods: dict[str, tuple[list[str], Any]] = {
@@ -139,7 +159,8 @@ def main(argv: list[str] | None = None) -> None:
     cold = statistics.median(t["compile_s"] for t in timings["lmic solve (plan cache cold)"])
     warm = statistics.median(t["compile_s"] for t in timings["lmic solve (plan cache warm)"])
     print(f"plan cache: compile_s {cold:.3f} s cold -> {warm:.3f} s warm ({cold - warm:+.3f} s of analysis skipped)")
-    _plan_times(args.rounds, work)
+    if "plans" in only:
+        _plan_times(args.rounds, work)
     shutil.rmtree(work, ignore_errors=True)
 
 
@@ -176,6 +197,125 @@ def _plan_times(rounds: int, work: Path) -> None:
     for tid in ids:
         off, cold, warm = (statistics.median(times[(tid, m)]) for m in ("off", "cold", "warm"))
         print(f"{tid:22} {off:9.3f} {cold:9.3f} {warm:9.3f} {warm / off:13.2f}x")
+
+
+SPLIT_DRIVER = """
+import importlib, io, json, sys, time
+from contextlib import redirect_stdout
+t_enter = time.perf_counter()
+modules, argv = json.loads(sys.argv[1]), sys.argv[2:]
+third = 0.0
+for name in modules:
+    t = time.perf_counter()
+    try:
+        importlib.import_module(name)
+    except Exception:
+        pass
+    if name.split(".")[0] in ("numpy", "scipy"):
+        third += time.perf_counter() - t
+t_imported = time.perf_counter()
+from lmic.cli import main
+buf = io.StringIO()
+with redirect_stdout(buf):
+    rc = main(argv)
+t_done = time.perf_counter()
+sys.stderr.write("\\nSPLIT " + json.dumps({
+    "rc": rc, "imports_s": t_imported - t_enter, "numpy_scipy_s": third, "main_s": t_done - t_imported,
+    "stdout": buf.getvalue(), "modules": list(sys.modules), "sympy": "sympy" in sys.modules}) + "\\n")
+"""
+
+
+def one_shot(
+    argv: list[str], env: dict[str, str], modules: list[str] | None = None, cwd: Path = ROOT
+) -> dict[str, Any]:
+    """One ``lmic`` process run through :data:`SPLIT_DRIVER`: its wall time and its split.
+
+    ``modules``: imported up front (a first run's ``modules``); ``None`` imports nothing first.
+    ``cwd``: the working folder (``python -c`` puts it first on ``sys.path``: the checkout run).
+    Returns the driver's record plus ``wall_s``, the JSON result's ``timings`` and ``verdict``.
+    """
+    t0 = time.perf_counter()
+    out = subprocess.run(
+        [sys.executable, "-c", SPLIT_DRIVER, json.dumps(modules or []), *argv],
+        env=env,
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+    )
+    wall = time.perf_counter() - t0
+    lines = [x for x in out.stderr.splitlines() if x.startswith("SPLIT ")]
+    if not lines:
+        raise SystemExit(f"lmic {' '.join(argv)}: {out.stderr.strip()[-300:]}")
+    rec = json.loads(lines[-1][6:])
+    rec["wall_s"] = wall
+    result = json.loads(rec["stdout"]) if rec["stdout"].lstrip().startswith("{") else {}
+    rec["timings"] = result.get("timings", {})
+    rec["verdict"] = result.get("verdict")
+    return rec
+
+
+def split_parts(rec: dict[str, Any]) -> dict[str, float]:
+    """The phases of one :func:`one_shot` record (seconds) and the two shares."""
+    t = rec["timings"]
+    inside = sum(t.get(k, 0.0) for k in ("compile_s", "lower_s", "solve_s", "certify_s", "enclosure_s"))
+    parts = {
+        "python": rec["wall_s"] - rec["imports_s"] - rec["main_s"],
+        "imports": rec["imports_s"],
+        "load/bind": t.get("compile_s", 0.0),
+        "lower": t.get("lower_s", 0.0),
+        "solver": t.get("solve_s", 0.0),
+        "certify": t.get("certify_s", 0.0) + t.get("enclosure_s", 0.0),
+        "output": rec["main_s"] - inside,
+        "wall": rec["wall_s"],
+    }
+    parts["share"] = 1 - parts["solver"] / parts["wall"]
+    rest = parts["wall"] - parts["python"] - rec["numpy_scipy_s"]
+    parts["share ex."] = 1 - parts["solver"] / rest
+    return parts
+
+
+def split_table(sizes: list[int], rounds: int, work: Path, compare: str = "") -> None:
+    """Print the one-shot split of warm ``lmic solve qib.thm1`` runs (interleaved over sizes).
+
+    ``compare``: another checkout (e.g. ``/work/main``) run the same way in the same rounds, for
+    a before/after table (its own cache folder, warmed the same way).
+    """
+    roots = {"this": ROOT} | ({"compare": Path(compare).resolve()} if compare else {})
+    envs = {}
+    for label, root in roots.items():
+        env = _env(LMIC_CACHE_DIR=str(work / f"split-cache-{label}"))
+        env["PYTHONPATH"] = os.pathsep.join([str(root), str(root / "plugins")])
+        envs[label] = env
+    systems = {}
+    modules: dict[tuple[str, int], list[str]] = {}
+    for n in sizes:
+        systems[n] = work / f"split-qib{n}.json"
+        _random_qib_system(n, systems[n])
+        argv = ["solve", "qib.thm1", str(systems[n]), "--json"]
+        for label, env in envs.items():
+            one_shot(argv, env, cwd=roots[label])  # cold: analyses and stores the plan
+            modules[(label, n)] = one_shot(argv, env, cwd=roots[label])["modules"]  # warm: what it imports
+    keys = [(label, n) for n in sizes for label in envs]
+    recs: dict[tuple[str, int], list[dict[str, Any]]] = {k: [] for k in keys}
+    for r in range(rounds):
+        for label, n in keys[r % len(keys) :] + keys[: r % len(keys)]:
+            argv = ["solve", "qib.thm1", str(systems[n]), "--json"]
+            recs[(label, n)].append(one_shot(argv, envs[label], modules[(label, n)], roots[label]))
+    cols = ["python", "imports", "load/bind", "lower", "solver", "certify", "output", "wall"]
+    print(f"one-shot 'lmic solve qib.thm1 SYSTEM --json', warm plan cache, {rounds} interleaved rounds, medians (s)")
+    if compare:
+        print(f"  this = {ROOT}, compare = {roots['compare']}")
+    head = f"{'n':>3} {'code':>7} " + " ".join(f"{c:>9}" for c in cols)
+    print(head + f" {'share':>6} {'share ex.':>9} {'sympy':>6} verdict")
+    for label, n in keys:
+        parts = [split_parts(x) for x in recs[(label, n)]]
+        med = {k: statistics.median(p[k] for p in parts) for k in parts[0]}
+        sympy = any(x["sympy"] for x in recs[(label, n)])
+        cells = " ".join(f"{med[c]:9.3f}" for c in cols)
+        verdict = recs[(label, n)][-1]["verdict"]
+        print(f"{n:3d} {label:>7} {cells} {med['share']:6.0%} {med['share ex.']:9.0%} {str(sympy):>6} {verdict}")
+    load = os.getloadavg() if hasattr(os, "getloadavg") else None
+    print(f"load average {load}; share = 1 - solver/wall; share ex. leaves out python start and numpy/scipy imports")
 
 
 if __name__ == "__main__":

@@ -24,10 +24,11 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeGuard, cast
 
 import numpy as np
 
@@ -212,15 +213,13 @@ def load_target(
         if system is not None or params:
             raise LmicError("a system and parameters apply to a theorem, not to an IR problem")
         return target, target.meta.get("theorem"), time.perf_counter() - t0
-    from lmic.template.theorem import Theorem
-
-    if isinstance(target, Theorem):  # an inline theorem (notebook): no registration needed
+    if _is_theorem(target):  # an inline theorem (notebook): no registration needed
         if system is None:
             raise LmicError(f"theorem {target.id}: give a system (file, dict or StateSpace) to solve it")
         from lmic.compile import compile_theorem
 
         return compile_theorem(target, system, params), target.id, time.perf_counter() - t0
-    text = os.fspath(target)
+    text = os.fspath(cast("str | os.PathLike[str]", target))  # not a Problem, not a Theorem
     if text.endswith(_FILE_SUFFIXES) or (Path(text).is_file() and system is None):
         if system is not None:
             shown = getattr(system, "label", None) or (system if isinstance(system, str | os.PathLike) else "a system")
@@ -242,6 +241,13 @@ def load_target(
 
     problem = compile_theorem(text, system, params)
     return problem, text, time.perf_counter() - t0
+
+
+def _is_theorem(obj: Any) -> TypeGuard[Theorem]:
+    """Whether ``obj`` is a :class:`~lmic.template.theorem.Theorem`, without importing the
+    template layer (sympy) when it was never loaded (then ``obj`` cannot be one)."""
+    module = sys.modules.get("lmic.template.theorem")
+    return module is not None and isinstance(obj, module.Theorem)
 
 
 def _backend(spec: str | Backend) -> Backend:
@@ -477,6 +483,8 @@ def _backoff(
 
 
 def _enclosure_summary(enc: dict[str, Any] | None) -> dict[str, Any] | None:
+    if enc is None:  # a feasibility problem: the enclosure module is not even imported
+        return None
     from lmic.certify.enclosure import summary
 
     return to_jsonable(summary(enc))

@@ -115,9 +115,14 @@ def fingerprint() -> dict[str, Any] | None:
     try:
         eps = []
         tops: set[str] = set()
+        dists: dict[str, tuple[str, str]] = {}  # a distribution's metadata is parsed once, not per entry point
         for ep in entry_points(group=GROUP):
             dist = getattr(ep, "dist", None)
-            eps.append([ep.name, ep.value, str(getattr(dist, "name", "")), str(getattr(dist, "version", ""))])
+            where = str(getattr(dist, "_path", None) or id(dist))
+            if where not in dists:
+                meta = getattr(dist, "metadata", None) if dist is not None else None
+                dists[where] = (str(meta["Name"] or ""), str(meta["Version"] or "")) if meta is not None else ("", "")
+            eps.append([ep.name, ep.value, *dists[where]])
             tops.add(ep.value.split(":")[0].split(".")[0].strip())
         files: dict[str, Any] = {"lmic": _files(Path(__file__).resolve().parent)}
         for top in sorted(tops):

@@ -14,6 +14,7 @@ Examples
 from __future__ import annotations
 
 import fnmatch
+import functools
 import hashlib
 import json
 from dataclasses import replace
@@ -72,6 +73,7 @@ CLAIMED = (
 )
 
 
+@functools.lru_cache(maxsize=8192)  # the same paths come back for every list item and certificate
 def _matches(path: str, patterns: tuple[str, ...]) -> bool:
     parts = path.split(".")
     for pat in patterns:

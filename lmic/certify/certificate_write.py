@@ -11,6 +11,7 @@ True
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 import json
 import os
 from pathlib import Path
@@ -44,9 +45,19 @@ def _json(value: Any) -> Any:
     return to_jsonable(value, nonfinite="string")
 
 
-def _versions(backend: str, info: dict[str, Any]) -> dict[str, str]:
+@functools.lru_cache(maxsize=64)
+def _installed_version(name: str) -> str | None:
+    """The installed version of distribution ``name`` (read once per process: a study's worker
+    writes hundreds of certificates)."""
     from importlib import metadata
 
+    try:
+        return metadata.version(name)
+    except metadata.PackageNotFoundError:
+        return None
+
+
+def _versions(backend: str, info: dict[str, Any]) -> dict[str, str]:
     out: dict[str, str] = {"lmic": __version__}
     names = {"numpy", "scipy", "python-flint"}
     head = backend.split(":")[0].lower()
@@ -56,10 +67,9 @@ def _versions(backend: str, info: dict[str, Any]) -> dict[str, str]:
     if tail in _PACKAGES:
         names.add(_PACKAGES[tail])
     for name in sorted(names):
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            continue
+        version = _installed_version(name)
+        if version is not None:
+            out[name] = version
     for key in ("version", "solver_version"):
         if isinstance(info.get(key), str):
             out["solver"] = info[key]

@@ -143,14 +143,16 @@ def run(args: argparse.Namespace) -> int:
     route = getattr(result, "route", None)  # lmic.routes: the backends tried, method, verdict
     if route and route.get("text"):
         print(route["text"])
-    # -- optimal-value enclosure (lmic.certify.enclosure) --
-    from lmic.certify.enclosure import describe
+    # -- optimal-value enclosure (lmic.certify.enclosure); none for a feasibility problem --
+    if getattr(result, "enclosure", None) is not None:
+        from lmic.certify.enclosure import describe
 
-    for line in describe(getattr(result, "enclosure", None)):
-        print(line)
-    from lmic.backoff import describe as describe_backoff
+        for line in describe(result.enclosure):
+            print(line)
+    if getattr(result, "backoff", None) is not None:
+        from lmic.backoff import describe as describe_backoff
 
-    x = result.solution.x
-    for line in describe_backoff(getattr(result, "backoff", None), None if x is None else float(abs(x).max(initial=0))):
-        print(line)
+        x = result.solution.x
+        for line in describe_backoff(result.backoff, None if x is None else float(abs(x).max(initial=0))):
+            print(line)
     return result.exit_code()

@@ -22,17 +22,16 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.sparse as sp
-import sympy
-from sympy.matrices.expressions import Identity, MatrixSymbol, Transpose
 
 from lmic._version import __version__
+from lmic.compile.frozen import Coef, Factor, Tree
 from lmic.compile.inputs import Inputs, dim_value, resolve_inputs
-from lmic.compile.plan import LinearForm, LmiPlan, Plan, Term
+from lmic.compile.warm import FrozenPlan
 from lmic.errors import DataError, TemplateError
 from lmic.ir.expr import evaluate
 from lmic.ir.problem import (
@@ -46,15 +45,63 @@ from lmic.ir.problem import (
 )
 from lmic.ir.svec import tril_index, tril_size
 from lmic.system import System, load_system
-from lmic.template.totree import to_tree
+
+if TYPE_CHECKING:  # sympy is imported only for analysed (not frozen) plans
+    import sympy
+
+    from lmic.compile import warm
+    from lmic.compile.plan import LinearForm, LmiPlan, Plan, Term
+
+    AnyTerm = Term | warm.Term
 
 __all__ = ["bind", "resolve_inputs", "Inputs"]
 
 _SYM_TOL = 1e-9
 
 
+# -- the leaves of a plan: sympy objects (an analysed plan) or lmic.compile.frozen's (a frozen one)
+def _lambdify(plan: Any, expr: Any) -> Any:
+    """``f(*coefficient values)`` evaluating a coefficient."""
+    if isinstance(expr, Coef):
+        return expr.function([s.name for s in plan.coef_symbols])
+    import sympy
+
+    return sympy.lambdify(plan.coef_symbols, expr, modules="math", dummify=True)
+
+
+def _is_identity_factor(f: Any) -> bool:
+    if isinstance(f, Factor):
+        return f.frozen_kind == "eye"
+    from sympy.matrices.expressions import Identity
+
+    return isinstance(f, Identity)
+
+
+def _factor_value(f: Any, env: Mapping[str, Any], dims: Mapping[Any, int]) -> Any:
+    if isinstance(f, Factor):
+        return f.value(env, dims)
+    from sympy.matrices.expressions import MatrixSymbol, Transpose
+
+    from lmic.template.totree import to_tree
+
+    if isinstance(f, MatrixSymbol):
+        return env[f.name]
+    if isinstance(f, Transpose) and isinstance(f.arg, MatrixSymbol):
+        return env[f.arg.name].T
+    return evaluate(to_tree(f, dims), env)
+
+
+def _tree(expr: Any, dims: Mapping[Any, int]) -> dict[str, Any]:
+    """The IR tree of a derived quantity or check at these dimensions."""
+    if isinstance(expr, Tree):
+        return expr.bound(dims)
+    from lmic.template.totree import to_tree
+
+    return to_tree(expr, dims)
+
+
 class _Binder:
-    def __init__(self, plan: Plan, inputs: Inputs) -> None:
+    def __init__(self, plan: Plan | FrozenPlan, inputs: Inputs) -> None:
         self.plan = plan
         self.inp = inputs
         self.tid = plan.id
@@ -92,7 +139,7 @@ class _Binder:
             return float(expr)
         fn = self.plan.cache.get(("coef", expr))
         if fn is None:
-            fn = sympy.lambdify(self.plan.coef_symbols, expr, modules="math", dummify=True)
+            fn = _lambdify(self.plan, expr)
             self.plan.cache[("coef", expr)] = fn
         try:
             value = float(fn(*self._param_args))
@@ -104,17 +151,12 @@ class _Binder:
 
     def factor(self, f: Any) -> np.ndarray | None:
         """Numeric value of a constant factor (``None`` for an identity)."""
-        if isinstance(f, Identity):
+        if _is_identity_factor(f):
             return None
         cached = self._factor_cache.get(f)
         if cached is not None:
             return cached
-        if isinstance(f, MatrixSymbol):
-            val = self.env[f.name]
-        elif isinstance(f, Transpose) and isinstance(f.arg, MatrixSymbol):
-            val = self.env[f.arg.name].T
-        else:
-            val = evaluate(to_tree(f, self.dims), self.env)
+        val = _factor_value(f, self.env, self.dims)
         val = np.atleast_2d(np.asarray(val, dtype=float))
         self._factor_cache[f] = val
         return val
@@ -151,7 +193,7 @@ class _Binder:
             self.plan.cache[key] = cached
         return cached
 
-    def _term_index(self, term: Term, rows: int, cols: int) -> tuple[np.ndarray, np.ndarray]:
+    def _term_index(self, term: AnyTerm, rows: int, cols: int) -> tuple[np.ndarray, np.ndarray]:
         """(row in vec(block), IR column) of every coefficient a term can touch (dims only)."""
         key = ("term", term.left, term.var, term.transposed, term.right, rows, cols, self._dims_key)
         cached = self.plan.cache.get(key)
@@ -182,9 +224,9 @@ class _Binder:
         return cached
 
     def _is_identity(self, factors: tuple[Any, ...]) -> bool:
-        return all(isinstance(f, Identity) for f in factors)
+        return all(_is_identity_factor(f) for f in factors)
 
-    def term_values(self, term: Term, rows: int, cols: int) -> np.ndarray:
+    def term_values(self, term: AnyTerm, rows: int, cols: int) -> np.ndarray:
         """Values matching :meth:`_term_index`, unscaled by the coefficient."""
         if term.var is None or self.vars[term.var].kind == "scalar":
             M = self.product(term.left)
@@ -228,7 +270,9 @@ class _Binder:
         self._products[key] = vals
         return vals
 
-    def entry_pieces(self, terms: list[Term], rows: int, cols: int) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    def entry_pieces(
+        self, terms: Sequence[AnyTerm], rows: int, cols: int
+    ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """(row in vec(entry), IR column, value) for every term (values scaled by the coefficient)."""
         out = []
         for term in terms:
@@ -247,7 +291,7 @@ class _Binder:
         return val, mag
 
     # -- LMIs ----------------------------------------------------------------------------
-    def lmi(self, lp: LmiPlan) -> LMI:
+    def lmi(self, lp: LmiPlan | warm.LmiPlan) -> LMI:
         sizes = [self._size(s, f"block row of LMI '{lp.name}'") for s in lp.sizes]
         d = int(sum(sizes))
 
@@ -366,7 +410,7 @@ class _Binder:
             )
 
     # -- linear forms ----------------------------------------------------------------------
-    def _trace_row(self, terms: list[Term]) -> np.ndarray:
+    def _trace_row(self, terms: Sequence[AnyTerm]) -> np.ndarray:
         """Row of ``trace(sum of terms)``: ``trace(L V R)`` is linear in ``V`` with weights ``(R L)^T``."""
         row = np.zeros(1 + self.n)
         for term in terms:
@@ -388,7 +432,7 @@ class _Binder:
             np.add.at(row, 1 + var.offset + bk, c * RL[bj, bi])
         return row
 
-    def linear_row(self, form: LinearForm) -> np.ndarray:
+    def linear_row(self, form: LinearForm | warm.LinearForm) -> np.ndarray:
         row = np.zeros(1 + self.n)
         row[0] = self.coef(form.const) if form.const != 0 else 0.0
         for coef, terms in form.traces:
@@ -436,8 +480,8 @@ class _Binder:
         sense, form = plan.objective
         objective = Objective(sense, self.linear_row(form) if sense != "feasibility" else np.zeros(1 + self.n))
         t = plan.template
-        derived = [NamedExpr(d.name, to_tree(d.expr, self.dims), d.doc) for d in t.derived]
-        checks = [Check(c.name, c.spec.kind, to_tree(c.spec.expr, self.dims), c.spec.bound, c.doc) for c in t.checks]
+        derived = [NamedExpr(d.name, _tree(d.expr, self.dims), d.doc) for d in t.derived]
+        checks = [Check(c.name, c.spec.kind, _tree(c.spec.expr, self.dims), c.spec.bound, c.doc) for c in t.checks]
         data = {k: (v.copy() if isinstance(v, np.ndarray) else float(v)) for k, v in self.env.items()}
         meta = {
             "theorem": plan.id,
@@ -459,7 +503,7 @@ class _Binder:
         return Problem(list(self.vars.values()), lmis, linear, objective, data, derived, checks, meta)
 
 
-def template_identity(plan: Plan) -> dict[str, Any]:
+def template_identity(plan: Plan | FrozenPlan) -> dict[str, Any]:
     """``provider`` (distribution, version) and ``template`` (hash and per-declaration parts) of a plan.
 
     >>> from lmic.compile import plan_for
@@ -467,6 +511,8 @@ def template_identity(plan: Plan) -> dict[str, Any]:
     >>> ident["provider"]["distribution"], len(ident["template"]["sha256"])
     ('lmic', 64)
     """
+    if isinstance(plan, FrozenPlan):  # recorded when it was frozen
+        return plan.identity()
     from lmic.template.builder import template_hash
     from lmic.template.theorem import Provider
 
@@ -477,12 +523,12 @@ def template_identity(plan: Plan) -> dict[str, Any]:
     return {"provider": provider.to_dict(), "template": {"sha256": template_hash(parts), "parts": dict(parts)}}
 
 
-def bind(plan: Plan, system: Any, params: Mapping[str, Any] | None = None) -> Problem:
+def bind(plan: Plan | FrozenPlan, system: Any, params: Mapping[str, Any] | None = None) -> Problem:
     """Compile ``plan`` with the numbers of ``system`` (path, dict or System) into an IR Problem.
 
     Parameters
     ----------
-    plan : Plan
+    plan : Plan or lmic.compile.warm.FrozenPlan
     system : str, path, dict or System
     params : mapping, optional
         Parameter overrides (``-p k=v``).

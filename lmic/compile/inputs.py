@@ -12,41 +12,50 @@ import contextlib
 import sys
 import warnings
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import sympy
 
-from lmic.compile.plan import Plan
+from lmic.compile.frozen import Dim, Domain, normalise_option
 from lmic.errors import DataError, LmicError, TemplateError
 from lmic.system import System, UnusedDataNote, near_miss
-from lmic.template.builder import normalise_option
-from lmic.template.convert import as_expr
-from lmic.template.decls import in_domain as _in_domain
+
+if TYPE_CHECKING:  # sympy only for analysed plans (a frozen plan, lmic.compile.frozen, has none)
+    from lmic.compile.plan import Plan
+    from lmic.compile.warm import FrozenPlan
 
 __all__ = ["Inputs", "dim_value", "resolve_inputs"]
 
 
 class Inputs:
-    """Numbers resolved for one bind: dimensions, data, parameters and constants."""
+    """Numbers resolved for one bind: dimensions, data, parameters and constants.
+
+    ``dims`` is keyed by the dimension symbols (sympy) of an analysed plan, by the dimension
+    names of a frozen one.
+    """
 
     def __init__(self) -> None:
-        self.dims: dict[sympy.Symbol, int] = {}
+        self.dims: dict[Any, int] = {}
         self.values: dict[str, Any] = {}  # data, params, consts (numbers / arrays)
         self.params: dict[str, Any] = {}  # every parameter and option value used
 
 
-def dim_value(expr: Any, dims: Mapping[sympy.Symbol, int]) -> int | None:
+def dim_value(expr: Any, dims: Mapping[Any, int]) -> int | None:
     """The integer value of a dimension expression under ``dims``, or None when it is not fixed.
 
     Examples
     --------
+    >>> import sympy
     >>> n, p = sympy.symbols("n p")
     >>> dim_value(n + 1, {n: 3}), dim_value(2, {}), dim_value(n * p, {n: 3})
     (4, 2, None)
     """
     if isinstance(expr, int):
         return expr
+    if isinstance(expr, Dim):  # a frozen plan's
+        return expr.value(dims)
+    from lmic.template.convert import as_expr
+
     v = as_expr(as_expr(expr).xreplace(dict(dims)))
     return int(v) if v.is_Integer else None
 
@@ -66,7 +75,17 @@ def _real_array(value: Any, what: str) -> np.ndarray:
         raise TemplateError(f"{what} is not a number or a matrix of numbers: {value!r:.60}") from None
 
 
-def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | None = None) -> Inputs:
+def _in_domain(value: float, domain: Any) -> bool:
+    """Whether ``value`` lies in ``domain``: a frozen plan's :class:`Domain` without sympy, an
+    analysed plan's sympy set by :func:`lmic.template.decls.in_domain`."""
+    if isinstance(domain, Domain):  # a frozen plan's
+        return domain.contains_number(value)
+    from lmic.template.decls import in_domain
+
+    return in_domain(value, domain)
+
+
+def resolve_inputs(plan: Plan | FrozenPlan, system: System, overrides: Mapping[str, Any] | None = None) -> Inputs:
     """Validate data and parameters against the template and compute the constants.
 
     Parameters
@@ -163,7 +182,7 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
             UnusedDataNote,
             stacklevel=2,
         )
-    origin: dict[sympy.Symbol, str] = {}
+    origin: dict[Any, str] = {}
     arrays: dict[str, np.ndarray] = {}
     for d in t.data_decls:
         if d.name in system.data:
@@ -173,8 +192,8 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
         if d.name not in arrays:
             continue
         for axis, size in enumerate(d.shape):
-            dim = as_expr(size)
-            if isinstance(dim, sympy.Symbol) and dim not in out.dims:
+            dim = _dim_symbol(size)
+            if dim is not None and dim not in out.dims:
                 out.dims[dim] = int(arrays[d.name].shape[axis])
                 origin[dim] = f"{'rows' if axis == 0 else 'columns'} of {d.name}"
     # defaults for missing data
@@ -185,8 +204,8 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
             shape = " x ".join(str(s) for s in d.shape)
             raise DataError(f"{where}: missing data '{d.name}' ({shape})" + (f": {d.doc}" if d.doc else ""))
         for size in d.shape:  # a dimension only absent optional data would fix is 0
-            dim = as_expr(size)
-            if isinstance(dim, sympy.Symbol) and dim not in out.dims:
+            dim = _dim_symbol(size)
+            if dim is not None and dim not in out.dims:
                 out.dims[dim] = 0
                 origin[dim] = f"absent optional data {d.name}"
         n_rows, n_cols = (dim_value(size, out.dims) for size in d.shape)
@@ -211,7 +230,7 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
             shape_sym = " x ".join(str(s) for s in d.shape)
             bound = ", ".join(
                 f"{s} = {out.dims[s]} from {origin.get(s, 'defaults')}"
-                for s in sorted((s for s in sympy.Matrix(list(d.shape)).free_symbols if s in out.dims), key=str)
+                for s in sorted((s for s in _shape_symbols(d.shape) if s in out.dims), key=str)
             )
             raise DataError(
                 f"{where}: data '{d.name}' has shape {arr.shape[0]}x{arr.shape[1]}, expected "
@@ -264,4 +283,27 @@ def resolve_inputs(plan: Plan, system: System, overrides: Mapping[str, Any] | No
             raise DataError(f"{where}: requirement '{req.name}' cannot be checked: {why}") from None
         if not ok:
             raise DataError(f"{where}: requirement '{req.name}' fails" + (f" ({req.doc})" if req.doc else ""))
+    return out
+
+
+def _dim_symbol(size: Any) -> Any:
+    """The dimension a size names when it is a bare dimension (sympy symbol or name), else ``None``."""
+    if isinstance(size, Dim):  # a frozen plan's
+        return size.symbol
+    import sympy
+
+    from lmic.template.convert import as_expr
+
+    dim = as_expr(size)
+    return dim if isinstance(dim, sympy.Symbol) else None
+
+
+def _shape_symbols(shape: Any) -> set[Any]:
+    """The dimensions a shape uses."""
+    out: set[Any] = set()
+    for size in shape:
+        if isinstance(size, Dim):  # a frozen plan's
+            out |= size.names()
+        elif not isinstance(size, int):
+            out |= set(size.free_symbols)
     return out

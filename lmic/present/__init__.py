@@ -18,9 +18,28 @@ Examples
 
 from __future__ import annotations
 
-from lmic.present.html import result_html, theorem_html
-from lmic.present.latex import matrix_latex, number_latex, result_latex, theorem_latex_block
-from lmic.present.text import format_value, number_text, print_result, value_text
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from lmic.present.html import result_html, theorem_html
+    from lmic.present.latex import matrix_latex, number_latex, result_latex, theorem_latex_block
+    from lmic.present.text import format_value, number_text, print_result, value_text
+
+# imported on first use (PEP 562): ``lmic solve`` prints through lmic.present.text alone, and the
+# theorem renderers (lmic.present.html, .latex) import the template layer (sympy)
+_WHERE = {
+    "result_html": "html",
+    "theorem_html": "html",
+    "matrix_latex": "latex",
+    "number_latex": "latex",
+    "result_latex": "latex",
+    "theorem_latex_block": "latex",
+    "format_value": "text",
+    "number_text": "text",
+    "print_result": "text",
+    "value_text": "text",
+}
 
 __all__ = [
     "format_value",
@@ -34,3 +53,12 @@ __all__ = [
     "theorem_latex_block",
     "value_text",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """The formatters above, imported from their module on first use."""
+    if name in _WHERE:
+        value = getattr(importlib.import_module(f"lmic.present.{_WHERE[name]}"), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'lmic.present' has no attribute {name!r}")

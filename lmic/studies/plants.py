@@ -28,8 +28,8 @@ from typing import Any
 
 import numpy as np
 
+from lmic.compile.frozen import Dim
 from lmic.errors import DataError
-from lmic.template.convert import as_expr
 
 __all__ = ["random_plants", "data_shapes"]
 
@@ -58,17 +58,32 @@ def data_shapes(template: Any, dims: dict[str, int], fixed: set[str], where: str
             continue
         shape = []
         for d in decl.shape:
-            v = as_expr(as_expr(d).xreplace(subs))
-            if not v.is_Integer:
-                missing = sorted(str(s) for s in v.free_symbols)
+            value, missing = _size(d, subs)
+            if value is None:
                 raise DataError(
                     f"{where}: random: data '{decl.name}' needs dims {', '.join(missing)} (give them in dims:)"
                 )
-            if int(v) < 1:
-                raise DataError(f"{where}: random: data '{decl.name}' would have a dimension {int(v)}")
-            shape.append(int(v))
+            if value < 1:
+                raise DataError(f"{where}: random: data '{decl.name}' would have a dimension {value}")
+            shape.append(value)
         out[decl.name] = (shape[0], shape[1])
     return out
+
+
+def _size(d: Any, subs: dict[Any, int]) -> tuple[int | None, list[str]]:
+    """The value of a data size under ``subs`` and the dimensions it still misses.
+
+    A frozen plan's size (:class:`~lmic.compile.frozen.Dim`) is evaluated without sympy.
+    """
+    if isinstance(d, Dim):
+        missing = sorted(d.names() - {str(k) for k in subs})
+        return (None, missing) if missing else (d.value(subs), [])
+    from lmic.template.convert import as_expr
+
+    v = as_expr(as_expr(d).xreplace(subs))
+    if not v.is_Integer:
+        return None, sorted(str(s) for s in v.free_symbols)
+    return int(v), []
 
 
 def random_plants(template: Any, spec: dict[str, Any], where: str) -> list[dict[str, Any]]:

@@ -215,12 +215,13 @@ def _watch_parent(parent: int) -> None:
 
 
 #: what every job needs, imported when the child starts (often while the driver still loads the
-#: study) instead of inside the first job
+#: study) instead of inside the first job; not the template layer (sympy): a theorem whose plan
+#: an earlier process analysed binds its frozen plan without it (lmic.compile.warm)
 PRELOAD = (
     "lmic.api",
     "lmic.studies.tasks",
     "lmic.certify.certificate",
-    "lmic.template",
+    "lmic.compile.bind",
     "lmic.backends.clarabel",
     "lmic.backends.scs",
     "scipy.linalg",

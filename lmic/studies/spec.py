@@ -8,6 +8,10 @@ system files, grids are well formed) and expands the jobs, each with a content h
 (theorem template, system data, parameters, task, backend, task options). Anything wrong is one
 :class:`~lmic.errors.DataError` line naming the study file and the key.
 
+Warm runs (lmic's cache, :mod:`lmic.cache`): a document that passed the schema before is not
+validated again, and a theorem an earlier process analysed is read from its frozen plan
+(:mod:`lmic.compile.warm`): a warm study loads without jsonschema, sympy or the plugin module.
+
 Examples
 --------
 >>> study = load_study({"theorem": "thesis.lyapunov",
@@ -170,20 +174,49 @@ def _read(path: Path) -> Any:
         raise DataError(f"{path.name}: malformed YAML{line}: {problem}") from None
 
 
-def _validate(raw: Any, where: str) -> None:
-    import jsonschema
+#: the cache kind of study documents known to pass the schema (lmic.cache)
+VALID_KIND = "study-valid"
 
+
+def _validation_key(raw: Any, schema: Any) -> dict[str, Any] | None:
+    """What a successful validation of ``raw`` depends on: the document, the schema, jsonschema's
+    version (``None`` when the document is not plain JSON: then it is always validated)."""
+    from importlib import metadata
+
+    try:
+        doc = json.dumps(raw, sort_keys=True, separators=(",", ":"), allow_nan=False)
+        version = metadata.version("jsonschema")
+    except (TypeError, ValueError, metadata.PackageNotFoundError):
+        return None
+    digest = hashlib.sha256(doc.encode()).hexdigest()
+    return {
+        "document": digest,
+        "schema": hashlib.sha256(canonical_json(schema).encode()).hexdigest(),
+        "jsonschema": version,
+    }
+
+
+def _validate(raw: Any, where: str) -> None:
+    from lmic import cache
     from lmic.schemas import load_schema
 
     if not isinstance(raw, dict):
         raise DataError(f"{where}: a study file is a mapping with keys theorem, systems, grid, task ...")
-    validator = jsonschema.Draft202012Validator(load_schema("study"))
+    schema = load_schema("study")
+    key = _validation_key(raw, schema)
+    if key is not None and cache.load(VALID_KIND, key) is True:
+        return  # this very document passed this very schema before: jsonschema is not imported
+    import jsonschema
+
+    validator = jsonschema.Draft202012Validator(schema)
     errors = sorted(validator.iter_errors(raw), key=lambda e: (len(e.absolute_path), list(map(str, e.absolute_path))))
     if errors:
         err = errors[0]
         loc = "/".join(str(p) for p in err.absolute_path) or "(top level)"
         msg = err.message if len(err.message) < 160 else err.message[:157] + "..."
         raise DataError(f"{where}: {loc}: {msg}")
+    if key is not None:
+        cache.store(VALID_KIND, key, True)
 
 
 def _jsonable(obj: Any) -> Any:
@@ -194,30 +227,58 @@ def _number(v: Any) -> Any:
     return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else v
 
 
+#: the warm path's cache kind of a theorem's study template hash (lmic.compile.warm.load_extra)
+HASH_KIND = "study-template-hash"
+
+
 class _TheoremInfo:
-    """Declarations of one theorem (built once, default options plus the study's)."""
+    """Declarations of one theorem (built once, default options plus the study's).
+
+    When an earlier process analysed the theorem, its frozen plan (:mod:`lmic.compile.warm`)
+    gives the declarations and the cache the template hash: no plugin module, no sympy.
+    """
 
     def __init__(self, theorem_id: str, options: dict[str, Any], where: str) -> None:
-        from lmic.registry import get_theorem
+        from lmic.compile.warm import load_extra, store_extra, warm_plan
 
-        try:
-            self.theorem = get_theorem(theorem_id)
-        except LmicError:
-            raise DataError(f"{where}: theorem '{theorem_id}' is not registered (see lmic theorems)") from None
         self.id = theorem_id
-        self.template = self.theorem.template({k: v for k, v in options.items() if isinstance(v, str)})
+        chosen = {k: v for k, v in options.items() if isinstance(v, str)}
+        plan = warm_plan(theorem_id, chosen)
+        cached = load_extra(HASH_KIND, theorem_id) if plan is not None else None
+        if plan is not None and isinstance(cached, dict) and isinstance(cached.get("hash"), str):
+            self.template: Any = plan.template
+            self.hash = cached["hash"]
+        else:
+            from lmic.registry import get_theorem
+
+            try:
+                theorem = get_theorem(theorem_id)
+            except LmicError:
+                raise DataError(f"{where}: theorem '{theorem_id}' is not registered (see lmic theorems)") from None
+            self.template = theorem.template(chosen)
+            self.hash = template_hash(theorem_id)
+            if theorem.provider is not None and not theorem.provider.is_api:
+                store_extra(HASH_KIND, theorem_id, {"hash": self.hash})
+                _freeze_for_next_time(theorem, chosen)
         self.param_names = {p.name for p in self.template.params} | {o.name for o in self.template.options}
-        self.hash = template_hash(theorem_id)
 
     def check_values(self, values: dict[str, Any], where: str, what: str) -> None:
         """Numbers outside a parameter's declared domain are bad input (before any job runs)."""
-        import sympy
+        from lmic.compile.frozen import Domain
 
         decls = {p.name: p for p in self.template.params}
         for name, v in values.items():
             decl = decls.get(name)
             if decl is None or not isinstance(v, float):
                 continue
+            if isinstance(decl.domain, Domain):  # a frozen plan's (decisive)
+                if not decl.domain.contains_number(v):
+                    raise DataError(
+                        f"{where}: {what} '{name}' = {v:g} is outside its domain {decl.domain} in {self.id}"
+                    )
+                continue
+            import sympy
+
             inside = decl.domain.contains(sympy.Float(v))
             if inside not in (sympy.true, sympy.false) and v.is_integer():
                 inside = decl.domain.contains(sympy.Integer(int(v)))
@@ -229,6 +290,18 @@ class _TheoremInfo:
             if name not in self.param_names:
                 known = ", ".join(sorted(self.param_names)) or "none"
                 raise DataError(f"{where}: {what} '{name}' is not a parameter of {self.id} (its parameters: {known})")
+
+
+def _freeze_for_next_time(theorem: Any, options: dict[str, Any]) -> None:
+    """Store the theorem's frozen plan under this process's fingerprint (the next study loads
+    without sympy); the runners store theirs too, but a runner's ``sys.path`` may differ."""
+    from lmic.compile import plan_for
+    from lmic.compile.freeze import remember
+
+    try:
+        remember(plan_for(theorem, options))
+    except LmicError:  # a template that does not analyse: its jobs report it
+        pass
 
 
 def _files(spec: dict[str, Any], base: Path, where: str) -> list[Path]:

@@ -56,7 +56,10 @@ FUNCTIONS = {
 }
 
 
-def _dim(v: Any, dims: Mapping[sympy.Symbol, int]) -> int:
+def _dim(v: Any, dims: Mapping[sympy.Symbol, int]) -> Any:
+    symbolic = getattr(dims, "symbolic_dim", None)
+    if symbolic is not None:  # lmic.compile.freeze: a size left symbolic, bound at bind time
+        return symbolic(v)
     val = as_expr(as_expr(v).xreplace(dict(dims)))
     if not val.is_Integer:
         raise TemplateError(f"dimension {v} cannot be evaluated (unbound symbol)")
