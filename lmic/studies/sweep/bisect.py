@@ -307,7 +307,9 @@ def _bisect(
         if progress is not None:
             progress({**event, **state})
 
-    ev = Evaluator(plan, sysobj, overrides, param, backend, options, False, exact, report, sign)
+    # interior values: the last certified point first, then one certified solve (screen); the
+    # full policy only where that does not decide, and at the final non-certified end
+    ev = Evaluator(plan, sysobj, overrides, param, backend, options, False, exact, report, sign, screen=True)
     lower: float | None = None
     upper: float | None = None
     upper_pt: PointResult | None = None
@@ -385,7 +387,10 @@ def _bisect(
         return max(xtol, rtol * max(abs(a), abs(b)))
 
     iterations = 0
-    if lower is not None and upper is not None and upper > lower:
+
+    def bisect_loop() -> None:
+        nonlocal iterations
+        assert lower is not None and upper is not None
         width, tgt = upper - lower, target(lower, upper)
         state["total"] = max(0, math.ceil(math.log2(width / tgt))) if width > tgt else 0
         while upper - lower > target(lower, upper) and len(ev.points) < max_evals:
@@ -394,6 +399,29 @@ def _bisect(
             # remaining halvings (the relative target moves with the bracket)
             state["total"] = iterations - 1 + max(1, math.ceil(math.log2((upper - lower) / target(lower, upper))))
             feasible(0.5 * (lower + upper), "bisect")
+
+    while lower is not None and upper is not None and upper > lower:
+        bisect_loop()
+        if upper_pt is None or not upper_pt.screened:
+            break
+        # the final non-certified end was only screened (the solver said infeasible): its
+        # evidence comes from the full policy (a proof, or an honest label)
+        pt = ev(upper, "prove", full=True)
+        if pt.outcome != "feasible":
+            upper_pt = pt
+            break
+        # the screen was wrong: the bracket moves up to the next value not certified
+        lower = upper
+        above = [sign * p.value for p in ev.points if p.outcome != "feasible" and sign * p.value > lower]
+        upper, upper_pt = None, None
+        if above:
+            upper = min(above)
+            upper_pt = next(
+                p for p in reversed(ev.points) if sign * p.value == upper and p.outcome != "feasible"
+            )
+        state["lower"], state["upper"] = bracket_v(lower, upper)
+        if upper is None and not message:
+            message = f"the last value tried, {vv(lower):g}, is certified: no {'upper' if is_max else 'lower'} end"
     converged = lower is not None and upper is not None and upper - lower <= target(lower, upper)
     if lower is not None and upper is not None and not converged and not message:
         message = f"stopped after {len(ev.points)} points (--max-evals) before the tolerance"
