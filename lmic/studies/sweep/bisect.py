@@ -317,7 +317,9 @@ def _bisect(
 
     def feasible(v: float, phase: str) -> bool:
         nonlocal lower, upper, upper_pt
-        pt = ev(v, phase)
+        # until a value is certified, the full policy decides (a screen's "not certified"
+        # would end the search without evidence); then interior values are screened
+        pt = ev(v, phase, full=lower is None)
         if pt.outcome == "feasible":
             if lower is None or v > lower:
                 lower = v
@@ -357,17 +359,23 @@ def _bisect(
         if not in_domain(x0, dom):
             x0 = 0.5 * (dlo + dhi) if math.isfinite(dlo) and math.isfinite(dhi) else (dlo + 1.0)
         feasible(x0, "bracket")
+
+    def expand() -> str:
+        """Expand upwards from the certified ``lower`` until a value is not certified."""
+        assert lower is not None
+        k, base = 1, lower
+        while upper is None and len(ev.points) < max_evals:
+            cand = up(base, k)
+            if cand <= lower or (ev.points and cand == sign * ev.points[-1].value):
+                way = "up" if is_max else "down"
+                return f"'{param}' is certified {way} to the end of its domain ({vv(lower):g})"
+            feasible(cand, "bracket")
+            k += 1
+        return ""
+
     if not message:
         if lower is not None and upper is None:  # expand upwards
-            k, base = 1, lower
-            while upper is None and len(ev.points) < max_evals:
-                cand = up(base, k)
-                if cand <= lower or (ev.points and cand == sign * ev.points[-1].value):
-                    way = "up" if is_max else "down"
-                    message = f"'{param}' is certified {way} to the end of its domain ({vv(lower):g})"
-                    break
-                feasible(cand, "bracket")
-                k += 1
+            message = expand()
         elif lower is None and upper is not None:  # shrink downwards
             k, base = 1, upper
             while lower is None and len(ev.points) < max_evals:
@@ -410,18 +418,23 @@ def _bisect(
         if pt.outcome != "feasible":
             upper_pt = pt
             break
-        # the screen was wrong: the bracket moves up to the next value not certified
+        # the screen was wrong: the bracket moves up to the next value not certified, and the
+        # rest of the bisection uses the full policy (screens disagree with it near this end)
+        ev.screen = False
         lower = upper
-        above = [sign * p.value for p in ev.points if p.outcome != "feasible" and sign * p.value > lower]
+        # the next upper end: the nearest value the full policy did not certify, else the
+        # farthest screened one (the others are no evidence once a screen was wrong)
+        above = [p for p in ev.points if p.outcome != "feasible" and sign * p.value > lower]
+        decided = [sign * p.value for p in above if not p.screened]
         upper, upper_pt = None, None
         if above:
-            upper = min(above)
-            upper_pt = next(
-                p for p in reversed(ev.points) if sign * p.value == upper and p.outcome != "feasible"
-            )
+            upper = min(decided) if decided else max(sign * p.value for p in above)
+            upper_pt = next(p for p in reversed(ev.points) if sign * p.value == upper and p.outcome != "feasible")
         state["lower"], state["upper"] = bracket_v(lower, upper)
-        if upper is None and not message:
-            message = f"the last value tried, {vv(lower):g}, is certified: no {'upper' if is_max else 'lower'} end"
+        if upper is None:  # every value above was only screened: expand again (full policy)
+            message = expand() or message
+            if upper is None and not message:
+                message = f"no {'upper' if is_max else 'lower'} bound found for '{param}' within {max_evals} points"
     converged = lower is not None and upper is not None and upper - lower <= target(lower, upper)
     if lower is not None and upper is not None and not converged and not message:
         message = f"stopped after {len(ev.points)} points (--max-evals) before the tolerance"

@@ -233,11 +233,12 @@ def screen(
     * ``feasible`` when the certifier certifies the point (the same evidence as
       :func:`decide`);
     * ``infeasible`` when the solver's Farkas ray verifies (a GLOBAL proof);
-    * ``undecided`` with ``screened = True`` when the solver says infeasible without a proof:
-      enough to move a bisection's upper end, never reported as a proof (the bracket's final
-      end is proven by :func:`decide`);
-    * ``None`` otherwise (a solver error, an inaccurate solve, a rejected point): the caller
-      runs the full policy (:func:`decide`).
+    * ``undecided`` with ``screened = True`` otherwise (the solver says infeasible without a
+      proof, fails, or returns a point the certifier rejects): enough to move a bisection's
+      upper end, never reported as evidence (the bracket's final end is decided by
+      :func:`decide`, which escalates; if it is certified there, the bisection moves up);
+    * ``None`` when the backend cannot take the problem, or the problem is small for an
+      interior-point backend (solves of milliseconds): the caller runs :func:`decide`.
 
     Examples
     --------
@@ -245,8 +246,8 @@ def screen(
     >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
     >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
     ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
-    >>> screen(p, "clarabel").outcome
-    'feasible'
+    >>> screen(p, "clarabel") is None   # small: the full policy decides
+    True
     """
     from lmic.backends.registry import get_backend
     from lmic.certify import certify
@@ -265,8 +266,10 @@ def screen(
             return None
     except LmicError:
         return None
+    if is_small(judge) and be.interior_point:
+        return None  # solves of milliseconds: the full policy decides (max-margin first)
     opts = step_options(be, options) if is_auto(backend) else options
-    if options.strict == "auto" and not (is_small(judge) and be.interior_point):
+    if options.strict == "auto":
         opts = replace(opts, strict="fixed-margin")
     t0 = time.perf_counter()
     sol = solve(be, judge, opts)
@@ -284,10 +287,12 @@ def screen(
     elif verdict == "infeasible-certified":
         res.outcome = "infeasible"
         res.proof = "infeasible-certified: " + str(getattr(cert, "reason", "") or "verified Farkas ray")
-    elif sol.status == "infeasible":
-        res.proof = "solver: infeasible (not proven; moves the bisection's bracket only)"
+    elif sol.status in ("infeasible", "error", "inaccurate") or verdict == "rejected":
+        # not certified here, nothing proven: the bisection's upper end may move to it (the
+        # final end is decided by the full policy, which escalates)
+        res.proof = f"not certified by one solve ({sol.status}, {verdict}); moves the bisection's bracket only"
         res.screened = True
-        verdict = "infeasible (solver, unproven)"
+        verdict = "not certified (screen, unproven)"
     else:
         return None
     res.attempts = [line.format(verdict)]
