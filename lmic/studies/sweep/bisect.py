@@ -422,16 +422,15 @@ def _bisect(
         # rest of the bisection uses the full policy (screens disagree with it near this end)
         ev.screen = False
         lower = upper
-        # the next upper end: the nearest value the full policy did not certify, else the
-        # farthest screened one (the others are no evidence once a screen was wrong)
-        above = [p for p in ev.points if p.outcome != "feasible" and sign * p.value > lower]
-        decided = [sign * p.value for p in above if not p.screened]
+        # the next upper end: the nearest value not certified (if it was only screened, the
+        # full policy decides it when it is the final end again)
+        above = [sign * p.value for p in ev.points if p.outcome != "feasible" and sign * p.value > lower]
         upper, upper_pt = None, None
         if above:
-            upper = min(decided) if decided else max(sign * p.value for p in above)
+            upper = min(above)
             upper_pt = next(p for p in reversed(ev.points) if sign * p.value == upper and p.outcome != "feasible")
         state["lower"], state["upper"] = bracket_v(lower, upper)
-        if upper is None:  # every value above was only screened: expand again (full policy)
+        if upper is None:  # no value above was tried: expand again
             message = expand() or message
             if upper is None and not message:
                 message = f"no {'upper' if is_max else 'lower'} bound found for '{param}' within {max_evals} points"
