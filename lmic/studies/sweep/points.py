@@ -232,9 +232,10 @@ def screen(
 
     * ``feasible`` when the certifier certifies the point (the same evidence as
       :func:`decide`);
-    * ``infeasible`` when the solver's Farkas ray verifies (a GLOBAL proof);
-    * ``undecided`` with ``screened = True`` otherwise (the solver says infeasible without a
-      proof, fails, or returns a point the certifier rejects): enough to move a bisection's
+    * ``infeasible`` when the point's certificate is a verified infeasibility proof;
+    * ``undecided`` with ``screened = True`` otherwise (the solver says infeasible, fails, or
+      returns a point the certifier rejects; a ray is not verified here, its verification can
+      cost seconds): enough to move a bisection's
       upper end, never reported as evidence (the bracket's final end is decided by
       :func:`decide`, which escalates; if it is certified there, the bisection moves up);
     * ``None`` when the backend cannot take the problem, or the problem is small for an
@@ -274,6 +275,14 @@ def screen(
     t0 = time.perf_counter()
     sol = solve(be, judge, opts)
     t1 = time.perf_counter()
+    if sol.status != "feasible" and sol.status != "optimal":
+        # no point to certify; a ray's verification can cost seconds, and only the final end's
+        # evidence is reported (proven there by the full policy)
+        res = PointResult(value=value, outcome="undecided", proof="", status=sol.status, verdict="undecided")
+        res.proof = f"not certified by one solve ({sol.status}); moves the bisection's bracket only"
+        res.solve_s, res.screened, res.solution = float(sol.solve_s or (t1 - t0)), True, sol
+        res.attempts = [f"{be.label} / screen/{sol.strategy}: {sol.status} -> not certified (screen, unproven)"]
+        return res
     cert = certify(judge, sol)
     verdict = verdict_of(judge, sol, cert)
     res = PointResult(value=value, outcome="undecided", proof=verdict, status=sol.status, verdict=verdict)
