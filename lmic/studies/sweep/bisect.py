@@ -17,6 +17,15 @@ diag(F(x_ref))^-1/2`` taken at the last certified point ``x_ref``
 (:mod:`lmic.reductions.precondition`). A congruence does not change which ``x`` are feasible,
 and the certificate is always computed on the original LMIs.
 
+Evidence where the answer needs it: until a value is certified, and at the bracket's final
+non-certified end, the full solve policy decides (escalation, proofs). Interior values of a
+problem that is not small first try the last certified point (certified again, no solve), then
+one certified solve (:func:`lmic.studies.sweep.points.screen`): a certified point moves the
+lower end; anything else moves the upper end *without* evidence (``screened``), and the final
+upper end is then decided by the full policy. If that end turns out certified, the screen was
+wrong: screening stops, the bracket moves up to the nearest value not certified (or expands
+again) and the bisection goes on. A screened value is never reported as a proof.
+
 Bisection assumes that the feasible values form an interval that contains the lower end of the
 bracket (true for Lipschitz constants, delay bounds and similar parameters). Its report is
 honest about both ends: ``lower`` is certified; ``upper`` is the smallest value tried that was
