@@ -5,7 +5,10 @@
 - :mod:`~lmic.studies.sweep.results`: the result types (:class:`PointResult`,
   :class:`EndPoint`, :class:`SupResult`, :class:`SweepResult`);
 - :mod:`~lmic.studies.sweep.points`: one value bound, decided by the solve policy, recorded
-  (warm-started from the neighbouring point);
+  (warm-started from the neighbouring point); for feasibility questions the last certified
+  point is first certified again at the new value (``reuse``: no solve where it holds), and a
+  bisection's interior values are decided by one certified solve (``screen``), the full policy
+  deciding the bracket's final ends;
 - :mod:`~lmic.studies.sweep.ends`: the certified end of a bracket, its gains and certificate;
 - :mod:`~lmic.studies.sweep.bisect`: suprema and infima by bisection;
 - :mod:`~lmic.studies.sweep.enclosed`: suprema and infima of a parameter that enters affinely,

@@ -17,6 +17,15 @@ diag(F(x_ref))^-1/2`` taken at the last certified point ``x_ref``
 (:mod:`lmic.reductions.precondition`). A congruence does not change which ``x`` are feasible,
 and the certificate is always computed on the original LMIs.
 
+Evidence where the answer needs it: until a value is certified, and at the bracket's final
+non-certified end, the full solve policy decides (escalation, proofs). Interior values of a
+problem that is not small first try the last certified point (certified again, no solve), then
+one certified solve (:func:`lmic.studies.sweep.points.screen`): a certified point moves the
+lower end; anything else moves the upper end *without* evidence (``screened``), and the final
+upper end is then decided by the full policy. If that end turns out certified, the screen was
+wrong: screening stops, the bracket moves up to the nearest value not certified (or expands
+again) and the bisection goes on. A screened value is never reported as a proof.
+
 Bisection assumes that the feasible values form an interval that contains the lower end of the
 bracket (true for Lipschitz constants, delay bounds and similar parameters). Its report is
 honest about both ends: ``lower`` is certified; ``upper`` is the smallest value tried that was
@@ -307,7 +316,9 @@ def _bisect(
         if progress is not None:
             progress({**event, **state})
 
-    ev = Evaluator(plan, sysobj, overrides, param, backend, options, False, exact, report, sign)
+    # interior values: the last certified point first, then one certified solve (screen); the
+    # full policy only where that does not decide, and at the final non-certified end
+    ev = Evaluator(plan, sysobj, overrides, param, backend, options, False, exact, report, sign, screen=True)
     lower: float | None = None
     upper: float | None = None
     upper_pt: PointResult | None = None
@@ -315,7 +326,9 @@ def _bisect(
 
     def feasible(v: float, phase: str) -> bool:
         nonlocal lower, upper, upper_pt
-        pt = ev(v, phase)
+        # until a value is certified, the full policy decides (a screen's "not certified"
+        # would end the search without evidence); then interior values are screened
+        pt = ev(v, phase, full=lower is None)
         if pt.outcome == "feasible":
             if lower is None or v > lower:
                 lower = v
@@ -355,17 +368,23 @@ def _bisect(
         if not in_domain(x0, dom):
             x0 = 0.5 * (dlo + dhi) if math.isfinite(dlo) and math.isfinite(dhi) else (dlo + 1.0)
         feasible(x0, "bracket")
+
+    def expand() -> str:
+        """Expand upwards from the certified ``lower`` until a value is not certified."""
+        assert lower is not None
+        k, base = 1, lower
+        while upper is None and len(ev.points) < max_evals:
+            cand = up(base, k)
+            if cand <= lower or (ev.points and cand == sign * ev.points[-1].value):
+                way = "up" if is_max else "down"
+                return f"'{param}' is certified {way} to the end of its domain ({vv(lower):g})"
+            feasible(cand, "bracket")
+            k += 1
+        return ""
+
     if not message:
         if lower is not None and upper is None:  # expand upwards
-            k, base = 1, lower
-            while upper is None and len(ev.points) < max_evals:
-                cand = up(base, k)
-                if cand <= lower or (ev.points and cand == sign * ev.points[-1].value):
-                    way = "up" if is_max else "down"
-                    message = f"'{param}' is certified {way} to the end of its domain ({vv(lower):g})"
-                    break
-                feasible(cand, "bracket")
-                k += 1
+            message = expand()
         elif lower is None and upper is not None:  # shrink downwards
             k, base = 1, upper
             while lower is None and len(ev.points) < max_evals:
@@ -385,7 +404,10 @@ def _bisect(
         return max(xtol, rtol * max(abs(a), abs(b)))
 
     iterations = 0
-    if lower is not None and upper is not None and upper > lower:
+
+    def bisect_loop() -> None:
+        nonlocal iterations
+        assert lower is not None and upper is not None
         width, tgt = upper - lower, target(lower, upper)
         state["total"] = max(0, math.ceil(math.log2(width / tgt))) if width > tgt else 0
         while upper - lower > target(lower, upper) and len(ev.points) < max_evals:
@@ -394,6 +416,33 @@ def _bisect(
             # remaining halvings (the relative target moves with the bracket)
             state["total"] = iterations - 1 + max(1, math.ceil(math.log2((upper - lower) / target(lower, upper))))
             feasible(0.5 * (lower + upper), "bisect")
+
+    while lower is not None and upper is not None and upper > lower:
+        bisect_loop()
+        if upper_pt is None or not upper_pt.screened:
+            break
+        # the final non-certified end was only screened (the solver said infeasible): its
+        # evidence comes from the full policy (a proof, or an honest label)
+        pt = ev(upper, "prove", full=True)
+        if pt.outcome != "feasible":
+            upper_pt = pt
+            break
+        # the screen was wrong: the bracket moves up to the next value not certified, and the
+        # rest of the bisection uses the full policy (screens disagree with it near this end)
+        ev.screen = False
+        lower = upper
+        # the next upper end: the nearest value not certified (if it was only screened, the
+        # full policy decides it when it is the final end again)
+        above = [sign * p.value for p in ev.points if p.outcome != "feasible" and sign * p.value > lower]
+        upper, upper_pt = None, None
+        if above:
+            upper = min(above)
+            upper_pt = next(p for p in reversed(ev.points) if sign * p.value == upper and p.outcome != "feasible")
+        state["lower"], state["upper"] = bracket_v(lower, upper)
+        if upper is None:  # no value above was tried: expand again
+            message = expand() or message
+            if upper is None and not message:
+                message = f"no {'upper' if is_max else 'lower'} bound found for '{param}' within {max_evals} points"
     converged = lower is not None and upper is not None and upper - lower <= target(lower, upper)
     if lower is not None and upper is not None and not converged and not message:
         message = f"stopped after {len(ev.points)} points (--max-evals) before the tolerance"

@@ -81,11 +81,16 @@ def sweep(
     options: Any = None,
     exact: bool = True,
     progress: Progress | None = None,
+    reuse: bool = True,
 ) -> SweepResult:
     """Solve and certify the theorem at every value of ``param`` (a re-bound cached plan).
 
     Each point is the theorem's own problem (objective kept) decided by :func:`decide`; the best
     certified point is reported (objective for ``min``/``max``, relative margin for feasibility).
+    For a feasibility theorem (no objective) with ``reuse``, the last certified point is first
+    certified again at the next value (:func:`lmic.studies.sweep.points.reuse`): where it holds,
+    that value is certified without a solve (its attempt says so); else the value is solved,
+    warm-started from the last solve. ``reuse=False`` solves every value.
 
     Examples
     --------
@@ -108,7 +113,7 @@ def sweep(
         if progress is not None:
             progress({**event, "total": total})
 
-    ev = Evaluator(plan, sysobj, overrides, param, backend, options, True, exact, report)
+    ev = Evaluator(plan, sysobj, overrides, param, backend, options, True, exact, report, reuse=reuse)
     for k, v in enumerate(values):
         ev(float(v), "sweep", iteration=k + 1)
     certified = [p for p in ev.points if p.outcome == "feasible"]

@@ -38,13 +38,23 @@ from typing import Any
 
 import numpy as np
 
-from lmic.errors import DataError
+from lmic.errors import DataError, LmicError
 from lmic.ir.problem import Problem
 from lmic.policy import feasibility_problem, min_rel_margin
 from lmic.solution import Solution
 from lmic.studies.sweep.results import PointResult, Progress
 
-__all__ = ["decide", "setup", "domain", "in_domain", "Evaluator", "scalar_derived", "warm_options"]
+__all__ = [
+    "decide",
+    "screen",
+    "reuse",
+    "setup",
+    "domain",
+    "in_domain",
+    "Evaluator",
+    "scalar_derived",
+    "warm_options",
+]
 
 
 def scalar_derived(cert: Any) -> dict[str, float]:
@@ -159,6 +169,145 @@ def decide(
     return result
 
 
+def reuse(problem: Problem, x: np.ndarray, *, value: float = math.nan, source: float = math.nan) -> PointResult | None:
+    """A certified point at a neighbouring value, certified again at this one (no solve).
+
+    The certifier alone decides (:func:`lmic.certify.certify` on ``problem`` at ``x``): the
+    result is ``feasible`` with an ordinary certificate when every LMI, row, check and derived
+    quantity holds, else ``None`` (nothing is concluded from a failure). Only for feasibility
+    questions: a grid of an optimisation problem needs each value's optimum.
+
+    Parameters
+    ----------
+    problem : Problem
+        The problem at this value (its objective is ignored).
+    x : numpy.ndarray
+        A point certified at another value of the parameter (the same plan: same variables).
+    value, source : float
+        This value and the value ``x`` was certified at (for the report).
+
+    Returns
+    -------
+    PointResult or None
+
+    Examples
+    --------
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> reuse(p, np.array([2.0]), value=1.0, source=0.5).proof
+    'certified'
+    >>> reuse(p, np.array([-2.0])) is None
+    True
+    """
+    from lmic.certify import certify
+
+    if x is None or len(x) != problem.n:
+        return None
+    judge = feasibility_problem(problem)
+    t0 = time.perf_counter()
+    sol = Solution(status="feasible", x=np.asarray(x, dtype=float), backend="reuse")
+    cert = certify(judge, sol)
+    if cert.verdict != "certified":
+        return None
+    res = PointResult(value=value, outcome="feasible", proof="certified", status="feasible", verdict="certified")
+    res.attempts = [f"reuse: the certified point of {source:.6g}, certified again -> certified"]
+    res.certify_s = time.perf_counter() - t0
+    res.certificate, res.solution, res.x = cert, sol, sol.x
+    res.rel_margin = min_rel_margin(cert)
+    res.derived = scalar_derived(cert)
+    res.reused = True
+    return res
+
+
+def screen(
+    problem: Problem, backend: Any = None, options: Any = None, *, value: float = math.nan
+) -> PointResult | None:
+    """One solve, certified: the cheap decision of a bisection's interior value.
+
+    The first backend of the route (:func:`lmic.policy.route`) solves the feasibility problem
+    once, with the fixed-margin reduction alone on problems that are not small (no max-margin
+    retry, no other backend). Returns
+
+    * ``feasible`` when the certifier certifies the point (the same evidence as
+      :func:`decide`);
+    * ``infeasible`` when the point's certificate is a verified infeasibility proof;
+    * ``undecided`` with ``screened = True`` otherwise (the solver says infeasible, fails, or
+      returns a point the certifier rejects; a ray is not verified here, its verification can
+      cost seconds): enough to move a bisection's
+      upper end, never reported as evidence (the bracket's final end is decided by
+      :func:`decide`, which escalates; if it is certified there, the bisection moves up);
+    * ``None`` when the backend cannot take the problem, or the problem is small for an
+      interior-point backend (solves of milliseconds): the caller runs :func:`decide`.
+
+    Examples
+    --------
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> screen(p, "clarabel") is None   # small: the full policy decides
+    True
+    """
+    from lmic.backends.registry import get_backend
+    from lmic.certify import certify
+    from lmic.options import SolveOptions
+    from lmic.outcome import verdict_of
+    from lmic.policy import is_auto, route, step_options
+    from lmic.reductions.pipeline import solve
+    from lmic.reductions.strict import is_small
+
+    judge = feasibility_problem(problem)
+    options = options or SolveOptions()
+    try:
+        first = route(judge, backend)[0]
+        be = first if not isinstance(first, str) else get_backend(first)
+        if not be.supports(judge):
+            return None
+    except LmicError:
+        return None
+    if is_small(judge) and be.interior_point:
+        return None  # solves of milliseconds: the full policy decides (max-margin first)
+    opts = step_options(be, options) if is_auto(backend) else options
+    if options.strict == "auto":
+        opts = replace(opts, strict="fixed-margin")
+    t0 = time.perf_counter()
+    sol = solve(be, judge, opts)
+    t1 = time.perf_counter()
+    if sol.status != "feasible" and sol.status != "optimal":
+        # no point to certify; a ray's verification can cost seconds, and only the final end's
+        # evidence is reported (proven there by the full policy)
+        res = PointResult(value=value, outcome="undecided", proof="", status=sol.status, verdict="undecided")
+        res.proof = f"not certified by one solve ({sol.status}); moves the bisection's bracket only"
+        res.solve_s, res.screened, res.solution = float(sol.solve_s or (t1 - t0)), True, sol
+        res.attempts = [f"{be.label} / screen/{sol.strategy}: {sol.status} -> not certified (screen, unproven)"]
+        return res
+    cert = certify(judge, sol)
+    verdict = verdict_of(judge, sol, cert)
+    res = PointResult(value=value, outcome="undecided", proof=verdict, status=sol.status, verdict=verdict)
+    res.solve_s, res.certify_s = float(sol.solve_s or (t1 - t0)), time.perf_counter() - t1
+    res.certificate, res.solution = cert, sol
+    res.rel_margin = min_rel_margin(cert)
+    line = f"{be.label} / screen/{sol.strategy}: {sol.status} -> {{}} ({t1 - t0:.2f} s)"
+    if verdict == "certified":
+        res.outcome, res.proof, res.x = "feasible", "certified", sol.x
+        res.derived = scalar_derived(cert)
+    elif verdict == "infeasible-certified":
+        res.outcome = "infeasible"
+        res.proof = "infeasible-certified: " + str(getattr(cert, "reason", "") or "verified Farkas ray")
+    elif sol.status in ("infeasible", "error", "inaccurate") or verdict == "rejected":
+        # not certified here, nothing proven: the bisection's upper end may move to it (the
+        # final end is decided by the full policy, which escalates)
+        res.proof = f"not certified by one solve ({sol.status}, {verdict}); moves the bisection's bracket only"
+        res.screened = True
+        verdict = "not certified (screen, unproven)"
+    else:
+        return None
+    res.attempts = [line.format(verdict)]
+    return res
+
+
 def setup(theorem: str, system: Any, param: str, params: Mapping[str, Any] | None) -> tuple[Any, Any, dict, Any]:
     """Load the system, analyse the plan once, find the parameter's declaration.
 
@@ -253,6 +402,9 @@ class Evaluator:
         exact: bool,
         progress: Progress | None,
         sign: float = 1.0,
+        *,
+        reuse: bool = True,
+        screen: bool = False,
     ) -> None:
         self.plan, self.sysobj, self.overrides, self.param = plan, sysobj, overrides, param
         self.sign = sign  # called with u, binds the parameter at sign * u (infima: -1)
@@ -268,8 +420,18 @@ class Evaluator:
         self.sense = "feasibility"
         #: the last solution with a point: the next solve's warm start (same shape: a re-bound plan)
         self.warm: Solution | None = None
+        #: try the last certified point first (:func:`reuse`; feasibility questions only)
+        self.reuse = reuse
+        #: decide by one certified solve first (:func:`screen`; bisections), the policy only
+        #: when that does not decide
+        self.screen = screen
+        self.last_value = math.nan
 
-    def __call__(self, value: float, phase: str, **info: Any) -> PointResult:
+    def __call__(self, value: float, phase: str, *, full: bool = False, **info: Any) -> PointResult:
+        """Decide ``sign * value``: reuse, screen (as configured), else the full policy.
+
+        ``full``: the full policy only (a bracket's final end, whose evidence is reported).
+        """
         from lmic.compile import bind
 
         value = self.sign * value
@@ -277,21 +439,29 @@ class Evaluator:
         problem = bind(self.plan, self.sysobj, {**self.overrides, self.param: float(value)})
         bind_s = time.perf_counter() - t0
         self.sense = problem.objective.sense
-        res = decide(
-            problem,
-            self.backend,
-            warm_options(self.options, self.warm),
-            reference=self.reference if self.precondition else None,
-            keep_objective=self.keep_objective,
-            exact=self.exact,
-            value=float(value),
-            scale=self.scale,
-        )
+        res: PointResult | None = None
+        feasibility_question = not self.keep_objective or problem.objective.sense == "feasibility"
+        if not full and self.reuse and feasibility_question and self.reference is not None:
+            res = reuse(problem, self.reference, value=float(value), source=self.last_value)
+        if res is None and not full and self.screen and not self.precondition:
+            res = screen(problem, self.backend, warm_options(self.options, self.warm), value=float(value))
+        if res is None:
+            res = decide(
+                problem,
+                self.backend,
+                warm_options(self.options, self.warm),
+                reference=self.reference if self.precondition else None,
+                keep_objective=self.keep_objective,
+                exact=self.exact,
+                value=float(value),
+                scale=self.scale,
+            )
         res.bind_s = bind_s
-        if res.solution is not None and res.solution.x is not None:
+        if not res.reused and res.solution is not None and res.solution.x is not None:
             self.warm = res.solution
         if res.outcome == "feasible" and res.x is not None:
             res.problem = problem
+            self.last_value = float(value)
             self.reference = res.x
             self.precondition = self.precondition or _preconditioned(res)
             norm = float(np.max(np.abs(res.x))) if res.x.size else 0.0

@@ -80,6 +80,11 @@ class PointResult:
     problem: Problem | None = field(default=None, repr=False)
     #: the solver's answer that decided (the next point's warm start; not in the JSON)
     solution: Solution | None = field(default=None, repr=False)
+    #: certified without a solve: a neighbouring value's certified point holds here too
+    reused: bool = False
+    #: decided for a bisection only: the solver said infeasible, nothing is proven (a bracket's
+    #: final end is proven separately, never reported on this evidence)
+    screened: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form (without the point ``x``)."""
@@ -94,6 +99,8 @@ class PointResult:
             "derived": self.derived,
             "farkas_radius": self.farkas_radius,
             "attempts": self.attempts,
+            "reused": self.reused,
+            "screened": self.screened,
             "bind_s": self.bind_s,
             "solve_s": self.solve_s,
             "certify_s": self.certify_s,

@@ -74,9 +74,10 @@ def test_sweep_outcomes_are_the_same_warm_and_cold(monkeypatch):
     pytest.importorskip("cvxopt")
     system = qib_system(6)
     values = [0.001, 0.01, 0.02, 0.03]
-    warm = sweep("qib.thm1", system, "beta", values, backend="cvxopt")
+    # reuse=False: every value solved (a reused point would need no solve, hence no warm start)
+    warm = sweep("qib.thm1", system, "beta", values, backend="cvxopt", reuse=False)
     monkeypatch.setattr(points, "warm_options", lambda options, warm: options or SolveOptions())
-    cold = sweep("qib.thm1", system, "beta", values, backend="cvxopt")
+    cold = sweep("qib.thm1", system, "beta", values, backend="cvxopt", reuse=False)
     assert [p.outcome for p in warm.points] == [p.outcome for p in cold.points]
     assert any(p.outcome == "feasible" for p in warm.points)
     for p in warm.points:  # every certified point certified again, independently of the sweep
