@@ -404,6 +404,7 @@ def _bisect(
         return max(xtol, rtol * max(abs(a), abs(b)))
 
     iterations = 0
+    at_resolution = [False]
 
     def bisect_loop() -> None:
         nonlocal iterations
@@ -415,7 +416,11 @@ def _bisect(
             state["iteration"] = iterations
             # remaining halvings (the relative target moves with the bracket)
             state["total"] = iterations - 1 + max(1, math.ceil(math.log2((upper - lower) / target(lower, upper))))
-            feasible(0.5 * (lower + upper), "bisect")
+            mid = 0.5 * (lower + upper)
+            if not lower < mid < upper:  # the bracket is two adjacent floats: it cannot shrink
+                at_resolution[0] = True
+                break
+            feasible(mid, "bisect")
 
     while lower is not None and upper is not None and upper > lower:
         bisect_loop()
@@ -445,7 +450,10 @@ def _bisect(
                 message = f"no {'upper' if is_max else 'lower'} bound found for '{param}' within {max_evals} points"
     converged = lower is not None and upper is not None and upper - lower <= target(lower, upper)
     if lower is not None and upper is not None and not converged and not message:
-        message = f"stopped after {len(ev.points)} points (--max-evals) before the tolerance"
+        if at_resolution[0]:
+            message = "stopped at floating-point resolution: the bracket's ends are adjacent numbers"
+        else:
+            message = f"stopped after {len(ev.points)} points (--max-evals) before the tolerance"
     proven = [
         sign * p.value
         for p in ev.points

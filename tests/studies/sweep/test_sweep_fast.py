@@ -180,3 +180,16 @@ def test_reuse_never_certifies_a_point_that_fails():
     assert points.reuse(_problem(system, 1.1 * truth), inside.x) is None
     near = points.reuse(_problem(system, 0.4 * truth), inside.x, value=0.4 * truth, source=0.5 * truth)
     assert near is not None and near.reused and _certified(system, 0.4 * truth, near.x)
+
+
+def test_bisection_stops_at_floating_point_resolution():
+    # tolerances far below the spacing of floats: the bracket ends as two adjacent numbers
+    # around the closed form, with a message saying so, instead of bisecting forever
+    system, truth = _system(3, 0)
+    res = maximize(
+        decay, system, "a", lo=0.0, hi=2.0 * truth + 1.0, rtol=1e-300, xtol=1e-300, max_evals=10**9, backoff=0.0
+    )
+    assert abs(res.lower - truth) <= 1e-6 * truth  # the certified end, to the certifier's accuracy
+    assert np.nextafter(res.lower, np.inf) == res.upper
+    assert "floating-point resolution" in res.message
+    assert len(res.points) < 200
