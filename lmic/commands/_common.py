@@ -153,17 +153,12 @@ def check_executor_args(args: argparse.Namespace) -> None:
     ...
     lmic.errors.DataError: --workers 100000: at most ... on this machine (... cores; each worker is a process)
     """
-    if args.workers is not None and args.workers < 1:
-        raise DataError(f"--workers {args.workers}: give at least 1")
+    from lmic.studies.executors import check_workers
+
     spec = args.executor
     if spec is not None and not (spec in ("local", "dask") or spec.startswith("tcp://")):
         raise DataError(f"--executor {spec}: use local, dask or tcp://HOST:PORT")
-    cores = os.cpu_count() or 1
-    most = max(16, 8 * cores)
-    if args.workers is not None and args.workers > most and not (spec or "").startswith("tcp://"):
-        raise DataError(
-            f"--workers {args.workers}: at most {most} on this machine ({cores} cores; each worker is a process)"
-        )
+    check_workers(spec, args.workers)
 
 
 def __getattr__(name: str) -> Any:

@@ -238,6 +238,26 @@ class DaskExecutor(Executor):
                 self._cluster.close()
 
 
+def check_workers(spec: str | None, workers: int | None) -> None:
+    """Refuse a worker count that would fork more processes than this machine can run.
+
+    A remote scheduler (``tcp://``) is not limited here: its workers are elsewhere.
+
+    >>> check_workers("local", 10**5)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    lmic.errors.DataError: --workers 100000: at most ... on this machine (... cores; each worker is a process)
+    """
+    if workers is not None and workers < 1:
+        raise DataError(f"--workers {workers}: give at least 1")
+    cores = os.cpu_count() or 1
+    most = max(16, 8 * cores)
+    if workers is not None and workers > most and not (spec or "").startswith("tcp://"):
+        raise DataError(
+            f"--workers {workers}: at most {most} on this machine ({cores} cores; each worker is a process)"
+        )
+
+
 def make_executor(spec: str, workers: int | None = None) -> Executor:
     """``local``, ``dask`` or ``tcp://HOST:PORT`` -> an executor.
 
@@ -246,6 +266,7 @@ def make_executor(spec: str, workers: int | None = None) -> Executor:
     ...
     lmic.errors.DataError: --executor ssh://x: use local, dask or tcp://HOST:PORT
     """
+    check_workers(spec, workers)
     if spec == "local":
         return LocalExecutor(workers)
     if spec == "dask":

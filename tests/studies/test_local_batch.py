@@ -416,3 +416,17 @@ def test_runners_yield_the_cores_to_the_driver():
         assert os.getpriority(os.PRIO_PROCESS, pid) == mine + RUNNER_NICENESS
     finally:
         ex.close()
+
+
+def test_make_executor_refuses_more_workers_than_the_machine_can_run():
+    # the Python API has the CLI's limit: a huge count is bad input, before any process starts
+    import os
+
+    from lmic.errors import DataError
+    from lmic.studies.executors import make_executor
+
+    most = max(16, 8 * (os.cpu_count() or 1))
+    with pytest.raises(DataError, match=f"--workers {most + 1}: at most {most}"):
+        make_executor("local", most + 1)
+    with pytest.raises(DataError, match="--workers 0: give at least 1"):
+        make_executor("dask", 0)
