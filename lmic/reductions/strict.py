@@ -98,6 +98,7 @@ Examples
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 from lmic.certify.farkas import verify_farkas
@@ -114,6 +115,7 @@ from lmic.reductions.strict_common import (  # noqa: F401
     _trace_row,
     has_strict,
     is_scale_free,
+    point_test,
     verify_point,
 )
 from lmic.reductions.strict_fixed import _fixed_margin, _shift, achieved_margin, invert_fixed  # noqa: F401
@@ -292,7 +294,12 @@ def solve(
     attempts: list[Solution] = []
     for k, strategy in enumerate(steps):
         reduced, inverse = reduce(problem, options, strategy)
-        sol = invert(run(reduced, options), inverse, options, problem)
+        opts = options
+        if first_order and strategy == "fixed-margin" and problem.objective.sense == "feasibility":
+            # any point of the original problem decides: a first-order solver may stop at the
+            # first iterate that verifies (SolveOptions.accept), long before its own test
+            opts = replace(options, accept=point_test(problem))
+        sol = invert(run(reduced, opts), inverse, options, problem)
         attempts.append(sol)
         if k == len(steps) - 1 or _decided(sol, problem, strategy, steps):
             break

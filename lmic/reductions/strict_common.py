@@ -11,6 +11,7 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -19,9 +20,9 @@ import numpy as np
 from lmic.backends.lowering import has_strict  # one definition; re-exported here for the passes
 from lmic.certify.check import Tolerances, lmi_report
 from lmic.ir.problem import Problem
-from lmic.ir.svec import tril_size
+from lmic.ir.svec import tril_size, tril_unvec
 
-__all__ = ["StrictInverse", "has_strict", "is_scale_free", "verify_point"]
+__all__ = ["StrictInverse", "has_strict", "is_scale_free", "verify_point", "point_test"]
 
 
 @dataclass
@@ -124,3 +125,34 @@ def verify_point(problem: Problem, x: np.ndarray | None) -> tuple[bool, str]:
             if not ok:
                 return False, f"row '{lin.names[r]}': {res[r]:.3g}"
     return True, ""
+
+
+def point_test(problem: Problem) -> Callable[[np.ndarray], bool]:
+    """:func:`verify_point` on ``problem`` as a test of a solver's iterates (``SolveOptions.accept``).
+
+    A cheap rejection first: every strict LMI's ``F(x)`` must have a Cholesky factor (positive
+    definite in float64; a failed factorisation means ``lambda_min <= 0`` up to rounding, which
+    :func:`verify_point` would reject too); only then the full test, whose answer is returned.
+    The certifier judges the final answer again.
+
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> test = point_test(lyapunov_problem(-np.eye(2)))
+    >>> test(np.array([1.0, 0.0, 1.0])), test(np.array([1.0, 0.0, -1.0])), test(np.zeros(2))
+    (True, False, False)
+    """
+    strict = [lmi for lmi in problem.lmis if lmi.strict and lmi.dim]
+    n = problem.n
+
+    def accept(x: np.ndarray) -> bool:
+        x = np.asarray(x, dtype=float)
+        if x.shape != (n,) or not np.all(np.isfinite(x)):
+            return False
+        xx = np.concatenate([[1.0], x])
+        for lmi in strict:
+            try:
+                np.linalg.cholesky(tril_unvec(lmi.coeffs @ xx, lmi.dim))
+            except np.linalg.LinAlgError:
+                return False
+        return verify_point(problem, x)[0]
+
+    return accept
