@@ -42,6 +42,8 @@ def to_jsonable(obj: Any, *, nonfinite: str = "null") -> Any:
     if isinstance(obj, list | tuple):
         return [to_jsonable(v, nonfinite=nonfinite) for v in obj]
     if isinstance(obj, np.ndarray):
+        if obj.dtype.kind in "iub" or (obj.dtype.kind == "f" and np.all(np.isfinite(obj))):
+            return obj.tolist()  # already plain ints, floats and bools: no walk over the entries
         return to_jsonable(obj.tolist(), nonfinite=nonfinite)
     if isinstance(obj, np.bool_):
         return bool(obj)

@@ -19,6 +19,7 @@ import numpy as np
 
 from lmic.backends.lowering import has_strict  # one definition; re-exported here for the passes
 from lmic.certify.check import Tolerances, lmi_report
+from lmic.certify.spectra import prepared
 from lmic.ir.problem import Problem
 from lmic.ir.svec import tril_size, tril_unvec
 
@@ -70,12 +71,16 @@ def _identity_tril(d: int) -> np.ndarray:
 
 
 def _trace_row(lmi: Any) -> np.ndarray:
-    """``[tr F0, tr F_1, ..., tr F_n]`` of one LMI (one pass over its entries)."""
-    C = lmi.coeffs.tocoo()
-    on_diagonal = np.zeros(C.shape[0], dtype=bool)
-    on_diagonal[_diagonal_positions(lmi.dim)] = True
-    keep = on_diagonal[C.row]
-    return np.bincount(C.col[keep], weights=C.data[keep], minlength=C.shape[1])
+    """``[tr F0, tr F_1, ..., tr F_n]`` of one LMI: the sum of its diagonal storage rows (of the
+    CSR copy the certifier keeps, :func:`lmic.certify.spectra.prepared`).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI
+    >>> _trace_row(LMI("F", 2, sp.csc_matrix([[1.0, 2.0], [5.0, 7.0], [3.0, 0.0]]))).tolist()
+    [4.0, 2.0]
+    """
+    C = prepared(lmi).C
+    return np.asarray(C[_diagonal_positions(lmi.dim)].sum(axis=0), dtype=float).ravel()
 
 
 def _restrict(duals: dict | None, n_lmis: int, n_rows: int) -> dict | None:
