@@ -19,7 +19,6 @@ import numpy as np
 
 from lmic.backends.lowering import has_strict  # one definition; re-exported here for the passes
 from lmic.certify.check import Tolerances, lmi_report
-from lmic.certify.spectra import prepared
 from lmic.ir.problem import Problem
 from lmic.ir.svec import tril_size, tril_unvec
 
@@ -48,10 +47,12 @@ def is_scale_free(problem: Problem) -> bool:
     >>> is_scale_free(p)
     False
     """
-    if not all(lmi.homogeneous for lmi in problem.lmis):
-        return False
-    a0 = problem.linear.A[:, 0]
-    return a0.nnz == 0 or not np.any(a0.toarray())
+    for lmi in problem.lmis:  # F0 = 0: the constant column holds no nonzero
+        C = lmi.coeffs if lmi.coeffs.format == "csc" else lmi.coeffs.tocsc()
+        if np.any(C.data[C.indptr[0] : C.indptr[1]]):
+            return False
+    A = problem.linear.A.tocsr()
+    return not np.any(A.data[A.indices == 0])
 
 
 def _diagonal_positions(d: int) -> np.ndarray:
@@ -71,16 +72,21 @@ def _identity_tril(d: int) -> np.ndarray:
 
 
 def _trace_row(lmi: Any) -> np.ndarray:
-    """``[tr F0, tr F_1, ..., tr F_n]`` of one LMI: the sum of its diagonal storage rows (of the
-    CSR copy the certifier keeps, :func:`lmic.certify.spectra.prepared`).
+    """``[tr F0, tr F_1, ..., tr F_n]`` of one LMI: the sum of its diagonal storage rows, by one
+    pass over the CSC arrays (no sparse objects built).
 
     >>> import scipy.sparse as sp
     >>> from lmic.ir.problem import LMI
     >>> _trace_row(LMI("F", 2, sp.csc_matrix([[1.0, 2.0], [5.0, 7.0], [3.0, 0.0]]))).tolist()
     [4.0, 2.0]
     """
-    C = prepared(lmi).C
-    return np.asarray(C[_diagonal_positions(lmi.dim)].sum(axis=0), dtype=float).ravel()
+    C = lmi.coeffs if lmi.coeffs.format == "csc" else lmi.coeffs.tocsc()
+    on_diagonal = np.zeros(C.shape[0], dtype=bool)
+    on_diagonal[_diagonal_positions(lmi.dim)] = True
+    ncols = C.shape[1]
+    col = np.repeat(np.arange(ncols), np.diff(C.indptr))
+    keep = on_diagonal[C.indices[C.indptr[0] : C.indptr[-1]]]
+    return np.bincount(col[keep], weights=C.data[C.indptr[0] : C.indptr[-1]][keep], minlength=ncols).astype(float)
 
 
 def _restrict(duals: dict | None, n_lmis: int, n_rows: int) -> dict | None:

@@ -52,31 +52,52 @@ def _shift(lmi: Any, margin: float) -> Any:
 
 
 def _fixed_margin(problem: Problem, margin: float, normalise: bool = False) -> Problem:
+    """Every strict LMI shifted by ``margin`` (:func:`_shift`), every strict row ``a0 - margin +
+    a . x >= 0``; with ``normalise``, one row ``d - sum_k x_k tr F_k >= 0`` per strict LMI and
+    one ``1 - a . x >= 0`` per strict row, after the original rows. The rows are assembled in
+    one sparse construction (triplets), whatever their number."""
     lmis = []
-    norm_rows: list[sp.spmatrix] = []
     n = problem.n
+    rows: list[np.ndarray] = []
+    cols: list[np.ndarray] = []
+    vals: list[np.ndarray] = []
+    lin = problem.linear
+    n_rows = len(lin)
+    if n_rows:
+        A = lin.A.tocoo()
+        rows, cols, vals = [A.row], [A.col], [A.data]
+    extra = 0  # normalisation rows so far
     for lmi in problem.lmis:
         if lmi.strict:
             if normalise:  # trace F(x) <= d  <=>  d - sum_k x_k tr F_k >= 0
-                norm_rows.append(sp.csr_matrix(np.concatenate([[float(lmi.dim)], -_trace_row(lmi)[1:]])[None, :]))
+                tr = _trace_row(lmi)
+                ks = np.flatnonzero(tr[1:]) + 1
+                rows.append(np.full(len(ks) + 1, n_rows + extra))
+                cols.append(np.concatenate([[0], ks]))
+                vals.append(np.concatenate([[float(lmi.dim)], -tr[ks]]))
+                extra += 1
             lmi = _shift(lmi, margin)
         lmis.append(lmi)
-    lin = problem.linear
-    A = lin.A.tocsr()
-    strict_rows = np.flatnonzero(np.asarray(lin.strict, dtype=bool)) if len(lin) else np.zeros(0, dtype=int)
+    strict_rows = np.flatnonzero(np.asarray(lin.strict, dtype=bool)) if n_rows else np.zeros(0, dtype=int)
     if len(strict_rows):
+        rows.append(strict_rows)  # a0 - margin (summed with a0 by the construction)
+        cols.append(np.zeros(len(strict_rows), dtype=int))
+        vals.append(np.full(len(strict_rows), -margin))
         if normalise:  # a . x <= 1 for every strict row
-            S = A[strict_rows]
-            norm_rows.append(sp.hstack([sp.csr_matrix(np.ones((len(strict_rows), 1))), -S[:, 1:]], format="csr"))
-        zeros = np.zeros(len(strict_rows), dtype=int)
-        A = (A + sp.csr_matrix((np.full(len(strict_rows), -margin), (strict_rows, zeros)), shape=A.shape)).tocsr()
-    kinds, names = list(lin.kinds), list(lin.names)
-    if norm_rows:
-        rows = sp.vstack(norm_rows, format="csr")
-        A = sp.vstack([A, rows], format="csr") if len(lin) else rows
-        kinds += ["ge"] * rows.shape[0]
-        names += [f"scale normalisation {k}" for k in range(rows.shape[0])]
-    linear = LinearConstraints(A, kinds, [False] * len(kinds), names)
+            S = lin.A.tocsr()[strict_rows].tocoo()
+            keep = S.col > 0
+            rows.append(n_rows + extra + np.concatenate([np.arange(len(strict_rows)), S.row[keep]]))
+            cols.append(np.concatenate([np.zeros(len(strict_rows), dtype=int), S.col[keep]]))
+            vals.append(np.concatenate([np.ones(len(strict_rows)), -S.data[keep]]))
+            extra += len(strict_rows)
+    shape = (n_rows + extra, 1 + n)
+    if rows:
+        A_new = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=shape)
+    else:
+        A_new = sp.csr_matrix(shape)
+    kinds = list(lin.kinds) + ["ge"] * extra
+    names = list(lin.names) + [f"scale normalisation {k}" for k in range(extra)]
+    linear = LinearConstraints(A_new, kinds, [False] * len(kinds), names)
     objective = problem.objective
     if objective.sense == "feasibility":
         objective = Objective("feasibility", np.zeros(n + 1))
