@@ -55,17 +55,18 @@ class Prepared:
 
     Attributes
     ----------
-    C : scipy.sparse.csr_matrix
-        The coefficients ``[F0 | F_1 ... F_n]`` (storage rows), CSR for the products.
-    absC : scipy.sparse.csr_matrix
+    C : scipy.sparse.csc_matrix
+        The coefficients ``[F0 | F_1 ... F_n]`` (storage rows), canonical CSC (the IR's own
+        format: no conversion).
+    absC : scipy.sparse.csc_matrix
         ``|C|`` entrywise.
     k : int
         The largest number of terms of one entry (the float error bound's ``k``).
     dim : int
     """
 
-    C: sp.csr_matrix
-    absC: sp.csr_matrix
+    C: sp.csc_matrix
+    absC: sp.csc_matrix
     k: int
     dim: int
 
@@ -96,8 +97,12 @@ def prepared(lmi: Any) -> Prepared:
     if hit is not None and hit[0] is lmi and hit[1] is lmi.coeffs:
         _PREPARED.move_to_end(key)
         return hit[2]
-    C = lmi.coeffs.tocsr()
-    prep = Prepared(C=C, absC=abs(C), k=int(np.max(np.diff(C.indptr))) if C.nnz else 0, dim=lmi.dim)
+    C = sp.csc_matrix(lmi.coeffs, copy=False)
+    if not C.has_canonical_format:
+        C = C.copy()
+        C.sum_duplicates()  # k counts the terms of an entry once
+    k = int(np.bincount(C.indices, minlength=1).max()) if C.nnz else 0  # terms per entry (row)
+    prep = Prepared(C=C, absC=abs(C), k=k, dim=lmi.dim)
     _PREPARED[key] = (lmi, lmi.coeffs, prep)
     if len(_PREPARED) > _PREPARED_SIZE:
         _PREPARED.popitem(last=False)
