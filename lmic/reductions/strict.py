@@ -74,6 +74,10 @@ reduced to closed ones before lowering, and the answer is mapped back. Two reduc
       when it decides: its point is a *verified strictly feasible point* (solver ``optimal`` and
       every LMI and row holds at ``x`` by the certifier's rules, :func:`verify_point`), or its
       Farkas ray proves the original problem infeasible. Otherwise ``max-margin`` decides.
+      A first-order solver gets the point test of the original problem as
+      ``SolveOptions.accept`` (:func:`point_test`): SCS pauses every few iterations and stops at
+      the first iterate that verifies (``qib.thm1``: iteration 6 instead of its own convergence
+      test at 25), the certifier judging the answer as always.
 
 Every attempt is listed in ``Solution.info["strict_attempts"]`` and the strategy of the
 returned answer in ``Solution.strategy``.
