@@ -16,6 +16,9 @@ import numpy as np
 
 __all__ = ["to_jsonable"]
 
+#: element types that to_jsonable returns unchanged when finite
+_PLAIN = {float, int}
+
 
 def to_jsonable(obj: Any, *, nonfinite: str = "null") -> Any:
     """numpy arrays and scalars -> lists and floats, recursively.
@@ -40,8 +43,12 @@ def to_jsonable(obj: Any, *, nonfinite: str = "null") -> Any:
     if isinstance(obj, dict):
         return {str(k): to_jsonable(v, nonfinite=nonfinite) for k, v in obj.items()}
     if isinstance(obj, list | tuple):
+        if set(map(type, obj)) <= _PLAIN and all(map(math.isfinite, obj)):
+            return list(obj)  # plain finite ints and floats (a matrix row): nothing to convert
         return [to_jsonable(v, nonfinite=nonfinite) for v in obj]
     if isinstance(obj, np.ndarray):
+        if obj.dtype.kind in "iub" or (obj.dtype.kind == "f" and np.all(np.isfinite(obj))):
+            return obj.tolist()  # already plain ints, floats and bools: no walk over the entries
         return to_jsonable(obj.tolist(), nonfinite=nonfinite)
     if isinstance(obj, np.bool_):
         return bool(obj)

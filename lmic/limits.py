@@ -127,6 +127,10 @@ def read_text(path: Any, where: str, error: type[LmicError] = DataError) -> str:
         raise error(f"{where}: not UTF-8 text (byte {err.start})") from None
 
 
+#: element types that are never containers (a fast test for rows of numbers)
+_LEAVES = {int, float, str, bool, type(None)}
+
+
 def check_depth(obj: Any, where: str, error: type[LmicError] = DataError, limit: int = MAX_DEPTH) -> None:
     """Refuse collections nested deeper than ``limit`` (iterative: no recursion).
 
@@ -142,6 +146,8 @@ def check_depth(obj: Any, where: str, error: type[LmicError] = DataError, limit:
             if depth > limit:
                 raise error(f"{where}: nested deeper than {limit} levels")
             children = node.values() if isinstance(node, dict) else node
+            if set(map(type, children)) <= _LEAVES:
+                continue  # numbers and strings only (a matrix row): nothing nested below
             stack.extend((c, depth + 1) for c in children if isinstance(c, dict | list))
 
 

@@ -62,6 +62,13 @@ class SolveOptions:
         and dual starting points) use it when the shapes match and ignore it otherwise, as do
         backends that cannot warm-start. It changes where the solver starts, never what is
         certified.
+    accept : callable or None
+        Set by the engine, not by users: ``accept(x) -> bool`` tests a point of the problem given
+        to the solver against the *original* problem (:func:`lmic.reductions.strict.verify_point`
+        on a fixed-margin feasibility solve). A first-order solver that can pause (SCS) tests its
+        iterates every few iterations and stops at the first one that passes, instead of waiting
+        for its own convergence test (every 25 iterations); the certifier still judges the
+        answer. Other backends ignore it.
 
     Every field is checked when it is set (at construction and on assignment): a tolerance in
     ``(0, 1)``, a positive finite time limit and margin, a positive integer ``max_iter``;
@@ -94,6 +101,7 @@ class SolveOptions:
     gap: float = 1e-4
     extra: dict[str, Any] = field(default_factory=dict)
     warm_start: Solution | None = None
+    accept: Callable[[np.ndarray], bool] | None = None
 
     def __setattr__(self, name: str, value: Any) -> None:
         # every assignment is checked, at construction and later (the CLI sets fields one by one)
@@ -170,7 +178,14 @@ def _check_gap(value: Any) -> float:
     return value
 
 
+def _check_accept(value: Any) -> Callable[[np.ndarray], bool] | None:
+    if value is not None and not callable(value):
+        raise LmicError(f"accept must be a callable or None, got {type(value).__name__}")
+    return value
+
+
 _OPTION_CHECKS: dict[str, Callable[[Any], Any]] = {
+    "accept": _check_accept,
     "warm_start": _check_warm_start,
     "tol": _check_tol,
     "time_limit": _check_time_limit,

@@ -167,7 +167,10 @@ def parse_matrix(value: Any, where: str) -> np.ndarray:
     if isinstance(value, np.generic):
         value = value.item()
     value = _number_literal(value)
-    if _is_number(value):
+    fast = _plain_rows(value)
+    if fast is not None:  # a rectangular list of lists of floats (and ints): one conversion
+        arr = fast
+    elif _is_number(value):
         arr = np.array([[_float(value, where)]])
     elif isinstance(value, list):
         value = [[_number_literal(v) for v in r] if isinstance(r, list) else _number_literal(r) for r in value]
@@ -200,6 +203,26 @@ def parse_matrix(value: Any, where: str) -> np.ndarray:
         i, j = np.argwhere(bad)[0]
         raise DataError(f"{where}: entry ({i + 1},{j + 1}) is {arr[i, j]} (NaN and Inf are not allowed)")
     return arr
+
+
+def _plain_rows(value: Any) -> np.ndarray | None:
+    """``value`` as a float array when it is a non-empty rectangular list of non-empty lists of
+    Python floats and ints (no bools, strings or anything else) within the size limit; else
+    ``None`` (the entry-by-entry checks of :func:`parse_matrix` then name what is wrong)."""
+    if not isinstance(value, list) or not value or not all(type(r) is list for r in value):
+        return None
+    width = len(value[0])
+    if not width or len(value) > MAX_DIMENSION or width > MAX_DIMENSION or any(len(r) != width for r in value):
+        return None
+    kinds: set[type] = set()
+    for row in value:
+        kinds.update(map(type, row))
+    if not kinds <= {float, int}:
+        return None
+    try:
+        return np.array(value, dtype=float)
+    except OverflowError:  # an integer too large for a float64: the slow path says which
+        return None
 
 
 def _show(v: Any) -> str:

@@ -75,6 +75,19 @@ def scs_unvec(v: np.ndarray, d: int) -> np.ndarray:
 #: SCS's s-form lowering (apply: ConicData; invert: IR multipliers)
 FORM = SForm(scs_vec)
 
+#: with ``SolveOptions.accept``: iterations between two tests of the iterate (SCS tests its own
+#: convergence only every 25; a restart from the iterate every iteration stalls, every 2-3 does
+#: not: ``qib.thm1`` n = 10..50 verifies at iteration 3-6, benchmarks/routes.py)
+CHECK_EVERY = 3
+#: ... up to this many iterations; then the rest of the budget runs as one warm-started solve
+CHECK_UNTIL = 30
+
+#: SCS's set-up factorises its KKT matrix: up to this many variables SCS's bundled QDLDL is
+#: faster than the MKL PARDISO its ``auto`` choice prefers (``qib.thm1``: 0.6 against 2.1 ms at
+#: 106 variables, 64 against 119 ms at 1621, about even at 2526; PARDISO ahead from ~3600:
+#: 0.65 against 1.3 s), unless ``SolveOptions.extra`` names a ``linear_solver``
+QDLDL_MAX_VARIABLES = 3000
+
 
 def _warm_start(prev: Solution | None, shape: tuple[int, int]) -> dict[str, np.ndarray]:
     """SCS's ``x``, ``y``, ``s`` initial guesses from ``prev`` (``SolveOptions.warm_start``: a
@@ -119,6 +132,9 @@ class SCSBackend(Backend):
         "failed": "error",
         "sigint": "error",
         "unfinished": "error",
+        # stopped early by lmic: the iterate passed SolveOptions.accept (the original problem's
+        # point check); certified like any other answer
+        "point_verified": "optimal",
     }
     INEXACT_INFEASIBLE: ClassVar[frozenset[str]] = frozenset({"infeasible_inaccurate"})
     INEXACT_UNBOUNDED: ClassVar[frozenset[str]] = frozenset({"unbounded_inaccurate"})
@@ -140,6 +156,8 @@ class SCSBackend(Backend):
         s.update(options.extra)
         if options.warm_start is not None:  # taken out again by call(): not an scs.SCS keyword
             s["_warm_start"] = options.warm_start
+        if options.accept is not None:  # likewise
+            s["_accept"] = options.accept
         return s
 
     def call(self, problem: Problem, settings: dict[str, Any]) -> NativeResult:
@@ -157,24 +175,36 @@ class SCSBackend(Backend):
             cone["l"] = data.n_ge
         if data.psd:
             cone["s"] = list(data.psd)
-        t0 = time.perf_counter()
         warm_from = settings.pop("_warm_start", None)  # SolveOptions.warm_start (sweeps), see settings()
-        solver = scs.SCS({"A": data.A, "b": data.b, "c": data.c}, cone, **settings)
+        accept = settings.pop("_accept", None)  # SolveOptions.accept, see settings()
         warm = _warm_start(warm_from, data.A.shape)
-        result = solver.solve(warm_start=True, **warm) if warm else solver.solve()
-        solve_s = time.perf_counter() - t0
+        qp = {"A": data.A, "b": data.b, "c": data.c}
+        if "linear_solver" not in settings and hasattr(scs, "LinearSolver") and data.A.shape[1] <= QDLDL_MAX_VARIABLES:
+            settings["linear_solver"] = "qdldl"
+        extra_info: dict[str, Any] = {}
+        if accept is None:
+            t0 = time.perf_counter()
+            solver = scs.SCS(qp, cone, **settings)
+            result = solver.solve(warm_start=True, **warm) if warm else solver.solve()
+            solve_s = time.perf_counter() - t0
+            verified_at = None
+        else:
+            result, solve_s, verified_at, extra_info = _solve_checked(scs, qp, cone, settings, warm, accept)
         info = result["info"]
         shown = str(info.get("status", ""))
         native = _STATUS_NAMES.get(int(info["status_val"]), shown)
-        if "time_limit" in shown:
+        if "time_limit" in shown or extra_info.pop("time_limit", False):
             native = "time_limit"
+        if verified_at is not None:
+            native, shown = "point_verified", f"point verified at iteration {verified_at} ({shown})"
         return NativeResult(
             native,
             x=np.asarray(result["x"], dtype=float),
             duals=FORM.invert(data, np.asarray(result["y"], dtype=float), len(problem.linear)),
             solve_s=solve_s,
-            iterations=int(info.get("iter", 0)),
+            iterations=int(extra_info.get("iterations", info.get("iter", 0))),
             info={
+                **extra_info,
                 "solver_time_s": float(info.get("solve_time", 0.0)) / 1e3,
                 "warm_started": bool(warm),
                 # the native iterates, for the next solve of a problem of the same shape
@@ -182,3 +212,60 @@ class SCSBackend(Backend):
             },
             shown=shown or native,
         )
+
+
+def _solve_checked(
+    scs: Any,
+    qp: dict[str, Any],
+    cone: dict[str, Any],
+    settings: dict[str, Any],
+    warm: dict[str, np.ndarray],
+    accept: Any,
+) -> tuple[dict[str, Any], float, int | None, dict[str, Any]]:
+    """SCS paused every :data:`CHECK_EVERY` iterations (up to :data:`CHECK_UNTIL`) to test its
+    iterate with ``accept``; the rest of the budget as one warm-started solve.
+
+    Returns ``(result, solve_s, verified_at, info)``: SCS's last result, the time inside SCS
+    (set-up and iterations, not the tests), the iteration whose point passed (``None``: none
+    did, the result is SCS's own) and ``{"iterations", "accept_tests", "accept_s"}`` (and
+    ``"time_limit": True`` when the time limit ran out between two pauses).
+    """
+    budget = int(settings.get("max_iters", 100_000))
+    limit = settings.get("time_limit_secs")
+    step = min(CHECK_EVERY, budget)
+    t0 = time.perf_counter()
+    solver = scs.SCS(qp, cone, **dict(settings, max_iters=step))
+    result = solver.solve(warm_start=True, **warm) if warm else solver.solve()
+    solve_s = time.perf_counter() - t0
+    done, tests, tests_s = int(result["info"]["iter"]), 0, 0.0
+    while True:
+        info = result["info"]
+        if int(info["iter"]) < step or int(info["status_val"]) not in (0, 2) or "time_limit" in str(info["status"]):
+            break  # SCS stopped on its own (converged, infeasible, unbounded, failed, its time limit)
+        t1 = time.perf_counter()
+        x = np.asarray(result["x"], dtype=float)
+        ok = bool(np.all(np.isfinite(x)) and accept(x))
+        tests, tests_s = tests + 1, tests_s + time.perf_counter() - t1
+        if ok:
+            return result, solve_s, done, {"iterations": done, "accept_tests": tests, "accept_s": tests_s}
+        left = budget - done
+        if left <= 0:
+            break
+        if limit is not None and time.perf_counter() - t0 >= float(limit):
+            stopped = {"iterations": done, "accept_tests": tests, "accept_s": tests_s, "time_limit": True}
+            return result, solve_s, None, stopped
+        t1 = time.perf_counter()
+        if done + step <= CHECK_UNTIL and left >= step:
+            result = solver.solve(warm_start=True)  # from the iterate it stopped at
+        else:  # no more tests: the rest of the budget at once, from the last iterate
+            rest = dict(settings, max_iters=left)
+            if limit is not None:
+                rest["time_limit_secs"] = max(1e-3, float(limit) - (time.perf_counter() - t0))
+            iterate = {k: np.asarray(result[k], dtype=float) for k in ("x", "y", "s")}
+            result = scs.SCS(qp, cone, **rest).solve(warm_start=True, **iterate)
+            solve_s += time.perf_counter() - t1
+            done += int(result["info"]["iter"])
+            break
+        solve_s += time.perf_counter() - t1
+        done += int(result["info"]["iter"])
+    return result, solve_s, None, {"iterations": done, "accept_tests": tests, "accept_s": tests_s}

@@ -22,9 +22,8 @@ from typing import Any
 import numpy as np
 
 from lmic.certify.result import Tolerances
-from lmic.certify.spectra import block_spectrum, perron_root
+from lmic.certify.spectra import block_spectrum, prepared, term_scale
 from lmic.ir.problem import LMI, Problem
-from lmic.ir.svec import tril_unvec
 
 __all__ = ["lmi_report", "linear_reports", "lmi_reason", "linear_reason", "UNIT_ROUNDOFF"]
 
@@ -46,11 +45,11 @@ def _spectral_norm_nonneg(M: np.ndarray) -> float:
     return float(max(np.linalg.eigvalsh(M)[-1], 0.0))
 
 
-def _below_coefficient_scale(T: float, absC: Any, xx: np.ndarray, d: int, zero_rel: float) -> bool:
+def _below_coefficient_scale(T: float, lmi: LMI, zero_rel: float) -> bool:
     """``T <= zero_rel * ||sum_i |C_i|||`` (the point is ~0 for this LMI); the coefficient
     scale is only computed when its cheap upper bound (the largest row sum) allows it."""
-    M = tril_unvec(absC @ np.ones_like(xx), d)
-    if T > zero_rel * float(M.sum(axis=1).max(initial=0.0)):
+    rows, M = prepared(lmi).coefficient_scale
+    if T > zero_rel * rows:
         return False  # the Perron root is at most the largest row sum
     coef_scale = _spectral_norm_nonneg(M)
     return coef_scale > 0 and T <= zero_rel * coef_scale
@@ -80,13 +79,10 @@ def lmi_report(lmi: LMI, x: np.ndarray, tol: Tolerances, *, inaccurate: bool = F
     >>> r["min_eig"], r["rel_margin"], r["ok"]
     (3.0, 1.0, True)
     """
-    C = lmi.coeffs.tocsr()
-    xx = np.concatenate([[1.0], np.asarray(x, dtype=float)])
     d = lmi.dim
     F, eig = block_spectrum(lmi, x)  # one eigen-decomposition per block and point (shared)
-    absC = abs(C)
-    T = perron_root(tril_unvec(absC @ np.abs(xx), d))  # no second decomposition
-    k = int(np.max(np.diff(C.indptr))) if C.nnz else 0
+    T = term_scale(lmi, x)  # kept with the spectrum
+    k = prepared(lmi).k  # per LMI, not per point
     err_rel = 10.0 * (k + d + 2) * _U
     out: dict[str, Any] = {"name": lmi.name, "dim": d, "strict": bool(lmi.strict)}
     if d == 0:  # an empty LMI holds vacuously
@@ -129,7 +125,7 @@ def lmi_report(lmi: LMI, x: np.ndarray, tol: Tolerances, *, inaccurate: bool = F
         rel_margin=rel,
         float_err=err_rel * T,
     )
-    zero = T == 0.0 or _below_coefficient_scale(T, absC, xx, d, tol.zero_rel)
+    zero = T == 0.0 or _below_coefficient_scale(T, lmi, tol.zero_rel)
     if lmi.strict:
         thr = max(tol.strict_rel, err_rel) * T
         ok = (not zero) and lmin > thr

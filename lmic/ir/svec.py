@@ -26,6 +26,7 @@ True
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -76,15 +77,25 @@ def tril_index(i, j, d: int):
     return j * d - (j * (j - 1)) // 2 + (i - j)
 
 
+@functools.lru_cache(maxsize=64)
+def _tril_rows_cols(d: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`tril_rows_cols`, computed once per ``d`` (read-only arrays)."""
+    cols, rows = np.triu_indices(d)  # (j, i) pairs with j <= i in row-major of the upper = colmajor lower
+    order = np.lexsort((rows, cols))
+    r, c = rows[order], cols[order]
+    r.setflags(write=False)
+    c.setflags(write=False)
+    return r, c
+
+
 def tril_rows_cols(d: int) -> tuple[np.ndarray, np.ndarray]:
     """Row and column indices ``(i, j)`` of every storage position, in storage order.
 
     >>> tril_rows_cols(2)
     (array([0, 1, 1]), array([0, 0, 1]))
     """
-    cols, rows = np.triu_indices(d)  # (j, i) pairs with j <= i in row-major of the upper = colmajor lower
-    order = np.lexsort((rows, cols))
-    return rows[order], cols[order]
+    r, c = _tril_rows_cols(d)
+    return r.copy(), c.copy()
 
 
 def tril_vec(M: np.ndarray) -> np.ndarray:
@@ -94,7 +105,7 @@ def tril_vec(M: np.ndarray) -> np.ndarray:
     array([1., 0., 1.])
     """
     M = np.asarray(M)
-    r, c = tril_rows_cols(M.shape[0])
+    r, c = _tril_rows_cols(M.shape[0])
     return M[r, c]
 
 
@@ -106,8 +117,8 @@ def tril_unvec(v, d: int) -> np.ndarray:
            [2., 3.]])
     """
     v = np.asarray(v, dtype=float)
-    M = np.zeros((d, d))
-    r, c = tril_rows_cols(d)
+    M = np.empty((d, d))
+    r, c = _tril_rows_cols(d)
     M[r, c] = v
     M[c, r] = v
     return M
@@ -119,7 +130,7 @@ def svec_scale(d: int) -> np.ndarray:
     >>> svec_scale(2)
     array([1.        , 1.41421356, 1.        ])
     """
-    r, c = tril_rows_cols(d)
+    r, c = _tril_rows_cols(d)
     return np.where(r == c, 1.0, SQRT2)
 
 

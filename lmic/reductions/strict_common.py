@@ -11,6 +11,7 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -19,9 +20,9 @@ import numpy as np
 from lmic.backends.lowering import has_strict  # one definition; re-exported here for the passes
 from lmic.certify.check import Tolerances, lmi_report
 from lmic.ir.problem import Problem
-from lmic.ir.svec import tril_size
+from lmic.ir.svec import tril_size, tril_unvec
 
-__all__ = ["StrictInverse", "has_strict", "is_scale_free", "verify_point"]
+__all__ = ["StrictInverse", "has_strict", "is_scale_free", "verify_point", "point_test"]
 
 
 @dataclass
@@ -46,10 +47,12 @@ def is_scale_free(problem: Problem) -> bool:
     >>> is_scale_free(p)
     False
     """
-    if not all(lmi.homogeneous for lmi in problem.lmis):
-        return False
-    a0 = problem.linear.A[:, 0]
-    return a0.nnz == 0 or not np.any(a0.toarray())
+    for lmi in problem.lmis:  # F0 = 0: the constant column holds no nonzero
+        C = lmi.coeffs if lmi.coeffs.format == "csc" else lmi.coeffs.tocsc()
+        if np.any(C.data[C.indptr[0] : C.indptr[1]]):
+            return False
+    A = problem.linear.A.tocsr()
+    return not np.any(A.data[A.indices == 0])
 
 
 def _diagonal_positions(d: int) -> np.ndarray:
@@ -69,12 +72,21 @@ def _identity_tril(d: int) -> np.ndarray:
 
 
 def _trace_row(lmi: Any) -> np.ndarray:
-    """``[tr F0, tr F_1, ..., tr F_n]`` of one LMI (one pass over its entries)."""
-    C = lmi.coeffs.tocoo()
+    """``[tr F0, tr F_1, ..., tr F_n]`` of one LMI: the sum of its diagonal storage rows, by one
+    pass over the CSC arrays (no sparse objects built).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI
+    >>> _trace_row(LMI("F", 2, sp.csc_matrix([[1.0, 2.0], [5.0, 7.0], [3.0, 0.0]]))).tolist()
+    [4.0, 2.0]
+    """
+    C = lmi.coeffs if lmi.coeffs.format == "csc" else lmi.coeffs.tocsc()
     on_diagonal = np.zeros(C.shape[0], dtype=bool)
     on_diagonal[_diagonal_positions(lmi.dim)] = True
-    keep = on_diagonal[C.row]
-    return np.bincount(C.col[keep], weights=C.data[keep], minlength=C.shape[1])
+    ncols = C.shape[1]
+    col = np.repeat(np.arange(ncols), np.diff(C.indptr))
+    keep = on_diagonal[C.indices[C.indptr[0] : C.indptr[-1]]]
+    return np.bincount(col[keep], weights=C.data[C.indptr[0] : C.indptr[-1]][keep], minlength=ncols).astype(float)
 
 
 def _restrict(duals: dict | None, n_lmis: int, n_rows: int) -> dict | None:
@@ -124,3 +136,34 @@ def verify_point(problem: Problem, x: np.ndarray | None) -> tuple[bool, str]:
             if not ok:
                 return False, f"row '{lin.names[r]}': {res[r]:.3g}"
     return True, ""
+
+
+def point_test(problem: Problem) -> Callable[[np.ndarray], bool]:
+    """:func:`verify_point` on ``problem`` as a test of a solver's iterates (``SolveOptions.accept``).
+
+    A cheap rejection first: every strict LMI's ``F(x)`` must have a Cholesky factor (positive
+    definite in float64; a failed factorisation means ``lambda_min <= 0`` up to rounding, which
+    :func:`verify_point` would reject too); only then the full test, whose answer is returned.
+    The certifier judges the final answer again.
+
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> test = point_test(lyapunov_problem(-np.eye(2)))
+    >>> test(np.array([1.0, 0.0, 1.0])), test(np.array([1.0, 0.0, -1.0])), test(np.zeros(2))
+    (True, False, False)
+    """
+    strict = [lmi for lmi in problem.lmis if lmi.strict and lmi.dim]
+    n = problem.n
+
+    def accept(x: np.ndarray) -> bool:
+        x = np.asarray(x, dtype=float)
+        if x.shape != (n,) or not np.all(np.isfinite(x)):
+            return False
+        xx = np.concatenate([[1.0], x])
+        for lmi in strict:
+            try:
+                np.linalg.cholesky(tril_unvec(lmi.coeffs @ xx, lmi.dim))
+            except np.linalg.LinAlgError:
+                return False
+        return verify_point(problem, x)[0]
+
+    return accept

@@ -28,47 +28,76 @@ __all__ = ["achieved_margin", "invert_fixed"]
 
 
 def _shift(lmi: Any, margin: float) -> Any:
-    """``lmi`` with ``F0 - margin I`` and not strict."""
-    C = lmi.coeffs.tocoo()
-    d = _diagonal_positions(lmi.dim)
-    coeffs = sp.csc_matrix(
-        (
-            np.concatenate([C.data, np.full(len(d), -margin)]),
-            (np.concatenate([C.row, d]), np.concatenate([C.col, np.zeros(len(d), dtype=C.col.dtype)])),
-        ),
-        shape=C.shape,
-    )
+    """``lmi`` with ``F0 - margin I`` and not strict.
+
+    Only the constant column changes: it is rebuilt (sorted, duplicates summed) and the other
+    columns' arrays are copied as they are, so the result keeps the coefficients' layout (no
+    COO round trip and no re-sort of the whole matrix).
+    """
+    C = lmi.coeffs if lmi.coeffs.format == "csc" else lmi.coeffs.tocsc()
+    if not C.has_sorted_indices:
+        C = C.sorted_indices()
+    ip = C.indptr
+    s0, s1 = int(ip[0]), int(ip[1])
+    col0 = np.zeros(C.shape[0])
+    np.add.at(col0, C.indices[s0:s1], C.data[s0:s1])
+    col0[_diagonal_positions(lmi.dim)] -= margin
+    rows0 = np.flatnonzero(col0)
+    data = np.concatenate([col0[rows0], C.data[s1:]])
+    indices = np.concatenate([rows0.astype(C.indices.dtype), C.indices[s1:]])
+    indptr = np.concatenate([[0], ip[1:] - s1 + len(rows0)]).astype(ip.dtype)
+    coeffs = sp.csc_matrix((data, indices, indptr), shape=C.shape)
+    coeffs.has_sorted_indices = True
     return replace(lmi, coeffs=coeffs, strict=False)
 
 
 def _fixed_margin(problem: Problem, margin: float, normalise: bool = False) -> Problem:
+    """Every strict LMI shifted by ``margin`` (:func:`_shift`), every strict row ``a0 - margin +
+    a . x >= 0``; with ``normalise``, one row ``d - sum_k x_k tr F_k >= 0`` per strict LMI and
+    one ``1 - a . x >= 0`` per strict row, after the original rows. The rows are assembled in
+    one sparse construction (triplets), whatever their number."""
     lmis = []
-    norm_rows = []
     n = problem.n
+    rows: list[np.ndarray] = []
+    cols: list[np.ndarray] = []
+    vals: list[np.ndarray] = []
+    lin = problem.linear
+    n_rows = len(lin)
+    if n_rows:
+        A = lin.A.tocoo()
+        rows, cols, vals = [A.row], [A.col], [A.data]
+    extra = 0  # normalisation rows so far
     for lmi in problem.lmis:
         if lmi.strict:
             if normalise:  # trace F(x) <= d  <=>  d - sum_k x_k tr F_k >= 0
-                norm_rows.append(np.concatenate([[float(lmi.dim)], -_trace_row(lmi)[1:]]))
+                tr = _trace_row(lmi)
+                ks = np.flatnonzero(tr[1:]) + 1
+                rows.append(np.full(len(ks) + 1, n_rows + extra))
+                cols.append(np.concatenate([[0], ks]))
+                vals.append(np.concatenate([[float(lmi.dim)], -tr[ks]]))
+                extra += 1
             lmi = _shift(lmi, margin)
         lmis.append(lmi)
-    lin = problem.linear
-    A = lin.A.tolil(copy=True)
-    strict_rows: list[int] = np.flatnonzero(np.asarray(lin.strict, dtype=bool)).tolist() if len(lin) else []
-    for r in strict_rows:
-        if normalise:  # a . x <= 1
-            norm_rows.append(np.concatenate([[1.0], -lin.A[r].toarray().ravel()[1:]]))
-        A[r, 0] = A[r, 0] - margin
-    kinds, names = list(lin.kinds), list(lin.names)
-    A = A.tocsr()
-    if norm_rows:
-        A = (
-            sp.vstack([A, sp.csr_matrix(np.vstack(norm_rows))], format="csr")
-            if len(lin)
-            else (sp.csr_matrix(np.vstack(norm_rows)))
-        )
-        kinds += ["ge"] * len(norm_rows)
-        names += [f"scale normalisation {k}" for k in range(len(norm_rows))]
-    linear = LinearConstraints(A, kinds, [False] * len(kinds), names)
+    strict_rows = np.flatnonzero(np.asarray(lin.strict, dtype=bool)) if n_rows else np.zeros(0, dtype=int)
+    if len(strict_rows):
+        rows.append(strict_rows)  # a0 - margin (summed with a0 by the construction)
+        cols.append(np.zeros(len(strict_rows), dtype=int))
+        vals.append(np.full(len(strict_rows), -margin))
+        if normalise:  # a . x <= 1 for every strict row
+            S = lin.A.tocsr()[strict_rows].tocoo()
+            keep = S.col > 0
+            rows.append(n_rows + extra + np.concatenate([np.arange(len(strict_rows)), S.row[keep]]))
+            cols.append(np.concatenate([np.zeros(len(strict_rows), dtype=int), S.col[keep]]))
+            vals.append(np.concatenate([np.ones(len(strict_rows)), -S.data[keep]]))
+            extra += len(strict_rows)
+    shape = (n_rows + extra, 1 + n)
+    if rows:
+        A_new = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=shape)
+    else:
+        A_new = sp.csr_matrix(shape)
+    kinds = list(lin.kinds) + ["ge"] * extra
+    names = list(lin.names) + [f"scale normalisation {k}" for k in range(extra)]
+    linear = LinearConstraints(A_new, kinds, [False] * len(kinds), names)
     objective = problem.objective
     if objective.sense == "feasibility":
         objective = Objective("feasibility", np.zeros(n + 1))

@@ -29,6 +29,9 @@ SOLVED = {
     "cvxpy": {"optimal"},
     "picos": {"feasible/optimal", "unknown/optimal"},
 }
+#: lmic's own words of success, not the solver's: SCS paused at an iterate that passed the
+#: original problem's point check (``SolveOptions.accept``, lmic.backends.scs._solve_checked)
+LMIC_SOLVED = {"scs": {"point_verified"}}
 
 
 def _clarabel() -> set[str]:
@@ -102,7 +105,7 @@ def test_table_follows_the_rules(name):
         if inexact:
             assert status == "inaccurate", f"{name}: inexact '{native}' maps to {status}"
         if status == "optimal":
-            assert native in SOLVED[name], f"{name}: '{native}' claims success"
+            assert native in SOLVED[name] | LMIC_SOLVED.get(name, set()), f"{name}: '{native}' claims success"
     for solved in SOLVED[name]:
         assert be.map_status(solved) == "optimal"
 

@@ -83,3 +83,33 @@ def test_parameter_outside_its_domain_and_non_numeric_values():
         compile_theorem("thesis.lyapunov", {"data": {"A": [[-1.0]]}}, {"nonstrict": 3})
     with pytest.raises(DataError, match="parameter 'beta' = 'abc' is not a number"):
         compile_theorem("qib.thm1", QIB, {"beta": "abc"})
+
+
+def test_plain_float_rows_take_the_fast_path_with_the_same_result_and_errors():
+    """A list of lists of floats/ints is converted at once; anything else goes entry by entry,
+    and both give the same array (numpy's own conversion of the nested list is the truth) or
+    the same one-line error."""
+    import numpy as np
+
+    from lmic.errors import DataError
+    from lmic.system import _plain_rows, parse_matrix
+
+    rng = np.random.default_rng(0)
+    M = rng.standard_normal((7, 5)).tolist()
+    M[2][3] = 4  # an int among floats
+    assert _plain_rows(M) is not None
+    assert np.array_equal(parse_matrix(M, "A"), np.array(M, dtype=float))
+    for bad, fragment in [
+        ([[1.0, True]], "is True, not a number"),
+        ([[1.0, "x"]], "'x', not a number"),
+        ([[1.0], [2.0, 3.0]], "row 2 has 2 entries"),
+        ([[float("nan"), 1.0]], "is nan"),
+        ([[10**400, 1.0]], "too large for a float64"),
+    ]:
+        assert _plain_rows(bad) is None or fragment == "is nan"
+        try:
+            parse_matrix(bad, "A")
+        except DataError as err:
+            assert fragment in str(err)
+        else:
+            raise AssertionError(f"{bad!r} was accepted")
