@@ -47,6 +47,9 @@ __all__ = [
     "method_of",
     "OPTIMISATION_FIRST_ORDER_TOL",
     "OPTIMISATION_FIRST_ORDER_ITERS",
+    "ENCLOSURE_BUDGET_FACTOR",
+    "ENCLOSURE_BUDGET_FLOOR_S",
+    "enclosure_budget",
 ]
 
 #: tolerance of the first-order step of an optimisation route ("moderate accuracy": the
@@ -56,6 +59,24 @@ OPTIMISATION_FIRST_ORDER_TOL = 1e-6
 #: tolerance by then is polished by the interior-point step instead (SCS without a cap took
 #: 200 s on a 30-state bounded-real lemma where CVXOPT takes 2 s)
 OPTIMISATION_FIRST_ORDER_ITERS = 2000
+
+#: the enclosure of an optimisation answer (dual repair and proof, perturbed and centred
+#: re-solves, the tight re-solve of :func:`tighten`) may take this many times the solve it
+#: certifies ...
+ENCLOSURE_BUDGET_FACTOR = 3.0
+#: ... and at least this many seconds (the fixed costs: imports, one eigen-decomposition per
+#: block and proof)
+ENCLOSURE_BUDGET_FLOOR_S = 10.0
+
+
+def enclosure_budget(solve_s: float | None) -> float:
+    """The time budget of an enclosure: ``max(FLOOR, FACTOR * solve_s)`` seconds.
+
+    >>> enclosure_budget(0.1), enclosure_budget(10.0)
+    (10.0, 30.0)
+    """
+    s = float(solve_s or 0.0)
+    return max(ENCLOSURE_BUDGET_FLOOR_S, ENCLOSURE_BUDGET_FACTOR * (s if s > 0 else 0.0))
 
 
 @dataclass
@@ -131,7 +152,13 @@ def _solve_on(backend: Any, problem: Problem, options: Any) -> Any:
 
 
 def enclosure_of(
-    problem: Problem, sol: Any, cert: Any, exact: bool, backend: Any, options: Any
+    problem: Problem,
+    sol: Any,
+    cert: Any,
+    exact: bool,
+    backend: Any,
+    options: Any,
+    budget_s: float | None = None,
 ) -> tuple[dict[str, Any] | None, float]:
     """The certified enclosure of ``problem``'s optimal value from a solution's point and dual.
 
@@ -139,7 +166,10 @@ def enclosure_of(
     degenerate dual is retried on a perturbed problem, then on a centred dual point (the dual
     problem solved for the largest interior margin), both on ``backend``; a gap above
     :data:`lmic.certify.enclosure.GAP_TARGET` on an interior-point backend gets one re-solve at
-    :data:`~lmic.certify.enclosure.TIGHT_TOL` (:func:`tighten`).
+    :data:`TIGHT_TOLS` (:func:`tighten`). The whole enclosure has
+    ``budget_s`` seconds (default :func:`enclosure_budget` of the solve's time): no step starts
+    after it, the tight re-solve only when the rest of the budget can pay for it, and a budget
+    spent is recorded (``budget``), never turned into a bound.
 
     >>> from lmic.testing.conformance import lyapunov_problem
     >>> import numpy as np
@@ -153,19 +183,30 @@ def enclosure_of(
     from lmic.certify.enclosure import enclosure
 
     t0 = time.perf_counter()
+    solve_s = float(getattr(sol, "solve_s", 0.0) or 0.0)
+    budget = enclosure_budget(solve_s) if budget_s is None else float(budget_s)
+    deadline = t0 + budget
     x = sol.x if getattr(cert, "verdict", None) == "certified" else None
 
     def resolve(perturbed: Problem) -> dict[str, Any] | None:
+        if time.perf_counter() + solve_s > deadline:
+            return None  # the re-solve would not fit in the budget
         other = _solve_on(backend, perturbed, options)
         return other.duals if other is not None and other.status in ("optimal", "inaccurate") else None
 
     def solve_point(other_problem: Problem) -> np.ndarray | None:
+        if time.perf_counter() + solve_s > deadline:
+            return None
         other = _solve_on(backend, other_problem, options)
         return other.x if other is not None and other.status in ("optimal", "inaccurate") else None
 
-    enc = enclosure(problem, sol.duals, x, exact=exact, resolve=resolve, solve_point=solve_point)
-    enc = tighten(problem, enc, x, exact, backend, options, resolve, solve_point)
-    return enc, time.perf_counter() - t0
+    enc = enclosure(problem, sol.duals, x, exact=exact, resolve=resolve, solve_point=solve_point, budget_s=budget)
+    enc = tighten(problem, enc, x, exact, backend, options, resolve, solve_point, deadline=deadline, solve_s=solve_s)
+    spent = time.perf_counter() - t0
+    enc["budget"] = {"seconds": budget, "used": spent, "spent": spent > budget}
+    if enc["budget"]["spent"] and enc.get("rel_gap") is None:
+        enc["reason"] = f"{enc.get('reason')}; enclosure time budget {budget:.3g} s spent"
+    return enc, spent
 
 
 def tighten(
@@ -177,17 +218,22 @@ def tighten(
     options: Any,
     resolve: Any,
     solve_point: Any,
+    deadline: float | None = None,
+    solve_s: float = 0.0,
 ) -> dict[str, Any]:
-    """A gap above :data:`lmic.certify.enclosure.GAP_TARGET` on an interior-point backend: a
-    re-solve at :data:`~lmic.certify.enclosure.TIGHT_TOL` and the better proven end of each.
+    """A gap above :data:`lmic.certify.enclosure.GAP_TARGET` on an interior-point backend:
+    re-solves at each of :data:`TIGHT_TOLS` below the solve's tolerance, loosest first, until
+    the gap meets the target, and the better proven end of each.
 
     When the tight point's primal end is met only to round-off, the end comes from a point
     polished toward it (``restored point``); without any proven end there, ``tight_x`` records
-    the tight point for the restoration of :func:`lmic.api.solve`.
+    the tight point for the restoration of :func:`lmic.api.solve`. With ``deadline`` (a
+    :func:`time.perf_counter` value), the re-solve runs only when about twice ``solve_s`` (the
+    first solve's time) is left before it, and its enclosure gets what is left.
     """
     from dataclasses import replace
 
-    from lmic.certify.enclosure import GAP_TARGET, TIGHT_TOL, best_of, enclosure, polish_primal, with_primal
+    from lmic.certify.enclosure import GAP_TARGET
     from lmic.options import SolveOptions
 
     gap = enc.get("rel_gap")
@@ -201,13 +247,50 @@ def tighten(
         # cone, not inside it (on the bounded-real lemma at n = 20 it doubled the time, 6.5 s of
         # 12, and proved nothing), so there is nothing for a re-solve to tighten
         return enc
-    if options is not None and options.tol <= TIGHT_TOL:
+    base_tol = options.tol if options is not None else SolveOptions().tol
+    out = enc
+    for tol in [t for t in TIGHT_TOLS if t < base_tol]:
+        if deadline is not None and time.perf_counter() + 2.0 * solve_s > deadline:
+            break  # a tight re-solve (typically slower than the first) would not fit the budget
+        tight = replace(options, tol=tol) if options is not None else SolveOptions(tol=tol)
+        out = _tighten_once(problem, out, x, exact, backend, tight, resolve, solve_point, deadline, key)
+        if out.get("rel_gap") is not None and out["rel_gap"] <= GAP_TARGET:
+            break
+    return out
+
+
+#: the tolerances of :func:`tighten`'s re-solves, loosest first: Clarabel stops at
+#: ``AlmostSolved`` at 1e-10 on SDPLIB control3 where 1e-9 closes the gap (2.1e-6 -> 3e-7)
+TIGHT_TOLS = (1e-9, 1e-10)
+
+
+def _tighten_once(
+    problem: Problem,
+    enc: dict[str, Any],
+    x: Any,
+    exact: bool,
+    backend: Any,
+    tight: Any,
+    resolve: Any,
+    solve_point: Any,
+    deadline: float | None,
+    key: str,
+) -> dict[str, Any]:
+    """One re-solve of :func:`tighten` at ``tight.tol`` and the better proven end of each."""
+    from lmic.certify.enclosure import best_of, enclosure, polish_primal, with_primal
+    from lmic.errors import LmicError
+    from lmic.policy import decide
+
+    try:
+        # the policy's strategies on this backend (an AlmostSolved solve is re-tried preconditioned
+        # at its point: Clarabel at 1e-9 on SDPLIB control3)
+        sol2 = decide(problem, backend, tight, rescue=False).solution
+    except LmicError:
         return enc
-    tight = replace(options, tol=TIGHT_TOL) if options is not None else SolveOptions(tol=TIGHT_TOL)
-    sol2 = _solve_on(backend, problem, tight)
-    if sol2 is None or sol2.status not in ("optimal", "inaccurate") or sol2.x is None:
+    if sol2 is None or sol2.status not in ("optimal", "inaccurate") or sol2.x is None or not sol2.duals:
         return enc
-    enc2 = enclosure(problem, sol2.duals, sol2.x, exact=exact, resolve=resolve, solve_point=solve_point)
+    left = None if deadline is None else max(0.0, deadline - time.perf_counter())
+    enc2 = enclosure(problem, sol2.duals, sol2.x, exact=exact, resolve=resolve, solve_point=solve_point, budget_s=left)
     inner = enc.get("restored_x") if enc.get("primal") == "restored point" else x
     if enc2.get(key) is None and enc.get(key) is not None and inner is not None:
         # the tight point is met only to round-off: as close to it as the proof allows
@@ -275,7 +358,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
             rel = None if enc is None else enc.get("rel_gap")
             step["rel_gap"] = rel
             if rel is None:
-                step["gap_note"] = "no certified lower end" if enc and enc.get("upper") is not None else "no enclosure"
+                step["gap_note"] = _gap_note(enc)
         if best is None or rank(out.verdict) > rank(best.verdict) or _tighter(enc, best_enc, out, best):
             best, best_enc = out, enc
         if out.verdict == "certified":
@@ -305,3 +388,17 @@ def _tighter(enc: dict[str, Any] | None, best_enc: dict[str, Any] | None, out: O
         return False
     new, old = (enc or {}).get("rel_gap"), (best_enc or {}).get("rel_gap")
     return old is None or (new is not None and new <= old)
+
+
+def _gap_note(enc: dict[str, Any] | None) -> str:
+    """Which end of an enclosure without a relative gap is missing (the route line).
+
+    >>> _gap_note(None), _gap_note({"lower": 1.0, "upper": None})
+    ('no enclosure', 'no certified upper end')
+    """
+    if enc is None:
+        return "no enclosure"
+    lo, hi = enc.get("lower"), enc.get("upper")
+    if lo is None and hi is None:
+        return "no certified end"
+    return "no certified lower end" if lo is None else "no certified upper end"

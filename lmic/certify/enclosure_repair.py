@@ -136,7 +136,10 @@ def _repair(
     floor: float = 0.0,
     steps: int = 40,
     objective: float | None = None,
+    deadline: float | None = None,
 ):
+    import time
+
     import scipy.linalg
 
     ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
@@ -151,6 +154,8 @@ def _repair(
         now = float(np.max(np.abs(rho), initial=0.0))
         if now <= 1e-15 * scale or (len(history) >= 6 and now > 0.9 * history[-6]):
             break  # converged, or stalled (no interior point near: the proof will say so)
+        if deadline is not None and history and time.perf_counter() > deadline:
+            break  # the caller's time budget is spent: the proof decides on what is there
         history.append(now)
         blocks: list[Any] = []
         factors: list[Any] = []
@@ -279,11 +284,13 @@ def _prepare(
     top: float | None = None,
     drop: bool = True,
     objective: float | None = None,
+    deadline: float | None = None,
 ) -> tuple[list, np.ndarray, np.ndarray]:
     """Steps 1-3 of the module docstring; returns ``(Z_i, y, active)`` (``active``: the
     entries of ``u`` the proof may correct; the others are exactly zero). With
     ``objective``, the repair also holds ``g_0(u)`` at that value (the solver's dual
-    objective), so the least-norm steps do not trade objective for feasibility."""
+    objective), so the least-norm steps do not trade objective for feasibility. With
+    ``deadline`` (a :func:`time.perf_counter` value) the damped steps stop once it is passed."""
     ge = np.array([k == "ge" for k in problem.linear.kinds], dtype=bool)
     proj = []
     for Z in mats:
@@ -308,7 +315,7 @@ def _prepare(
     proj = [Z + eps * np.eye(Z.shape[0]) if on else np.zeros_like(Z) for Z, on in zip(proj, keep, strict=True)]
     y = np.where(ge & rows_on, y + eps, np.where(ge, 0.0, y))
     proj = [0.5 * (Z + Z.T) for Z in proj]
-    mats, y = _repair(problem, J, ranges, q, proj, y, floor=0.5 * eps, objective=objective)
+    mats, y = _repair(problem, J, ranges, q, proj, y, floor=0.5 * eps, objective=objective, deadline=deadline)
     mats, y = _least_norm(problem, J, ranges, q, mats, y, active, objective=objective)
     return mats, y, active
 
