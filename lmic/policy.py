@@ -67,6 +67,8 @@ __all__ = [
     "ORDER",
     "FIRST_ORDER_TOL",
     "MAX_BOUNDED",
+    "BACKEND_BUDGET_S",
+    "backend_budget",
     "AUTO_VARIANTS",
     "route",
     "decide",
@@ -81,6 +83,30 @@ ORDER = ("clarabel", "cvxopt", "sdpa", "scs")
 FIRST_ORDER_TOL = 1e-3
 #: stop escalating once this many backends gave bounded rays that no exact proof upgraded
 MAX_BOUNDED = 2
+
+#: per-backend time budget of an escalating route (seconds, for a problem of size 1e6 or less;
+#: see :func:`backend_budget`): a backend that has not decided by then gives way to the next one
+BACKEND_BUDGET_S = 60.0
+
+
+def backend_budget(problem: Problem) -> float:
+    """Seconds one backend of an escalating route may take before the next one is tried.
+
+    ``BACKEND_BUDGET_S * max(1, n * cone / 1e6)`` with ``n`` the variables and ``cone`` the
+    dimension of the PSD cone (``sum d (d + 1) / 2``): about the growth of an interior-point
+    solve. On a random 8-state ``delay_b.thm4_1`` (infeasible) Clarabel ran 200 s where CVXOPT
+    decides in 2 s. Only routes with another backend after this one are budgeted; a backend cut
+    by its budget is tried again without one when no other backend decided (a decision wherever
+    one exists).
+
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> backend_budget(lyapunov_problem(-np.eye(2)))
+    60.0
+    """
+    cone = sum(lmi.dim * (lmi.dim + 1) // 2 for lmi in problem.lmis) + len(problem.linear)
+    return BACKEND_BUDGET_S * max(1.0, problem.n * cone / 1e6)
+
+
 #: ``auto:VARIANT``: ``first-order`` starts an optimisation route with SCS, ``interior-point``
 #: skips that step; ``auto`` alone follows :data:`lmic.backends.auto.FIRST_ORDER_OPTIMISATION`
 AUTO_VARIANTS: dict[str, bool | None] = {"": None, "first-order": True, "interior-point": False}
@@ -286,6 +312,7 @@ def decide(
     solve_as: Problem | None = None,
     reference: np.ndarray | None = None,
     rescue: bool = True,
+    budget_s: float | None = None,
 ) -> Outcome:
     """Decide ``problem`` by the policy of the module docstring.
 
@@ -305,6 +332,11 @@ def decide(
         A point to precondition at first (``scaled``).
     rescue : bool
         Exact rescue of bounded rays and of points rejected only for tiny margins.
+    budget_s : float, optional
+        Seconds each backend may take (its strategies stop there, its solves get the rest as
+        their time limit unless ``options.time_limit`` is set). An escalating route budgets
+        every backend but its last by :func:`backend_budget`; a backend cut by its budget is
+        retried without one when no backend decided.
 
     Returns
     -------
@@ -332,10 +364,20 @@ def decide(
     run = _Run(problem, exact, rescue)
     bounded = 0
     feasibility_strict = problem.objective.sense == "feasibility" and has_strict(problem)
-    for name in names:
+    cut: list[Any] = []  # backends stopped by their budget (retried without one at the end)
+    auto_budget = budget_s is None and not single and options.time_limit is None
+    queue: list[tuple[Any, float | None]] = [
+        (name, (backend_budget(solve_as) if auto_budget and k < len(names) - 1 else budget_s))
+        for k, name in enumerate(names)
+    ]
+    qi = 0
+    while qi < len(queue):
+        name, budget = queue[qi]
+        qi += 1
         be = _instance(name)
         label = be.label
         opts = step_options(be, options) if not single else options
+        b_t0 = time.perf_counter()
         last_x: np.ndarray | None = None
         tried_strict: set[str] = set()
         plan: list[tuple[str, Problem, Any]] = []
@@ -350,11 +392,20 @@ def decide(
             t0 = time.perf_counter()
             scales = None
             step_opts = opts
+            if budget is not None:
+                left = budget - (t0 - b_t0)
+                if left <= 0:
+                    cut.append(name)
+                    break
+                if opts.time_limit is None or opts.time_limit > left:
+                    step_opts = replace(opts, time_limit=left)
             if tag in ("scaled", "rescaled"):
                 target, scales = precondition(target, at)
             if tag.startswith("strict="):
-                step_opts = replace(opts, strict=tag.split("=", 1)[1])
+                step_opts = replace(step_opts, strict=tag.split("=", 1)[1])
             sol = _solve_one(be, target, step_opts, scales, problem)
+            if budget is not None and _timed_out(sol) and name not in cut:
+                cut.append(name)
             for a in sol.info.get("strict_attempts", []) or []:
                 tried_strict.add(str(a.get("strategy")))
             out = run.record(label, tag, sol, t0, infeasibility_only=tag == "feasibility")
@@ -380,6 +431,10 @@ def decide(
             bounded += 1
             if bounded >= MAX_BOUNDED:
                 break
+        if qi == len(queue) and cut and budget_s is None and auto_budget:
+            # nothing decided within the budgets: the first backend cut by its budget, unbounded
+            queue.append((cut[0], None))
+            auto_budget = False
     assert run.best is not None
     best = run.best
     if not best.decided and rescue and not exact:
@@ -418,6 +473,12 @@ def decide(
     if best.evidence is None:
         best.evidence = Evidence()
     return best
+
+
+def _timed_out(sol: Solution) -> bool:
+    from lmic.backends.outcomes import is_time_limit
+
+    return is_time_limit(sol)
 
 
 def feasibility_problem(problem: Problem) -> Problem:

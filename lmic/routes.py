@@ -322,21 +322,27 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     RouteResult
     """
     from lmic.options import SolveOptions
-    from lmic.policy import decide, is_auto, route
+    from lmic.policy import backend_budget, decide, is_auto, route
 
     options = options or SolveOptions()
     if not is_auto(backend) or problem.objective.sense == "feasibility":
         out = decide(problem, backend, options, exact=exact)
         done = _steps(out)
         return RouteResult(out, None, 0.0, {"steps": done, "text": describe(done, problem)})
-    names = route(problem, backend)
+    names = list(route(problem, backend))
+    budgeted = options.time_limit is None
+    last = len(names) - 1
+    cut: list[Any] = []
     best: Outcome | None = None
     best_enc: dict[str, Any] | None = None
     enc_s = 0.0
     attempts: list[Any] = []
     steps: list[dict[str, Any]] = []
     bounded = 0
-    for name in names:
+    k = -1
+    while k + 1 < len(names):
+        k += 1
+        name = names[k]
         first_order = method_of(name) == "first-order"
         opts = options
         if first_order:
@@ -347,7 +353,11 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
                 tol=max(options.tol, OPTIMISATION_FIRST_ORDER_TOL),
                 max_iter=options.max_iter or OPTIMISATION_FIRST_ORDER_ITERS,
             )
-        out = decide(problem, name, opts, exact=exact)
+        budget = backend_budget(problem) if budgeted and k < last else None
+        t_b = time.perf_counter()
+        out = decide(problem, name, opts, exact=exact, budget_s=budget)
+        if budget is not None and not out.decided and time.perf_counter() - t_b >= budget:
+            cut.append(name)  # stopped by its budget: the next backend now; retried at the end
         attempts.extend(out.attempts)
         step: dict[str, Any] = {"backend": name, "verdict": out.verdict}
         steps.append(step)
@@ -374,6 +384,9 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
             bounded += 1
             if bounded >= 2:
                 break
+        if k == len(names) - 1 and cut and budgeted:
+            names.append(cut[0])  # nothing decided within the budgets: the first one cut, unbudgeted
+            budgeted = False
     assert best is not None
     best.attempts = attempts
     if best.solution is not None:
