@@ -20,7 +20,9 @@ certified point, or a GLOBAL infeasibility proof, :mod:`lmic.outcome`):
    proof counts from it, a point is no optimum);
 4. the first ``infeasible-bounded`` answer ("no solution with ``||x||_inf <= R``") is
    immediately tried for an exact rational proof (:func:`lmic.certify.farkas.prove_infeasible`),
-   which makes it global when it holds (one ray per decision: a proof attempt costs seconds).
+   which makes it global when it holds (up to :data:`MAX_RAY_PROOFS` rays per decision, one
+   face threshold each: a proof attempt costs seconds; another strategy's ray, e.g. the
+   fixed-margin one, is often the one that proves).
 
 Then the next backend of the route. After the route: the exact rescue of the best rejected
 point whose float eigenvalues are all positive (margins below the float error bound, e.g. near a
@@ -68,6 +70,8 @@ __all__ = [
     "FIRST_ORDER_TOL",
     "MAX_BOUNDED",
     "BACKEND_BUDGET_S",
+    "MAX_RAY_PROOFS",
+    "unbounded_outcome",
     "backend_budget",
     "AUTO_VARIANTS",
     "route",
@@ -83,6 +87,10 @@ ORDER = ("clarabel", "cvxopt", "sdpa", "scs")
 FIRST_ORDER_TOL = 1e-3
 #: stop escalating once this many backends gave bounded rays that no exact proof upgraded
 MAX_BOUNDED = 2
+
+#: bounded rays per decision tried for an exact (global) proof: on obs_control.thm3_2 in
+#: z-coordinates (eps = 0.8) CVXOPT's max-margin ray fails and its fixed-margin ray proves
+MAX_RAY_PROOFS = 3
 
 #: per-backend time budget of an escalating route (seconds, for a problem of size 1e6 or less;
 #: see :func:`backend_budget`): a backend that has not decided by then gives way to the next one
@@ -255,7 +263,7 @@ class _Run:
         self.attempts: list[Attempt] = []
         self.best: Outcome | None = None
         self.rejected: list[tuple[Solution, Any, str]] = []
-        self.ray_tried = False
+        self.rays_tried = 0
 
     def record(self, backend: str, label: str, sol: Solution, t0: float, infeasibility_only: bool = False) -> Outcome:
         t1 = time.perf_counter()
@@ -265,8 +273,8 @@ class _Run:
         if infeasibility_only and verdict in ("certified", "rejected"):
             # a point of the feasibility problem is no optimum: it decides nothing here
             verdict, note = "undecided", "the feasibility problem has a point; the optimum was not reached"
-        if verdict == "infeasible-bounded" and self.rescue and not self.exact and not self.ray_tried:
-            self.ray_tried = True  # an exact proof costs seconds: one ray per decision, one face
+        if verdict == "infeasible-bounded" and self.rescue and not self.exact and self.rays_tried < MAX_RAY_PROOFS:
+            self.rays_tried += 1  # an exact proof costs seconds: a few rays per decision, one face
             if _prove_ray(self.problem, sol, cert):
                 verdict, note = "infeasible-certified", "exact proof of the ray"
             else:
@@ -437,6 +445,12 @@ def decide(
             auto_budget = False
     assert run.best is not None
     best = run.best
+    if (
+        not best.decided
+        and problem.objective.sense != "feasibility"
+        and any(a.status == "unbounded" for a in run.attempts)
+    ):
+        best = unbounded_outcome(problem, best, options)
     if not best.decided and rescue and not exact:
         for sol, cert, label in sorted(run.rejected, key=lambda r: -_rel_margin(r[1])):
             t0 = time.perf_counter()
@@ -472,6 +486,61 @@ def decide(
         )
     if best.evidence is None:
         best.evidence = Evidence()
+    return best
+
+
+def unbounded_outcome(problem: Problem, best: Outcome, options: Any = None) -> Outcome:
+    """A solver said ``unbounded``: prove what can be proved about it.
+
+    The improving rays of ``problem`` (:func:`lmic.certify.farkas_unbounded.ray_problem`) are
+    decided by this policy; a ray is proved exactly
+    (:func:`~lmic.certify.farkas_unbounded.prove_improving_ray`), and the problem's feasibility
+    is decided too. Then ``reason`` says exactly what holds: with an exact ray and a certified
+    point, the objective is unbounded (no optimum: the optimal value is infinite); with an exact
+    ray only, "unbounded or infeasible"; with a feasibility problem proved infeasible, the
+    global infeasibility proof is the outcome. The verdict stays ``undecided`` (exit 1) unless
+    infeasibility is proved: the outcome vocabulary has no word for "unbounded", and an
+    unbounded problem has no optimum point to certify.
+
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> o = Outcome("undecided", None, "unbounded")
+    >>> unbounded_outcome(lyapunov_problem(-np.eye(1)), o).verdict  # a feasibility problem: nothing to do
+    'undecided'
+    """
+    from lmic.certify.farkas_unbounded import prove_improving_ray, ray_problem
+
+    if problem.objective.sense == "feasibility":
+        return best
+    ray_out = decide(ray_problem(problem), None, options, rescue=False)
+    ray = None
+    if ray_out.verdict == "certified" and ray_out.solution is not None and ray_out.solution.x is not None:
+        ray = prove_improving_ray(problem, ray_out.solution.x)
+    feas = decide(feasibility_problem(problem), None, options)
+    if feas.verdict == "infeasible-certified":
+        feas.attempts = best.attempts + ray_out.attempts + feas.attempts
+        return feas
+    word = "below" if problem.objective.sense == "min" else "above"
+    if ray is not None and ray["proven"]:
+        if feas.verdict == "certified":
+            inf = "-inf" if word == "below" else "+inf"
+            statement = (
+                f"unbounded {word}: a certified feasible point and an exact improving ray "
+                f"(q.d = {ray['slope']:.3g}); the optimal value is {inf}, no optimum exists (the dual is infeasible)"
+            )
+        else:
+            statement = (
+                f"the dual is infeasible (an exact improving ray, q.d = {ray['slope']:.3g}): the problem is unbounded "
+                f"{word} if it has a feasible point, else infeasible; feasibility not decided ({feas.verdict})"
+            )
+        out = Outcome("undecided", Evidence("exact-proof", None, statement), statement, solution=best.solution)
+        out.certificate, out.backend = (
+            feas.certificate if feas.verdict == "certified" else best.certificate,
+            best.backend,
+        )
+        out.attempts = best.attempts + ray_out.attempts + feas.attempts
+        return out
+    why = ray["reason"] if ray is not None else f"no improving ray found ({ray_out.verdict})"
+    best.reason = f"{best.reason}; the solver reports unbounded, not proved: {why}".lstrip("; ")
     return best
 
 

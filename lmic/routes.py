@@ -380,6 +380,8 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
             continue  # a first-order point whose gap is too wide: polish
         if out.verdict == "infeasible-certified":
             break
+        if out.verdict == "undecided" and getattr(out.evidence, "kind", "") == "exact-proof":
+            break  # proved unbounded (or dual infeasible): lmic.policy.unbounded_outcome
         if out.verdict == "infeasible-bounded":
             bounded += 1
             if bounded >= 2:
