@@ -91,6 +91,8 @@ MAX_BOUNDED = 2
 #: bounded rays per decision tried for an exact (global) proof: on obs_control.thm3_2 in
 #: z-coordinates (eps = 0.8) CVXOPT's max-margin ray fails and its fixed-margin ray proves
 MAX_RAY_PROOFS = 3
+#: ... while the proofs so far took less than this many seconds (the first is always tried)
+RAY_PROOF_BUDGET_S = 15.0
 
 #: per-backend time budget of an escalating route (seconds, for a problem of size 1e6 or less;
 #: see :func:`backend_budget`): a backend that has not decided by then gives way to the next one
@@ -264,6 +266,7 @@ class _Run:
         self.best: Outcome | None = None
         self.rejected: list[tuple[Solution, Any, str]] = []
         self.rays_tried = 0
+        self.ray_s = 0.0
 
     def record(self, backend: str, label: str, sol: Solution, t0: float, infeasibility_only: bool = False) -> Outcome:
         t1 = time.perf_counter()
@@ -273,9 +276,13 @@ class _Run:
         if infeasibility_only and verdict in ("certified", "rejected"):
             # a point of the feasibility problem is no optimum: it decides nothing here
             verdict, note = "undecided", "the feasibility problem has a point; the optimum was not reached"
-        if verdict == "infeasible-bounded" and self.rescue and not self.exact and self.rays_tried < MAX_RAY_PROOFS:
+        more = self.rays_tried < MAX_RAY_PROOFS and (not self.rays_tried or self.ray_s < RAY_PROOF_BUDGET_S)
+        if verdict == "infeasible-bounded" and self.rescue and not self.exact and more:
             self.rays_tried += 1  # an exact proof costs seconds: a few rays per decision, one face
-            if _prove_ray(self.problem, sol, cert):
+            t_ray = time.perf_counter()
+            proved = _prove_ray(self.problem, sol, cert)
+            self.ray_s += time.perf_counter() - t_ray
+            if proved:
                 verdict, note = "infeasible-certified", "exact proof of the ray"
             else:
                 note = "exact proof of the ray failed"
