@@ -71,7 +71,6 @@ __all__ = [
     "MAX_BOUNDED",
     "BACKEND_BUDGET_S",
     "MAX_RAY_PROOFS",
-    "unbounded_outcome",
     "backend_budget",
     "AUTO_VARIANTS",
     "route",
@@ -265,6 +264,7 @@ class _Run:
         self.attempts: list[Attempt] = []
         self.best: Outcome | None = None
         self.rejected: list[tuple[Solution, Any, str]] = []
+        self.holding: list[Outcome] = []  # optimisation points that hold, from 'inaccurate' solves
         self.rays_tried = 0
         self.ray_s = 0.0
 
@@ -313,6 +313,14 @@ class _Run:
             certificate=cert,
             backend=backend,
         )
+        if (
+            verdict == "undecided"
+            and not infeasibility_only
+            and self.problem.objective.sense != "feasibility"
+            and getattr(cert, "verdict", None) == "certified"
+            and sol.x is not None
+        ):
+            self.holding.append(out)  # the point holds; only the solver's status is in doubt
         if self.best is None or rank(out.verdict) > rank(self.best.verdict):
             self.best = out
         return out
@@ -452,12 +460,13 @@ def decide(
             auto_budget = False
     assert run.best is not None
     best = run.best
-    if (
-        not best.decided
-        and problem.objective.sense != "feasibility"
-        and any(a.status == "unbounded" for a in run.attempts)
-    ):
-        best = unbounded_outcome(problem, best, options)
+    if not best.decided and best.verdict in ("rejected", "undecided") and run.holding:
+        # a point that holds (the solver stopped short, e.g. 'inaccurate') says more than a
+        # rejected one: its objective is a proven end, and the enclosure (lmic.routes) may prove
+        # the optimum to the requested gap whatever the solver's status
+        sign = -1.0 if problem.objective.sense == "max" else 1.0
+        best = min(run.holding, key=lambda o: sign * float(o.solution.objective or 0.0))
+        best.reason = f"the solver stopped '{best.solution.status}'; its point holds: {best.reason}"
     if not best.decided and rescue and not exact:
         for sol, cert, label in sorted(run.rejected, key=lambda r: -_rel_margin(r[1])):
             t0 = time.perf_counter()
@@ -493,61 +502,6 @@ def decide(
         )
     if best.evidence is None:
         best.evidence = Evidence()
-    return best
-
-
-def unbounded_outcome(problem: Problem, best: Outcome, options: Any = None) -> Outcome:
-    """A solver said ``unbounded``: prove what can be proved about it.
-
-    The improving rays of ``problem`` (:func:`lmic.certify.farkas_unbounded.ray_problem`) are
-    decided by this policy; a ray is proved exactly
-    (:func:`~lmic.certify.farkas_unbounded.prove_improving_ray`), and the problem's feasibility
-    is decided too. Then ``reason`` says exactly what holds: with an exact ray and a certified
-    point, the objective is unbounded (no optimum: the optimal value is infinite); with an exact
-    ray only, "unbounded or infeasible"; with a feasibility problem proved infeasible, the
-    global infeasibility proof is the outcome. The verdict stays ``undecided`` (exit 1) unless
-    infeasibility is proved: the outcome vocabulary has no word for "unbounded", and an
-    unbounded problem has no optimum point to certify.
-
-    >>> from lmic.testing.conformance import lyapunov_problem
-    >>> o = Outcome("undecided", None, "unbounded")
-    >>> unbounded_outcome(lyapunov_problem(-np.eye(1)), o).verdict  # a feasibility problem: nothing to do
-    'undecided'
-    """
-    from lmic.certify.farkas_unbounded import prove_improving_ray, ray_problem
-
-    if problem.objective.sense == "feasibility":
-        return best
-    ray_out = decide(ray_problem(problem), None, options, rescue=False)
-    ray = None
-    if ray_out.verdict == "certified" and ray_out.solution is not None and ray_out.solution.x is not None:
-        ray = prove_improving_ray(problem, ray_out.solution.x)
-    feas = decide(feasibility_problem(problem), None, options)
-    if feas.verdict == "infeasible-certified":
-        feas.attempts = best.attempts + ray_out.attempts + feas.attempts
-        return feas
-    word = "below" if problem.objective.sense == "min" else "above"
-    if ray is not None and ray["proven"]:
-        if feas.verdict == "certified":
-            inf = "-inf" if word == "below" else "+inf"
-            statement = (
-                f"unbounded {word}: a certified feasible point and an exact improving ray "
-                f"(q.d = {ray['slope']:.3g}); the optimal value is {inf}, no optimum exists (the dual is infeasible)"
-            )
-        else:
-            statement = (
-                f"the dual is infeasible (an exact improving ray, q.d = {ray['slope']:.3g}): the problem is unbounded "
-                f"{word} if it has a feasible point, else infeasible; feasibility not decided ({feas.verdict})"
-            )
-        out = Outcome("undecided", Evidence("exact-proof", None, statement), statement, solution=best.solution)
-        out.certificate, out.backend = (
-            feas.certificate if feas.verdict == "certified" else best.certificate,
-            best.backend,
-        )
-        out.attempts = best.attempts + ray_out.attempts + feas.attempts
-        return out
-    why = ray["reason"] if ray is not None else f"no improving ray found ({ray_out.verdict})"
-    best.reason = f"{best.reason}; the solver reports unbounded, not proved: {why}".lstrip("; ")
     return best
 
 

@@ -50,6 +50,7 @@ __all__ = [
     "ENCLOSURE_BUDGET_FACTOR",
     "ENCLOSURE_BUDGET_FLOOR_S",
     "enclosure_budget",
+    "unbounded_outcome",
 ]
 
 #: tolerance of the first-order step of an optimisation route ("moderate accuracy": the
@@ -326,7 +327,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
 
     options = options or SolveOptions()
     if not is_auto(backend) or problem.objective.sense == "feasibility":
-        out = decide(problem, backend, options, exact=exact)
+        out = _unbounded_checked(problem, decide(problem, backend, options, exact=exact), options)
         done = _steps(out)
         return RouteResult(out, None, 0.0, {"steps": done, "text": describe(done, problem)})
     names = list(route(problem, backend))
@@ -355,21 +356,25 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
             )
         budget = backend_budget(problem) if budgeted and k < last else None
         t_b = time.perf_counter()
-        out = decide(problem, name, opts, exact=exact, budget_s=budget)
+        out = _unbounded_checked(problem, decide(problem, name, opts, exact=exact, budget_s=budget), options)
         if budget is not None and not out.decided and time.perf_counter() - t_b >= budget:
             cut.append(name)  # stopped by its budget: the next backend now; retried at the end
         attempts.extend(out.attempts)
         step: dict[str, Any] = {"backend": name, "verdict": out.verdict}
         steps.append(step)
         enc = None
-        if out.verdict == "certified":
+        holds = out.verdict == "undecided" and getattr(out.certificate, "verdict", None) == "certified"
+        if out.verdict == "certified" or holds:
             enc, t_enc = enclosure_of(problem, out.solution, out.certificate, exact, name, opts)
             enc_s += t_enc
             rel = None if enc is None else enc.get("rel_gap")
             step["rel_gap"] = rel
             if rel is None:
                 step["gap_note"] = _gap_note(enc)
-        if best is None or rank(out.verdict) > rank(best.verdict) or _tighter(enc, best_enc, out, best):
+        if holds and enc is not None and enc.get("rel_gap") is not None and enc["rel_gap"] <= options.gap:
+            out = _upgrade(out, enc)  # the enclosure proves the optimum whatever the solver's status
+            step["verdict"] = out.verdict
+        if best is None or _score(out) > _score(best) or _tighter(enc, best_enc, out, best):
             best, best_enc = out, enc
         if out.verdict == "certified":
             rel = step.get("rel_gap")
@@ -403,6 +408,98 @@ def _tighter(enc: dict[str, Any] | None, best_enc: dict[str, Any] | None, out: O
         return False
     new, old = (enc or {}).get("rel_gap"), (best_enc or {}).get("rel_gap")
     return old is None or (new is not None and new <= old)
+
+
+def unbounded_outcome(problem: Problem, best: Outcome, options: Any = None) -> Outcome:
+    """A solver said ``unbounded``: prove what can be proved about it.
+
+    The improving rays of ``problem`` (:func:`lmic.certify.farkas_unbounded.ray_problem`) are
+    decided by this policy; a ray is proved exactly
+    (:func:`~lmic.certify.farkas_unbounded.prove_improving_ray`), and the problem's feasibility
+    is decided too. Then ``reason`` says exactly what holds: with an exact ray and a certified
+    point, the objective is unbounded (no optimum: the optimal value is infinite); with an exact
+    ray only, "unbounded or infeasible"; with a feasibility problem proved infeasible, the
+    global infeasibility proof is the outcome. The verdict stays ``undecided`` (exit 1) unless
+    infeasibility is proved: the outcome vocabulary has no word for "unbounded", and an
+    unbounded problem has no optimum point to certify.
+
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> import numpy as np
+    >>> o = Outcome("undecided", None, "unbounded")
+    >>> unbounded_outcome(lyapunov_problem(-np.eye(1)), o).verdict  # a feasibility problem: nothing to do
+    'undecided'
+    """
+    from lmic.certify.farkas_unbounded import prove_improving_ray, ray_problem
+    from lmic.outcome import Evidence
+    from lmic.policy import decide, feasibility_problem
+
+    if problem.objective.sense == "feasibility":
+        return best
+    ray_out = decide(ray_problem(problem), None, options, rescue=False)
+    ray = None
+    if ray_out.verdict == "certified" and ray_out.solution is not None and ray_out.solution.x is not None:
+        ray = prove_improving_ray(problem, ray_out.solution.x)
+    feas = decide(feasibility_problem(problem), None, options)
+    if feas.verdict == "infeasible-certified":
+        feas.attempts = best.attempts + ray_out.attempts + feas.attempts
+        return feas
+    word = "below" if problem.objective.sense == "min" else "above"
+    if ray is not None and ray["proven"]:
+        if feas.verdict == "certified":
+            inf = "-inf" if word == "below" else "+inf"
+            statement = (
+                f"unbounded {word}: a certified feasible point and an exact improving ray "
+                f"(q.d = {ray['slope']:.3g}); the optimal value is {inf}, no optimum exists (the dual is infeasible)"
+            )
+        else:
+            statement = (
+                f"the dual is infeasible (an exact improving ray, q.d = {ray['slope']:.3g}): the problem is unbounded "
+                f"{word} if it has a feasible point, else infeasible; feasibility not decided ({feas.verdict})"
+            )
+        out = Outcome("undecided", Evidence("exact-proof", None, statement), statement, solution=best.solution)
+        out.certificate, out.backend = (
+            feas.certificate if feas.verdict == "certified" else best.certificate,
+            best.backend,
+        )
+        out.attempts = best.attempts + ray_out.attempts + feas.attempts
+        return out
+    why = ray["reason"] if ray is not None else f"no improving ray found ({ray_out.verdict})"
+    best.reason = f"{best.reason}; the solver reports unbounded, not proved: {why}".lstrip("; ")
+    return best
+
+
+def _unbounded_checked(problem: Problem, out: Outcome, options: Any) -> Outcome:
+    """:func:`unbounded_outcome` when a solve of an optimisation problem said ``unbounded``."""
+    said = any(a.status == "unbounded" for a in out.attempts)
+    if out.decided or problem.objective.sense == "feasibility" or not said:
+        return out
+    return unbounded_outcome(problem, out, options)
+
+
+def _score(out: Outcome) -> float:
+    """:func:`lmic.outcome.rank`, with a point that holds from an inexact solve (undecided)
+    above a rejected point: its objective is a proven end of the enclosure.
+
+    >>> _score(Outcome("rejected")) < _score(Outcome("infeasible-bounded"))
+    True
+    """
+    if out.verdict == "undecided" and getattr(out.certificate, "verdict", None) == "certified":
+        return rank("rejected") + 0.5
+    return float(rank(out.verdict))
+
+
+def _upgrade(out: Outcome, enc: dict[str, Any]) -> Outcome:
+    """A point that holds from a solve the solver called inexact, whose enclosure meets the gap:
+    the optimum is proven to that gap by the enclosure alone (both ends are proofs)."""
+    from lmic.outcome import evidence_of
+
+    out.verdict = "certified"
+    out.evidence = evidence_of("certified", out.certificate)
+    out.reason = (
+        f"{out.reason}; the enclosure proves the optimum: {enc.get('kind')} in "
+        f"[{enc['lower']:.10g}, {enc['upper']:.10g}] (relative gap {enc['rel_gap']:.2g})"
+    )
+    return out
 
 
 def _gap_note(enc: dict[str, Any] | None) -> str:

@@ -60,10 +60,10 @@ def test_ray_problem_points_are_rays() -> None:
     assert prove_improving_ray(p, out.solution.x)["proven"]
 
 
-def test_policy_says_exactly_what_is_proved_for_an_unbounded_problem() -> None:
-    from lmic.policy import decide
+def test_route_says_exactly_what_is_proved_for_an_unbounded_problem() -> None:
+    from lmic.routes import decide_route
 
-    out = decide(_unbounded_problem(), "clarabel")
+    out = decide_route(_unbounded_problem(), "clarabel").outcome
     assert out.verdict == "undecided" and out.exit_code() == 1  # no optimum exists to certify
     assert out.evidence.kind == "exact-proof"
     assert out.reason.startswith("unbounded below: a certified feasible point and an exact improving ray")
