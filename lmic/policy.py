@@ -417,9 +417,10 @@ def decide(
             step_opts = opts
             if budget is not None:
                 left = budget - (t0 - b_t0)
-                if left <= 0:
+                if left <= 0 and k > 1:  # the backend's first strategy always runs
                     cut.append(name)
                     break
+                left = max(left, 1e-3)
                 if opts.time_limit is None or opts.time_limit > left:
                     step_opts = replace(opts, time_limit=left)
             if tag in ("scaled", "rescaled"):
