@@ -167,10 +167,139 @@ def _face_jacobian(problem: Problem, eigs: list, sels: list, rows: list[int]) ->
     return np.hstack(cols)
 
 
+#: above this many unknowns the face centring factors its Hessian block by block
+#: (:func:`_center_on_face_large`) instead of the dense null-space Newton steps (``O(m^3)`` a step)
+DENSE_CENTRE_MAX = 1000
+
+
 def _center_on_face(
     J: np.ndarray, u0: np.ndarray, sizes: list[int], ge_rows: np.ndarray, separate: bool, max_iter: int = 30
 ) -> np.ndarray | None:
     """A point deep inside the face's slice of the certificate cone, in floats.
+
+    Maximises ``sum_i log det S_i + sum_{ge rows} log y_r (+ log(-g_0) when separate)`` subject
+    to ``g_k = 0`` (``k >= 1``) and ``sum_i tr S_i + sum_{ge rows} y_r`` fixed, by infeasible-start
+    Newton steps from ``u0`` (which must be strictly inside the cone). Returns ``None`` when no
+    strictly interior point was reached (the face is larger than the certificates' face).
+    """
+    m = u0.size
+    if m > DENSE_CENTRE_MAX:
+        return _center_on_face_large(J, u0, sizes, ge_rows, separate, max_iter)
+    tri = [np.triu_indices(r) for r in sizes]
+    nS = sum(len(a) for a, _ in tri)
+    # trace row of the normalisation; svec -> S for every block
+    N = np.zeros(m)
+    k = 0
+    for a, b in tri:
+        N[k : k + len(a)] = (a == b).astype(float)
+        k += len(a)
+    N[nS:] = ge_rows.astype(float)
+    A = np.vstack([J[1:], N[None, :]])
+    c0 = J[0]
+    scale = np.maximum(np.linalg.norm(A, axis=1), 1e-300)
+    A = A / scale[:, None]  # rows of unit norm: the KKT system is better balanced
+    b = np.zeros(A.shape[0])
+    b[-1] = float(N @ u0) / scale[-1]
+
+    def split(u: np.ndarray) -> list[np.ndarray]:
+        out, k = [], 0
+        for r, (a, bb) in zip(sizes, tri, strict=True):
+            S = np.zeros((r, r))
+            S[a, bb] = u[k : k + len(a)]
+            S[bb, a] = u[k : k + len(a)]
+            out.append(S)
+            k += len(a)
+        return out
+
+    def inside(u: np.ndarray) -> bool:
+        if separate and not float(c0 @ u) < 0:
+            return False
+        if np.any(u[nS:][ge_rows] <= 0):
+            return False
+        return all(np.linalg.eigvalsh(S)[0] > 0 for S in split(u) if S.size)
+
+    def derivatives(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        grad, H = np.zeros(m), np.zeros((m, m))
+        k = 0
+        for (a, bb), S in zip(tri, split(u), strict=True):
+            t = len(a)
+            # -log det S in svec coordinates (E_k = e_a e_b^T + e_b e_a^T, e_a e_a^T on the
+            # diagonal): grad_k = -tr(S^-1 E_k), H_kl = tr(S^-1 E_k S^-1 E_l), in closed form
+            # (O(t^2), not the O(t^2 r^2) of the products of the E_k)
+            Si = np.linalg.inv(S)
+            w = np.where(a == bb, 0.5, 1.0)
+            grad[k : k + t] = -2.0 * w * Si[a, bb]
+            H[k : k + t, k : k + t] = (
+                2.0 * (Si[np.ix_(bb, a)] * Si[np.ix_(a, bb)] + Si[np.ix_(bb, bb)] * Si[np.ix_(a, a)]) * np.outer(w, w)
+            )
+            k += t
+        yr = np.flatnonzero(ge_rows) + nS
+        grad[yr] -= 1.0 / u[yr]
+        H[yr, yr] += 1.0 / u[yr] ** 2
+        if separate:
+            h = -float(c0 @ u)
+            grad += c0 / h
+            H += np.outer(c0, c0) / h**2
+        return grad, H
+
+    # feasible-start Newton on the null space of the equality rows (orthonormal basis B)
+    _, sv, Vt = np.linalg.svd(A)
+    rank = int(np.sum(sv > 1e-10 * sv[0])) if sv.size else 0
+    B = Vt[rank:].T
+    dp = -np.linalg.lstsq(A, A @ u0 - b, rcond=1e-10)[0]  # least-norm move onto the slice
+    if not inside(u0) or not B.shape[1]:
+        return None
+    # phase 1 (infeasible start): u = u0 + s dp + B z; each step takes the rest of dp and the
+    # barrier's Newton correction in the null space, damped to stay inside the cone, until s = 1
+    u, s = u0.copy(), 0.0
+    for _ in range(max_iter):
+        grad, H = derivatives(u)
+        rest = (1.0 - s) * dp
+        Hz = B.T @ H @ B
+        dz = -np.linalg.solve(Hz + 1e-14 * np.trace(Hz) * np.eye(len(Hz)) / len(Hz), B.T @ (grad + H @ rest))
+        t = 1.0
+        while t > 1e-6 and not inside(u + t * (rest + B @ dz)):
+            t *= 0.5
+        if t <= 1e-6:
+            return None
+        u = u + t * (rest + B @ dz)
+        s = 1.0 if t == 1.0 else s + t * (1.0 - s)
+        if s == 1.0:
+            break
+    if s < 1.0:
+        return None
+
+    def value(u: np.ndarray) -> float:
+        f = -sum(float(np.linalg.slogdet(S)[1]) for S in split(u) if S.size)
+        f -= float(np.sum(np.log(u[nS:][ge_rows])))
+        return f - (math.log(-float(c0 @ u)) if separate else 0.0)
+
+    f = value(u)
+    for _ in range(max_iter):
+        grad, H = derivatives(u)
+        gz, Hz = B.T @ grad, B.T @ H @ B
+        dz = -np.linalg.solve(Hz + 1e-14 * np.trace(Hz) * np.eye(len(gz)) / len(gz), gz)
+        dec = -float(gz @ dz)  # Newton decrement squared
+        if not dec > 1e-8:  # near enough to the centre: only a margin is needed
+            break
+        du, t = B @ dz, 1.0
+        while t > 1e-6:
+            un = u + t * du
+            if inside(un):
+                fn = value(un)
+                if fn <= f - 0.25 * t * dec:
+                    break
+            t *= 0.5
+        if t <= 1e-6:
+            break
+        u, f = un, fn
+    return u
+
+
+def _center_on_face_large(
+    J: np.ndarray, u0: np.ndarray, sizes: list[int], ge_rows: np.ndarray, separate: bool, max_iter: int = 30
+) -> np.ndarray | None:
+    """:func:`_center_on_face` for many unknowns (``m >`` :data:`DENSE_CENTRE_MAX`).
 
     Maximises ``sum_i log det S_i + sum_{ge rows} log y_r (+ log(-g_0) when separate)`` subject
     to ``g_k = 0`` (``k >= 1``) and ``sum_i tr S_i + sum_{ge rows} y_r`` fixed, by infeasible-start
