@@ -440,7 +440,14 @@ def _center_on_face_large(
 
 
 def _towards_center(
-    problem: Problem, eigs: list, sels: list, rows: list[int], ge: np.ndarray, u0: np.ndarray, top: float
+    problem: Problem,
+    eigs: list,
+    sels: list,
+    rows: list[int],
+    ge: np.ndarray,
+    u0: np.ndarray,
+    top: float,
+    method: str = "dense",
 ) -> np.ndarray | None:
     """Move the face point ``u0`` towards the centre of the face's certificates, just enough.
 
@@ -457,7 +464,15 @@ def _towards_center(
     ge_rows = np.array([bool(ge[r]) for r in rows], dtype=bool)
     separate = float(J[0] @ u0) < 0
     try:
-        uc = _center_on_face(J, u0, sizes, ge_rows, separate)
+        if method == "schur":
+            # the other centring (a different Newton path, a different centre): it proves
+            # faces the dense one does not (obs_control original coordinates), and vice versa;
+            # above DENSE_CENTRE_MAX it is what the dense call already ran
+            if u0.size > DENSE_CENTRE_MAX:
+                return None
+            uc = _center_on_face_large(J, u0, sizes, ge_rows, separate)
+        else:
+            uc = _center_on_face(J, u0, sizes, ge_rows, separate)
     except np.linalg.LinAlgError:  # a singular block: the slice has no interior here
         uc = None
     if uc is None:
