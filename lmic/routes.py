@@ -285,7 +285,8 @@ def _tighten_once(
     try:
         # the policy's strategies on this backend (an AlmostSolved solve is re-tried preconditioned
         # at its point: Clarabel at 1e-9 on SDPLIB control3)
-        sol2 = decide(problem, backend, tight, rescue=False).solution
+        left = None if deadline is None else max(0.0, deadline - time.perf_counter())
+        sol2 = decide(problem, backend, tight, rescue=False, budget_s=left).solution  # strategies within the budget
     except LmicError:
         return enc
     if sol2 is None or sol2.status not in ("optimal", "inaccurate") or sol2.x is None or not sol2.duals:
