@@ -56,6 +56,10 @@ if not SDPLIB.is_dir():
 SDPLIB_NAMES = (
     ["control1", "control2", "control3"] + [f"hinf{k}" for k in range(1, 7)] + [f"truss{k}" for k in range(1, 5)]
 )
+#: the rest of the SDPLIB subset (issues 13/14, SDPLIB breadth): the Lovasz theta, QAP and
+#: arch problems (large blocks: the repair's cost), and the infeasible / dual-infeasible pair
+#: (their "published" entry is a word, not a value: no rounding interval)
+SDPLIB_BREADTH = ("theta1", "theta2", "qap5", "arch0", "infp1", "infd1")
 EXAMPLES = [
     ("sampled_euler.thm2", "sampled_euler.thm2.example.yaml"),
     ("sampled_euler.thm3", "sampled_euler.thm3.example.yaml"),
@@ -144,7 +148,7 @@ def problems(only: set[str] | None = None) -> list[tuple[str, Any]]:
         path = ROOT / "examples" / system
         if path.is_file():
             out.append((thm, load_target(thm, str(path))[0]))
-    for name in SDPLIB_NAMES:
+    for name in [*SDPLIB_NAMES, *SDPLIB_BREADTH]:
         if only and name not in only:
             continue
         path = SDPLIB / f"{name}.dat-s"
@@ -242,7 +246,7 @@ def main(argv: list[str] | None = None) -> int:
             lo, hi = row["lower"], row["upper"]
             row["published"] = f"{0.5 * (a + b):.12g}"
             row["inside"] = bool((lo is None or lo <= a) and (hi is None or b <= hi))
-        if label in published:
+        if label in published and published[label][:1] in "+-0123456789.":
             a, b = rounding_interval(published[label])
             lo, hi = row["lower"], row["upper"]
             row["published"] = published[label]

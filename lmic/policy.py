@@ -20,7 +20,9 @@ certified point, or a GLOBAL infeasibility proof, :mod:`lmic.outcome`):
    proof counts from it, a point is no optimum);
 4. the first ``infeasible-bounded`` answer ("no solution with ``||x||_inf <= R``") is
    immediately tried for an exact rational proof (:func:`lmic.certify.farkas.prove_infeasible`),
-   which makes it global when it holds (one ray per decision: a proof attempt costs seconds).
+   which makes it global when it holds (up to :data:`MAX_RAY_PROOFS` rays per decision, one
+   face threshold each: a proof attempt costs seconds; another strategy's ray, e.g. the
+   fixed-margin one, is often the one that proves).
 
 Then the next backend of the route. After the route: the exact rescue of the best rejected
 point whose float eigenvalues are all positive (margins below the float error bound, e.g. near a
@@ -67,6 +69,9 @@ __all__ = [
     "ORDER",
     "FIRST_ORDER_TOL",
     "MAX_BOUNDED",
+    "BACKEND_BUDGET_S",
+    "MAX_RAY_PROOFS",
+    "backend_budget",
     "AUTO_VARIANTS",
     "route",
     "decide",
@@ -81,6 +86,36 @@ ORDER = ("clarabel", "cvxopt", "sdpa", "scs")
 FIRST_ORDER_TOL = 1e-3
 #: stop escalating once this many backends gave bounded rays that no exact proof upgraded
 MAX_BOUNDED = 2
+
+#: bounded rays per decision tried for an exact (global) proof: on obs_control.thm3_2 in
+#: z-coordinates (eps = 0.8) CVXOPT's max-margin ray fails and its fixed-margin ray proves
+MAX_RAY_PROOFS = 3
+#: ... while the proofs so far took less than this many CPU seconds (the first is always tried)
+RAY_PROOF_BUDGET_S = 15.0
+
+#: per-backend time budget of an escalating route (seconds, for a problem of size 1e6 or less;
+#: see :func:`backend_budget`): a backend that has not decided by then gives way to the next one
+BACKEND_BUDGET_S = 60.0
+
+
+def backend_budget(problem: Problem) -> float:
+    """Seconds one backend of an escalating route may take before the next one is tried.
+
+    ``BACKEND_BUDGET_S * max(1, n * cone / 1e6)`` with ``n`` the variables and ``cone`` the
+    dimension of the PSD cone (``sum d (d + 1) / 2``): about the growth of an interior-point
+    solve. On a random 8-state ``delay_b.thm4_1`` (infeasible) Clarabel ran 200 s where CVXOPT
+    decides in 2 s. Only routes with another backend after this one are budgeted; a backend cut
+    by its budget is tried again without one when no other backend decided (a decision wherever
+    one exists).
+
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> backend_budget(lyapunov_problem(-np.eye(2)))
+    60.0
+    """
+    cone = sum(lmi.dim * (lmi.dim + 1) // 2 for lmi in problem.lmis) + len(problem.linear)
+    return BACKEND_BUDGET_S * max(1.0, problem.n * cone / 1e6)
+
+
 #: ``auto:VARIANT``: ``first-order`` starts an optimisation route with SCS, ``interior-point``
 #: skips that step; ``auto`` alone follows :data:`lmic.backends.auto.FIRST_ORDER_OPTIMISATION`
 AUTO_VARIANTS: dict[str, bool | None] = {"": None, "first-order": True, "interior-point": False}
@@ -229,7 +264,9 @@ class _Run:
         self.attempts: list[Attempt] = []
         self.best: Outcome | None = None
         self.rejected: list[tuple[Solution, Any, str]] = []
-        self.ray_tried = False
+        self.holding: list[Outcome] = []  # optimisation points that hold, from 'inaccurate' solves
+        self.rays_tried = 0
+        self.ray_s = 0.0
 
     def record(self, backend: str, label: str, sol: Solution, t0: float, infeasibility_only: bool = False) -> Outcome:
         t1 = time.perf_counter()
@@ -239,9 +276,13 @@ class _Run:
         if infeasibility_only and verdict in ("certified", "rejected"):
             # a point of the feasibility problem is no optimum: it decides nothing here
             verdict, note = "undecided", "the feasibility problem has a point; the optimum was not reached"
-        if verdict == "infeasible-bounded" and self.rescue and not self.exact and not self.ray_tried:
-            self.ray_tried = True  # an exact proof costs seconds: one ray per decision, one face
-            if _prove_ray(self.problem, sol, cert):
+        more = self.rays_tried < MAX_RAY_PROOFS and (not self.rays_tried or self.ray_s < RAY_PROOF_BUDGET_S)
+        if verdict == "infeasible-bounded" and self.rescue and not self.exact and more:
+            self.rays_tried += 1  # an exact proof costs seconds: a few rays per decision, one face
+            t_ray = time.process_time()  # CPU time: the same on a busy machine
+            proved = _prove_ray(self.problem, sol, cert)
+            self.ray_s += time.process_time() - t_ray
+            if proved:
                 verdict, note = "infeasible-certified", "exact proof of the ray"
             else:
                 note = "exact proof of the ray failed"
@@ -272,6 +313,14 @@ class _Run:
             certificate=cert,
             backend=backend,
         )
+        if (
+            verdict == "undecided"
+            and not infeasibility_only
+            and self.problem.objective.sense != "feasibility"
+            and getattr(cert, "verdict", None) == "certified"
+            and sol.x is not None
+        ):
+            self.holding.append(out)  # the point holds; only the solver's status is in doubt
         if self.best is None or rank(out.verdict) > rank(self.best.verdict):
             self.best = out
         return out
@@ -286,6 +335,7 @@ def decide(
     solve_as: Problem | None = None,
     reference: np.ndarray | None = None,
     rescue: bool = True,
+    budget_s: float | None = None,
 ) -> Outcome:
     """Decide ``problem`` by the policy of the module docstring.
 
@@ -305,6 +355,11 @@ def decide(
         A point to precondition at first (``scaled``).
     rescue : bool
         Exact rescue of bounded rays and of points rejected only for tiny margins.
+    budget_s : float, optional
+        Seconds each backend may take (its strategies stop there, its solves get the rest as
+        their time limit unless ``options.time_limit`` is set). An escalating route budgets
+        every backend but its last by :func:`backend_budget`; a backend cut by its budget is
+        retried without one when no backend decided.
 
     Returns
     -------
@@ -332,10 +387,20 @@ def decide(
     run = _Run(problem, exact, rescue)
     bounded = 0
     feasibility_strict = problem.objective.sense == "feasibility" and has_strict(problem)
-    for name in names:
+    cut: list[Any] = []  # backends stopped by their budget (retried without one at the end)
+    auto_budget = budget_s is None and not single and options.time_limit is None
+    queue: list[tuple[Any, float | None]] = [
+        (name, (backend_budget(solve_as) if auto_budget and k < len(names) - 1 else budget_s))
+        for k, name in enumerate(names)
+    ]
+    qi = 0
+    while qi < len(queue):
+        name, budget = queue[qi]
+        qi += 1
         be = _instance(name)
         label = be.label
         opts = step_options(be, options) if not single else options
+        b_t0 = time.perf_counter()
         last_x: np.ndarray | None = None
         tried_strict: set[str] = set()
         plan: list[tuple[str, Problem, Any]] = []
@@ -350,11 +415,21 @@ def decide(
             t0 = time.perf_counter()
             scales = None
             step_opts = opts
+            if budget is not None:
+                left = budget - (t0 - b_t0)
+                if left <= 0 and k > 1:  # the backend's first strategy always runs
+                    cut.append(name)
+                    break
+                left = max(left, 1e-3)
+                if opts.time_limit is None or opts.time_limit > left:
+                    step_opts = replace(opts, time_limit=left)
             if tag in ("scaled", "rescaled"):
                 target, scales = precondition(target, at)
             if tag.startswith("strict="):
-                step_opts = replace(opts, strict=tag.split("=", 1)[1])
+                step_opts = replace(step_opts, strict=tag.split("=", 1)[1])
             sol = _solve_one(be, target, step_opts, scales, problem)
+            if budget is not None and _timed_out(sol) and name not in cut:
+                cut.append(name)
             for a in sol.info.get("strict_attempts", []) or []:
                 tried_strict.add(str(a.get("strategy")))
             out = run.record(label, tag, sol, t0, infeasibility_only=tag == "feasibility")
@@ -380,8 +455,19 @@ def decide(
             bounded += 1
             if bounded >= MAX_BOUNDED:
                 break
+        if qi == len(queue) and cut and budget_s is None and auto_budget:
+            # nothing decided within the budgets: the first backend cut by its budget, unbounded
+            queue.append((cut[0], None))
+            auto_budget = False
     assert run.best is not None
     best = run.best
+    if not best.decided and best.verdict in ("rejected", "undecided") and run.holding:
+        # a point that holds (the solver stopped short, e.g. 'inaccurate') says more than a
+        # rejected one: its objective is a proven end, and the enclosure (lmic.routes) may prove
+        # the optimum to the requested gap whatever the solver's status
+        sign = -1.0 if problem.objective.sense == "max" else 1.0
+        best = min(run.holding, key=lambda o: sign * float(o.solution.objective or 0.0))
+        best.reason = f"the solver stopped '{best.solution.status}'; its point holds: {best.reason}"
     if not best.decided and rescue and not exact:
         for sol, cert, label in sorted(run.rejected, key=lambda r: -_rel_margin(r[1])):
             t0 = time.perf_counter()
@@ -418,6 +504,12 @@ def decide(
     if best.evidence is None:
         best.evidence = Evidence()
     return best
+
+
+def _timed_out(sol: Solution) -> bool:
+    from lmic.backends.outcomes import is_time_limit
+
+    return is_time_limit(sol)
 
 
 def feasibility_problem(problem: Problem) -> Problem:

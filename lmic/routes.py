@@ -47,6 +47,10 @@ __all__ = [
     "method_of",
     "OPTIMISATION_FIRST_ORDER_TOL",
     "OPTIMISATION_FIRST_ORDER_ITERS",
+    "ENCLOSURE_BUDGET_FACTOR",
+    "ENCLOSURE_BUDGET_FLOOR_S",
+    "enclosure_budget",
+    "unbounded_outcome",
 ]
 
 #: tolerance of the first-order step of an optimisation route ("moderate accuracy": the
@@ -56,6 +60,24 @@ OPTIMISATION_FIRST_ORDER_TOL = 1e-6
 #: tolerance by then is polished by the interior-point step instead (SCS without a cap took
 #: 200 s on a 30-state bounded-real lemma where CVXOPT takes 2 s)
 OPTIMISATION_FIRST_ORDER_ITERS = 2000
+
+#: the enclosure of an optimisation answer (dual repair and proof, perturbed and centred
+#: re-solves, the tight re-solve of :func:`tighten`) may take this many times the solve it
+#: certifies ...
+ENCLOSURE_BUDGET_FACTOR = 3.0
+#: ... and at least this many seconds (the fixed costs: imports, one eigen-decomposition per
+#: block and proof)
+ENCLOSURE_BUDGET_FLOOR_S = 10.0
+
+
+def enclosure_budget(solve_s: float | None) -> float:
+    """The time budget of an enclosure: ``max(FLOOR, FACTOR * solve_s)`` seconds.
+
+    >>> enclosure_budget(0.1), enclosure_budget(10.0)
+    (10.0, 30.0)
+    """
+    s = float(solve_s or 0.0)
+    return max(ENCLOSURE_BUDGET_FLOOR_S, ENCLOSURE_BUDGET_FACTOR * (s if s > 0 else 0.0))
 
 
 @dataclass
@@ -131,7 +153,13 @@ def _solve_on(backend: Any, problem: Problem, options: Any) -> Any:
 
 
 def enclosure_of(
-    problem: Problem, sol: Any, cert: Any, exact: bool, backend: Any, options: Any
+    problem: Problem,
+    sol: Any,
+    cert: Any,
+    exact: bool,
+    backend: Any,
+    options: Any,
+    budget_s: float | None = None,
 ) -> tuple[dict[str, Any] | None, float]:
     """The certified enclosure of ``problem``'s optimal value from a solution's point and dual.
 
@@ -139,7 +167,10 @@ def enclosure_of(
     degenerate dual is retried on a perturbed problem, then on a centred dual point (the dual
     problem solved for the largest interior margin), both on ``backend``; a gap above
     :data:`lmic.certify.enclosure.GAP_TARGET` on an interior-point backend gets one re-solve at
-    :data:`~lmic.certify.enclosure.TIGHT_TOL` (:func:`tighten`).
+    :data:`TIGHT_TOLS` (:func:`tighten`). The whole enclosure has
+    ``budget_s`` seconds (default :func:`enclosure_budget` of the solve's time): no step starts
+    after it, the tight re-solve only when the rest of the budget can pay for it, and a budget
+    spent is recorded (``budget``), never turned into a bound.
 
     >>> from lmic.testing.conformance import lyapunov_problem
     >>> import numpy as np
@@ -153,21 +184,39 @@ def enclosure_of(
     from lmic.certify.enclosure import enclosure
 
     t0 = time.perf_counter()
+    solve_s = float(getattr(sol, "solve_s", 0.0) or 0.0)
+    budget = enclosure_budget(solve_s) if budget_s is None else float(budget_s)
+    deadline = t0 + budget
     x = sol.x if getattr(cert, "verdict", None) == "certified" else None
 
     def resolve(perturbed: Problem) -> dict[str, Any] | None:
+        if time.perf_counter() + solve_s > deadline:
+            return None  # the re-solve would not fit in the budget
         other = _solve_on(backend, perturbed, options)
         return other.duals if other is not None and other.status in ("optimal", "inaccurate") else None
 
     def solve_point(other_problem: Problem) -> np.ndarray | None:
+        if time.perf_counter() + solve_s > deadline:
+            return None
         other = _solve_on(backend, other_problem, options)
         return other.x if other is not None and other.status in ("optimal", "inaccurate") else None
 
-    # solve_s: a failing lower end costs a few solves at most (search_budget)
-    solve_s = float(getattr(sol, "solve_s", 0.0))
-    enc = enclosure(problem, sol.duals, x, exact=exact, resolve=resolve, solve_point=solve_point, solve_s=solve_s)
-    enc = tighten(problem, enc, x, exact, backend, options, resolve, solve_point)
-    return enc, time.perf_counter() - t0
+    enc = enclosure(
+        problem,
+        sol.duals,
+        x,
+        exact=exact,
+        resolve=resolve,
+        solve_point=solve_point,
+        solve_s=solve_s,
+        budget_s=budget,
+    )
+    enc = tighten(problem, enc, x, exact, backend, options, resolve, solve_point, deadline=deadline, solve_s=solve_s)
+    spent = time.perf_counter() - t0
+    enc["budget"] = {"seconds": budget, "used": spent, "spent": spent > budget}
+    if enc["budget"]["spent"] and enc.get("rel_gap") is None:
+        enc["reason"] = f"{enc.get('reason')}; enclosure time budget {budget:.3g} s spent"
+    return enc, spent
 
 
 def tighten(
@@ -179,24 +228,22 @@ def tighten(
     options: Any,
     resolve: Any,
     solve_point: Any,
+    deadline: float | None = None,
+    solve_s: float = 0.0,
 ) -> dict[str, Any]:
-    """A gap above :data:`lmic.certify.enclosure.GAP_TARGET` on an interior-point backend: a
-    re-solve at :data:`~lmic.certify.enclosure.TIGHT_TOL` and the better proven end of each.
+    """A gap above :data:`lmic.certify.enclosure.GAP_TARGET` on an interior-point backend:
+    re-solves at each of :data:`TIGHT_TOLS` below the solve's tolerance, loosest first, until
+    the gap meets the target, and the better proven end of each.
 
     When the tight point's primal end is met only to round-off, the end comes from a point
     polished toward it (``restored point``); without any proven end there, ``tight_x`` records
-    the tight point for the restoration of :func:`lmic.api.solve`.
+    the tight point for the restoration of :func:`lmic.api.solve`. With ``deadline`` (a
+    :func:`time.perf_counter` value), the re-solve runs only when about twice ``solve_s`` (the
+    first solve's time) is left before it, and its enclosure gets what is left.
     """
     from dataclasses import replace
 
-    from lmic.certify.enclosure import (
-        GAP_TARGET,
-        TIGHT_TOL,
-        best_of,
-        enclosure,
-        polish_primal,
-        with_primal,
-    )
+    from lmic.certify.enclosure import GAP_TARGET
     from lmic.options import SolveOptions
 
     gap = enc.get("rel_gap")
@@ -210,12 +257,50 @@ def tighten(
         # cone, not inside it (on the bounded-real lemma at n = 20 it doubled the time, 6.5 s of
         # 12, and proved nothing), so there is nothing for a re-solve to tighten
         return enc
-    if options is not None and options.tol <= TIGHT_TOL:
+    base_tol = options.tol if options is not None else SolveOptions().tol
+    out = enc
+    for tol in [t for t in TIGHT_TOLS if t < base_tol]:
+        if deadline is not None and time.perf_counter() + 2.0 * solve_s > deadline:
+            break  # a tight re-solve (typically slower than the first) would not fit the budget
+        tight = replace(options, tol=tol) if options is not None else SolveOptions(tol=tol)
+        out = _tighten_once(problem, out, x, exact, backend, tight, resolve, solve_point, deadline, key)
+        if out.get("rel_gap") is not None and out["rel_gap"] <= GAP_TARGET:
+            break
+    return out
+
+
+#: the tolerances of :func:`tighten`'s re-solves, loosest first: Clarabel stops at
+#: ``AlmostSolved`` at 1e-10 on SDPLIB control3 where 1e-9 closes the gap (2.1e-6 -> 3e-7)
+TIGHT_TOLS = (1e-9, 1e-10)
+
+
+def _tighten_once(
+    problem: Problem,
+    enc: dict[str, Any],
+    x: Any,
+    exact: bool,
+    backend: Any,
+    tight: Any,
+    resolve: Any,
+    solve_point: Any,
+    deadline: float | None,
+    key: str,
+) -> dict[str, Any]:
+    """One re-solve of :func:`tighten` at ``tight.tol`` and the better proven end of each."""
+    from lmic.certify.enclosure import best_of, enclosure, polish_primal, with_primal
+    from lmic.errors import LmicError
+    from lmic.policy import decide
+
+    try:
+        # the policy's strategies on this backend (an AlmostSolved solve is re-tried preconditioned
+        # at its point: Clarabel at 1e-9 on SDPLIB control3)
+        left = None if deadline is None else max(0.0, deadline - time.perf_counter())
+        sol2 = decide(problem, backend, tight, rescue=False, budget_s=left).solution  # strategies within the budget
+    except LmicError:
         return enc
-    tight = replace(options, tol=TIGHT_TOL) if options is not None else SolveOptions(tol=TIGHT_TOL)
-    sol2 = _solve_on(backend, problem, tight)
-    if sol2 is None or sol2.status not in ("optimal", "inaccurate") or sol2.x is None:
+    if sol2 is None or sol2.status not in ("optimal", "inaccurate") or sol2.x is None or not sol2.duals:
         return enc
+    left = None if deadline is None else max(0.0, deadline - time.perf_counter())
     enc2 = enclosure(
         problem,
         sol2.duals,
@@ -223,7 +308,8 @@ def tighten(
         exact=exact,
         resolve=resolve,
         solve_point=solve_point,
-        solve_s=sol2.solve_s,
+        solve_s=float(getattr(sol2, "solve_s", 0.0) or 0.0),
+        budget_s=left,
     )
     inner = enc.get("restored_x") if enc.get("primal") == "restored point" else x
     if enc2.get(key) is None and enc.get(key) is not None and inner is not None:
@@ -256,21 +342,27 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     RouteResult
     """
     from lmic.options import SolveOptions
-    from lmic.policy import decide, is_auto, route
+    from lmic.policy import backend_budget, decide, is_auto, route
 
     options = options or SolveOptions()
     if not is_auto(backend) or problem.objective.sense == "feasibility":
-        out = decide(problem, backend, options, exact=exact)
+        out = _unbounded_checked(problem, decide(problem, backend, options, exact=exact), options)
         done = _steps(out)
         return RouteResult(out, None, 0.0, {"steps": done, "text": describe(done, problem)})
-    names = route(problem, backend)
+    names = list(route(problem, backend))
+    budgeted = options.time_limit is None
+    last = len(names) - 1
+    cut: list[Any] = []
     best: Outcome | None = None
     best_enc: dict[str, Any] | None = None
     enc_s = 0.0
     attempts: list[Any] = []
     steps: list[dict[str, Any]] = []
     bounded = 0
-    for name in names:
+    k = -1
+    while k + 1 < len(names):
+        k += 1
+        name = names[k]
         first_order = method_of(name) == "first-order"
         opts = options
         if first_order:
@@ -281,19 +373,27 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
                 tol=max(options.tol, OPTIMISATION_FIRST_ORDER_TOL),
                 max_iter=options.max_iter or OPTIMISATION_FIRST_ORDER_ITERS,
             )
-        out = decide(problem, name, opts, exact=exact)
+        budget = backend_budget(problem) if budgeted and k < last else None
+        t_b = time.perf_counter()
+        out = _unbounded_checked(problem, decide(problem, name, opts, exact=exact, budget_s=budget), options)
+        if budget is not None and not out.decided and time.perf_counter() - t_b >= budget:
+            cut.append(name)  # stopped by its budget: the next backend now; retried at the end
         attempts.extend(out.attempts)
         step: dict[str, Any] = {"backend": name, "verdict": out.verdict}
         steps.append(step)
         enc = None
-        if out.verdict == "certified":
+        holds = out.verdict == "undecided" and getattr(out.certificate, "verdict", None) == "certified"
+        if out.verdict == "certified" or holds:
             enc, t_enc = enclosure_of(problem, out.solution, out.certificate, exact, name, opts)
             enc_s += t_enc
             rel = None if enc is None else enc.get("rel_gap")
             step["rel_gap"] = rel
             if rel is None:
-                step["gap_note"] = "no certified lower end" if enc and enc.get("upper") is not None else "no enclosure"
-        if best is None or rank(out.verdict) > rank(best.verdict) or _tighter(enc, best_enc, out, best):
+                step["gap_note"] = _gap_note(enc)
+        if holds and enc is not None and enc.get("rel_gap") is not None and enc["rel_gap"] <= options.gap:
+            out = _upgrade(out, enc)  # the enclosure proves the optimum whatever the solver's status
+            step["verdict"] = out.verdict
+        if best is None or _score(out) > _score(best) or _tighter(enc, best_enc, out, best):
             best, best_enc = out, enc
         if out.verdict == "certified":
             rel = step.get("rel_gap")
@@ -304,10 +404,15 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
             continue  # a first-order point whose gap is too wide: polish
         if out.verdict == "infeasible-certified":
             break
+        if out.verdict == "undecided" and getattr(out.evidence, "kind", "") == "exact-proof":
+            break  # proved unbounded (or dual infeasible): lmic.policy.unbounded_outcome
         if out.verdict == "infeasible-bounded":
             bounded += 1
             if bounded >= 2:
                 break
+        if k == len(names) - 1 and cut and budgeted:
+            names.append(cut[0])  # nothing decided within the budgets: the first one cut, unbudgeted
+            budgeted = False
     assert best is not None
     best.attempts = attempts
     if best.solution is not None:
@@ -322,3 +427,109 @@ def _tighter(enc: dict[str, Any] | None, best_enc: dict[str, Any] | None, out: O
         return False
     new, old = (enc or {}).get("rel_gap"), (best_enc or {}).get("rel_gap")
     return old is None or (new is not None and new <= old)
+
+
+def unbounded_outcome(problem: Problem, best: Outcome, options: Any = None) -> Outcome:
+    """A solver said ``unbounded``: prove what can be proved about it.
+
+    The improving rays of ``problem`` (:func:`lmic.certify.farkas_unbounded.ray_problem`) are
+    decided by this policy; a ray is proved exactly
+    (:func:`~lmic.certify.farkas_unbounded.prove_improving_ray`), and the problem's feasibility
+    is decided too. Then ``reason`` says exactly what holds: with an exact ray and a certified
+    point, the objective is unbounded (no optimum: the optimal value is infinite); with an exact
+    ray only, "unbounded or infeasible"; with a feasibility problem proved infeasible, the
+    global infeasibility proof is the outcome. The verdict stays ``undecided`` (exit 1) unless
+    infeasibility is proved: the outcome vocabulary has no word for "unbounded", and an
+    unbounded problem has no optimum point to certify.
+
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> import numpy as np
+    >>> o = Outcome("undecided", None, "unbounded")
+    >>> unbounded_outcome(lyapunov_problem(-np.eye(1)), o).verdict  # a feasibility problem: nothing to do
+    'undecided'
+    """
+    from lmic.certify.farkas_unbounded import prove_improving_ray, ray_problem
+    from lmic.outcome import Evidence
+    from lmic.policy import decide, feasibility_problem
+
+    if problem.objective.sense == "feasibility":
+        return best
+    ray_out = decide(ray_problem(problem), None, options, rescue=False)
+    ray = None
+    if ray_out.verdict == "certified" and ray_out.solution is not None and ray_out.solution.x is not None:
+        ray = prove_improving_ray(problem, ray_out.solution.x)
+    feas = decide(feasibility_problem(problem), None, options)
+    if feas.verdict == "infeasible-certified":
+        feas.attempts = best.attempts + ray_out.attempts + feas.attempts
+        return feas
+    word = "below" if problem.objective.sense == "min" else "above"
+    if ray is not None and ray["proven"]:
+        if feas.verdict == "certified":
+            inf = "-inf" if word == "below" else "+inf"
+            statement = (
+                f"unbounded {word}: a certified feasible point and an exact improving ray "
+                f"(q.d = {ray['slope']:.3g}); the optimal value is {inf}, no optimum exists (the dual is infeasible)"
+            )
+        else:
+            statement = (
+                f"the dual is infeasible (an exact improving ray, q.d = {ray['slope']:.3g}): the problem is unbounded "
+                f"{word} if it has a feasible point, else infeasible; feasibility not decided ({feas.verdict})"
+            )
+        out = Outcome("undecided", Evidence("exact-proof", None, statement), statement, solution=best.solution)
+        out.certificate, out.backend = (
+            feas.certificate if feas.verdict == "certified" else best.certificate,
+            best.backend,
+        )
+        out.attempts = best.attempts + ray_out.attempts + feas.attempts
+        return out
+    why = ray["reason"] if ray is not None else f"no improving ray found ({ray_out.verdict})"
+    best.reason = f"{best.reason}; the solver reports unbounded, not proved: {why}".lstrip("; ")
+    return best
+
+
+def _unbounded_checked(problem: Problem, out: Outcome, options: Any) -> Outcome:
+    """:func:`unbounded_outcome` when a solve of an optimisation problem said ``unbounded``."""
+    said = any(a.status == "unbounded" for a in out.attempts)
+    if out.decided or problem.objective.sense == "feasibility" or not said:
+        return out
+    return unbounded_outcome(problem, out, options)
+
+
+def _score(out: Outcome) -> float:
+    """:func:`lmic.outcome.rank`, with a point that holds from an inexact solve (undecided)
+    above a rejected point: its objective is a proven end of the enclosure.
+
+    >>> _score(Outcome("rejected")) < _score(Outcome("infeasible-bounded"))
+    True
+    """
+    if out.verdict == "undecided" and getattr(out.certificate, "verdict", None) == "certified":
+        return rank("rejected") + 0.5
+    return float(rank(out.verdict))
+
+
+def _upgrade(out: Outcome, enc: dict[str, Any]) -> Outcome:
+    """A point that holds from a solve the solver called inexact, whose enclosure meets the gap:
+    the optimum is proven to that gap by the enclosure alone (both ends are proofs)."""
+    from lmic.outcome import evidence_of
+
+    out.verdict = "certified"
+    out.evidence = evidence_of("certified", out.certificate)
+    out.reason = (
+        f"{out.reason}; the enclosure proves the optimum: {enc.get('kind')} in "
+        f"[{enc['lower']:.10g}, {enc['upper']:.10g}] (relative gap {enc['rel_gap']:.2g})"
+    )
+    return out
+
+
+def _gap_note(enc: dict[str, Any] | None) -> str:
+    """Which end of an enclosure without a relative gap is missing (the route line).
+
+    >>> _gap_note(None), _gap_note({"lower": 1.0, "upper": None})
+    ('no enclosure', 'no certified upper end')
+    """
+    if enc is None:
+        return "no enclosure"
+    lo, hi = enc.get("lower"), enc.get("upper")
+    if lo is None and hi is None:
+        return "no certified end"
+    return "no certified lower end" if lo is None else "no certified upper end"

@@ -159,6 +159,7 @@ def enclosure(
     resolve: Callable[[Problem], dict[str, Any] | None] | None = None,
     solve_point: Callable[[Problem], np.ndarray | None] | None = None,
     solve_s: float = 0.0,
+    budget_s: float | None = None,
 ) -> dict[str, Any]:
     """The certified enclosure of the optimal value, in the problem's own sense.
 
@@ -180,6 +181,11 @@ def enclosure(
     solve_s : float
         The time of the solve that gave ``duals``: the dual search (:func:`dual_bound`) may
         take :func:`search_budget` of it, and expects a re-solve to cost as much.
+    budget_s : float, optional
+        Seconds for the whole enclosure (:func:`dual_bound`'s ``budget_s``, the repair of the
+        conditional bound, the strict polish): once spent, no new step starts, and what is not
+        proven by then is reported as not proven (``budget``: ``seconds``, ``spent``). The
+        dual search takes the smaller of this and :func:`search_budget`.
 
     Returns
     -------
@@ -202,6 +208,10 @@ def enclosure(
     >>> e["kind"], 2.0 < e["upper"] < 2.0 + 2e-9, e["rel_gap"] < 1e-8
     ('minimum', True, True)
     """
+    import time
+
+    t0 = time.perf_counter()
+    deadline = None if budget_s is None else t0 + float(budget_s)
     sense = problem.objective.sense
     strict = any(lmi.strict for lmi in problem.lmis) or any(problem.linear.strict)
     kind = ("infimum" if sense == "min" else "supremum") if strict else ("minimum" if sense == "min" else "maximum")
@@ -211,13 +221,14 @@ def enclosure(
         dual = {"proven": False, "reason": "the solver returned no dual point"}
     else:
         try:
+            search = search_budget(solve_s) if budget_s is None else min(search_budget(solve_s), float(budget_s))
             dual = dual_bound(
                 problem,
                 duals,
                 exact=exact,
                 resolve=resolve,
                 solve_point=solve_point,
-                budget_s=search_budget(solve_s),
+                budget_s=search,
                 solve_s=solve_s,
             )
         except CertificateError as exc:
@@ -230,7 +241,8 @@ def enclosure(
         pe = primal_end(problem, x)
         upper_value = pe["value"] if pe["proven"] else None
         out["primal"] = "certified point" if pe["proven"] else "no rigorous primal end: " + pe["reason"]
-        if pe["proven"] and strict and solve_point is not None and _gap_above(problem, dual, upper_value):
+        in_time = deadline is None or time.perf_counter() <= deadline
+        if pe["proven"] and strict and solve_point is not None and in_time and _gap_above(problem, dual, upper_value):
             # the strict problem's point keeps the solver's margin: move it towards a point of
             # the closed problem as far as the proof allows (a solve: only worth it when there
             # is a proven lower end and the gap to it is above GAP_TARGET)
@@ -244,7 +256,9 @@ def enclosure(
                 out["restored_x"] = pol["x"]
                 out["polish"] = {"theta": pol["theta"], "from": "closed problem"}
     if not dual.get("proven") and x is not None and duals and duals.get("lmis") is not None:
-        out["conditional"] = _conditional(problem, duals, x)
+        out["conditional"] = _conditional(problem, duals, x, deadline)
+    if deadline is not None:
+        out["budget"] = {"seconds": float(budget_s or 0.0), "spent": time.perf_counter() > deadline}
     bound = None
     if dual.get("proven"):
         bound = dual["lower"] if sense == "min" else -dual["lower"]
@@ -381,11 +395,13 @@ def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dic
     return out
 
 
-def _conditional(problem: Problem, duals: dict[str, Any], x: np.ndarray) -> dict[str, Any]:
+def _conditional(
+    problem: Problem, duals: dict[str, Any], x: np.ndarray, deadline: float | None = None
+) -> dict[str, Any]:
     """The box bound (:mod:`lmic.certify.enclosure_conditional`) in the problem's own sense,
     radius :data:`~lmic.certify.enclosure_conditional.RADIUS_FACTOR` times the point's size."""
     radius = RADIUS_FACTOR * max(1.0, float(np.max(np.abs(np.asarray(x, dtype=float)), initial=0.0)))
-    box = best_box_bound(problem, duals, radius)
+    box = best_box_bound(problem, duals, radius, deadline)
     if not box.get("proven"):
         return {"end": None, "value": None, "reason": box["reason"]}
     end = "lower" if problem.objective.sense == "min" else "upper"

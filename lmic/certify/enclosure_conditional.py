@@ -115,10 +115,14 @@ def box_bound(problem: Problem, duals: dict[str, Any], radius: float) -> dict[st
     }
 
 
-def best_box_bound(problem: Problem, duals: dict[str, Any], radius: float) -> dict[str, Any]:
+def best_box_bound(
+    problem: Problem, duals: dict[str, Any], radius: float, deadline: float | None = None
+) -> dict[str, Any]:
     """The better :func:`box_bound` of the solver's dual point as it stands and of the same
     point projected onto the cone and repaired (:func:`lmic.certify.enclosure_repair._prepare`
-    without shift: its residual is at round-off).
+    without shift: its residual is at round-off). With ``deadline`` (a
+    :func:`time.perf_counter` value), the repair is skipped once it is passed, and its steps
+    stop there.
 
     >>> import numpy as np, scipy.sparse as sp
     >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
@@ -127,12 +131,16 @@ def best_box_bound(problem: Problem, duals: dict[str, Any], radius: float) -> di
     >>> best_box_bound(p, {"lmis": [np.array([[0.9]])], "linear": []}, 5.0)["lower"] <= 2.0
     True
     """
+    import time
+
     best = box_bound(problem, duals, radius)
+    if deadline is not None and time.perf_counter() > deadline:
+        return best
     try:
         mats, y = _parse(problem, duals)
         _, q = _target(problem)
         J, ranges = _jacobian(problem)
-        mats, y, _ = _prepare(problem, J, ranges, q, mats, y, 0.0, _scale(problem, mats, y))
+        mats, y, _ = _prepare(problem, J, ranges, q, mats, y, 0.0, _scale(problem, mats, y), deadline=deadline)
     except (CertificateError, np.linalg.LinAlgError, ValueError, FloatingPointError):
         return best
     other = box_bound(problem, {"lmis": mats, "linear": y}, radius)

@@ -130,10 +130,12 @@ def dual_bound(
     def attempt(route: str, eps_rel: float, mz: Any, yz: Any) -> dict[str, Any]:
         ta = time.process_time()
         try:
-            mats, y, active = _prepare(problem, J, ranges, q, mz, yz, eps_rel, top)
+            mats, y, active = _prepare(problem, J, ranges, q, mz, yz, eps_rel, top, deadline=t0 + budget_s)
             res = _prove_float(problem, J, ranges, q, mats, y, active)
             if not res["proven"] and ("singular" in res["reason"] or "absorb" in res["reason"]):
-                mats, y, active = _prepare(problem, J, ranges, q, mz, yz, eps_rel, top, drop=False)
+                mats, y, active = _prepare(
+                    problem, J, ranges, q, mz, yz, eps_rel, top, drop=False, deadline=t0 + budget_s
+                )
                 res = _prove_float(problem, J, ranges, q, mats, y, active)
         except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
             res = {"proven": False, "reason": f"numerical failure in the repair: {exc}"}

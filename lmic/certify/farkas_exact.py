@@ -91,7 +91,7 @@ def prove_farkas(
     t0 = time.perf_counter()
     out: dict[str, Any] = {}
     for rel in _face_thresholds(problem, farkas, rel_face):
-        for center, rational in ((False, False), (False, True), (True, False), (True, True)):
+        for center, rational in ((False, False), (False, True), (True, False), (True, True), ("schur", False)):
             attempt = _prove_farkas(problem, farkas, rel, keep_certificate, center, rational)
             if attempt["face"] is not None:
                 attempt["face"]["threshold"] = rel
@@ -112,7 +112,7 @@ def _prove_farkas(
     farkas: dict[str, Any],
     rel_face: float,
     keep: bool,
-    center: bool = False,
+    center: bool | str = False,
     rational: bool = False,
 ) -> dict[str, Any]:
     from fractions import Fraction
@@ -163,7 +163,8 @@ def _prove_farkas(
         parts.append(np.where(ia == ib, w[sel][ia], 0.0))
     u0f = np.concatenate([*parts, y[rows]])
     if center and u0f.size:
-        moved = _towards_center(problem, eigs, sels, rows, ge, u0f, top)
+        method = "schur" if center == "schur" else "dense"
+        moved = _towards_center(problem, eigs, sels, rows, ge, u0f, top, method)
         if moved is None:
             return dict(fail, reason="no point inside the face's certificates was found (float centering)")
         u0f = moved

@@ -171,3 +171,40 @@ def test_cli_prints_the_route(tmp_path):
     )
     assert out.returncode == 0, out.stderr
     assert "route: clarabel (interior point; " in out.stdout and "-> certified" in out.stdout
+
+
+def test_a_backend_cut_by_its_budget_gives_way_and_is_retried_without_one(monkeypatch) -> None:
+    """Every budgeted solve stops at its time limit (a stand-in for a slow solver); solves
+    without a limit run. The escalating route tries each backend under its budget, then
+    retries the first one cut without a budget, and ends with a decision the certifier checks."""
+    import numpy as np
+
+    import lmic.policy as policy
+    from lmic.backends.outcomes import time_limit_solution
+    from lmic.certify import certify
+    from lmic.solution import Solution
+    from lmic.testing.conformance import lyapunov_problem
+
+    real = policy._solve_one
+
+    problem = lyapunov_problem(-np.eye(3))
+    names = policy.route(problem)
+    last = policy._instance(names[-1]).label
+
+    def slow(be, target, options, scales, judge):
+        if options.time_limit is not None:
+            return time_limit_solution(be.label, options.time_limit, elapsed=options.time_limit)
+        if be.label == last:  # the route's last backend (unbudgeted) fails too
+            return Solution("error", message="stand-in failure")
+        return real(be, target, options, scales, judge)
+
+    monkeypatch.setattr(policy, "_solve_one", slow)
+    out = policy.decide(problem)
+    assert out.verdict == "certified"
+    assert certify(problem, out.solution).verdict == "certified"
+    budgeted = [a for a in out.attempts if a.status == "error"]
+    assert {a.backend for a in budgeted} >= {policy._instance(n).label for n in names[:-1]}
+    assert out.attempts[-1].backend == policy._instance(names[0]).label  # the retry, unbudgeted
+    # an explicit budget is the caller's: never exceeded, no retry
+    explicit = policy.decide(problem, None, budget_s=5.0)
+    assert explicit.verdict == "undecided" and all(a.status == "error" for a in explicit.attempts)
