@@ -177,6 +177,8 @@ def dual_bound(
             out = _refine(problem, J, ranges, q, mats0, y0, top, low, high, best) if not spent() else best
         else:
             out = probe
+    elif not out["proven"] and len(SHIFTS) > 1:
+        out["reason"] = f"{out.get('reason')}; time budget {budget_s:g} s spent after {n_tried} attempts"
     if not out["proven"] and resolve is not None:
         for eps_rel in PERTURBATIONS:
             if spent(solves=True):
