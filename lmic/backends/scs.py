@@ -26,6 +26,7 @@ import numpy as np
 
 from lmic.backends.backend import Backend
 from lmic.backends.lowering import SForm, psd_unvec
+from lmic.backends.quiet import quiet_native
 from lmic.backends.results import NativeResult
 from lmic.ir.problem import Problem
 from lmic.ir.svec import svec_scale, tril_size
@@ -79,7 +80,7 @@ FORM = SForm(scs_vec)
 #: convergence only every 25; a restart from the iterate every iteration stalls, every 2-3 does
 #: not: ``qib.thm1`` n = 10..50 verifies at iteration 3-6, benchmarks/routes.py)
 CHECK_EVERY = 3
-#: ... up to this many iterations; then the rest of the budget runs as one warm-started solve
+#: ... up to this many iterations; then SCS's own solve runs, from the start
 CHECK_UNTIL = 30
 
 #: SCS's set-up factorises its KKT matrix: up to this many variables SCS's bundled QDLDL is
@@ -87,6 +88,9 @@ CHECK_UNTIL = 30
 #: 106 variables, 64 against 119 ms at 1621, about even at 2526; PARDISO ahead from ~3600:
 #: 0.65 against 1.3 s), unless ``SolveOptions.extra`` names a ``linear_solver``
 QDLDL_MAX_VARIABLES = 3000
+#: SCS's ``status_val`` after a pause at ``max_iters``: unfinished (0) or an inaccurate answer
+#: (2 solved, -6 unbounded, -7 infeasible), which at max_iters is no answer yet
+_PAUSED = frozenset({0, 2, -6, -7})
 
 
 def _warm_start(prev: Solution | None, shape: tuple[int, int]) -> dict[str, np.ndarray]:
@@ -189,7 +193,9 @@ class SCSBackend(Backend):
             solve_s = time.perf_counter() - t0
             verified_at = None
         else:
-            result, solve_s, verified_at, extra_info = _solve_checked(scs, qp, cone, settings, warm, accept)
+            # SCS prints "could not determine problem status" at a pause even when not verbose
+            with quiet_native(not settings.get("verbose", False)):
+                result, solve_s, verified_at, extra_info = _solve_checked(scs, qp, cone, settings, warm, accept)
         info = result["info"]
         shown = str(info.get("status", ""))
         native = _STATUS_NAMES.get(int(info["status_val"]), shown)
@@ -223,7 +229,8 @@ def _solve_checked(
     accept: Any,
 ) -> tuple[dict[str, Any], float, int | None, dict[str, Any]]:
     """SCS paused every :data:`CHECK_EVERY` iterations (up to :data:`CHECK_UNTIL`) to test its
-    iterate with ``accept``; the rest of the budget as one warm-started solve.
+    iterate with ``accept``; when none passes, SCS's own solve from the start (the caller's warm
+    start, if any).
 
     Returns ``(result, solve_s, verified_at, info)``: SCS's last result, the time inside SCS
     (set-up and iterations, not the tests), the iteration whose point passed (``None``: none
@@ -240,8 +247,11 @@ def _solve_checked(
     done, tests, tests_s = int(result["info"]["iter"]), 0, 0.0
     while True:
         info = result["info"]
-        if int(info["iter"]) < step or int(info["status_val"]) not in (0, 2) or "time_limit" in str(info["status"]):
-            break  # SCS stopped on its own (converged, infeasible, unbounded, failed, its time limit)
+        # SCS stopped on its own (converged, infeasible, unbounded, failed, its time limit); an
+        # inaccurate status at the pause (2 solved, -6 unbounded, -7 infeasible: "inaccurate")
+        # only means max_iters was reached, and is no answer
+        if int(info["iter"]) < step or int(info["status_val"]) not in _PAUSED or "time_limit" in str(info["status"]):
+            break
         t1 = time.perf_counter()
         x = np.asarray(result["x"], dtype=float)
         ok = bool(np.all(np.isfinite(x)) and accept(x))
@@ -257,12 +267,16 @@ def _solve_checked(
         t1 = time.perf_counter()
         if done + step <= CHECK_UNTIL and left >= step:
             result = solver.solve(warm_start=True)  # from the iterate it stopped at
-        else:  # no more tests: the rest of the budget at once, from the last iterate
-            rest = dict(settings, max_iters=left)
+        else:
+            # no iterate verified: SCS's own solve from the start (or from the caller's warm
+            # start), as without the tests. Not from the last iterate: a restart resets SCS's
+            # homogeneous embedding (tau, kappa) and acceleration, and on an infeasible problem
+            # its ray then came out too inaccurate to prove (obs_control.thm3_2, z-coordinates)
+            rest = dict(settings, max_iters=budget)
             if limit is not None:
                 rest["time_limit_secs"] = max(1e-3, float(limit) - (time.perf_counter() - t0))
-            iterate = {k: np.asarray(result[k], dtype=float) for k in ("x", "y", "s")}
-            result = scs.SCS(qp, cone, **rest).solve(warm_start=True, **iterate)
+            fresh = scs.SCS(qp, cone, **rest)
+            result = fresh.solve(warm_start=True, **warm) if warm else fresh.solve()
             solve_s += time.perf_counter() - t1
             done += int(result["info"]["iter"])
             break
