@@ -105,12 +105,13 @@ def test_flexible_arm_published_gain_fails():
     assert max(eig.real) == pytest.approx(62.7, abs=0.1)
     for backend in BACKENDS:
         r = solve("nonuniform.thm1", system(ARM, data={"L": L_ARM_PUB}), {"fixed_L": 1}, backend=backend)
-        assert r.verdict == "infeasible-bounded"
+        assert r.verdict == "infeasible-certified" and r.certificate.exact["proven"]  # exact Farkas proof
     # with C = [I2 0] A + L_pub C is Hurwitz, but (9) is still infeasible
     Dstd = arrays(ARM_STD_C)
     assert max(np.linalg.eigvals(Dstd["A"] + np.array(L_ARM_PUB) @ Dstd["C"]).real) < 0
     r = solve("nonuniform.thm1", system(ARM_STD_C, data={"L": L_ARM_PUB}), {"fixed_L": 1})
-    assert r.verdict == "infeasible-bounded"  # float ray of an inhomogeneous LMI: bounded only
+    # an exact rational Farkas certificate (the policy proves up to MAX_RAY_PROOFS rays exactly)
+    assert r.verdict == "infeasible-certified" and "exact rational Farkas" in r.certificate.reason
 
 
 def test_flexible_arm_decimal_corrected_gain_is_certified():
@@ -119,7 +120,7 @@ def test_flexible_arm_decimal_corrected_gain_is_certified():
         assert solve("nonuniform.thm1", d, {"fixed_L": 1}, backend=backend).verdict == "certified"
     # certified up to gamma = 4.164 (delta_bar = 0.1)
     assert solve("nonuniform.thm1", d, {"fixed_L": 1, "gamma": 4.15}).verdict == "certified"
-    assert solve("nonuniform.thm1", d, {"fixed_L": 1, "gamma": 4.18}).verdict == "infeasible-bounded"
+    assert solve("nonuniform.thm1", d, {"fixed_L": 1, "gamma": 4.18}).verdict == "infeasible-bounded"  # Clarabel: no exact proof
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
@@ -127,8 +128,9 @@ def test_chua_design_feasible_published_gain_not(backend):
     r = solve("nonuniform.thm1", system(CHUA), backend=backend)
     assert r.verdict == "certified"
     r = solve("nonuniform.thm1", system(CHUA, data={"L": L_CHUA_PUB}), {"fixed_L": 1}, backend=backend)
-    # CVXOPT's ray is proven exactly (a rational basis of its face); Clarabel's stays bounded
-    assert r.verdict == {"clarabel": "infeasible-bounded", "cvxopt": "infeasible-certified"}[backend]
+    # every backend's answer is proven exactly (a rational basis of a ray's face; with Clarabel
+    # the ray of its fixed-margin reduction, after the max-margin one's proof fails)
+    assert r.verdict == "infeasible-certified" and "exact rational Farkas" in r.certificate.reason
     d = system("nonuniform.thm1.chua-gamma2.95", data={"L": L_CHUA_PUB})
     assert solve("nonuniform.thm1", d, {"fixed_L": 1}, backend=backend).verdict == "certified"
 
@@ -136,7 +138,7 @@ def test_chua_design_feasible_published_gain_not(backend):
 def test_chua_published_gain_certified_only_up_to_gamma_3_227():
     d = system(CHUA, data={"L": L_CHUA_PUB})
     assert solve("nonuniform.thm1", d, {"fixed_L": 1, "gamma": 3.22}).verdict == "certified"
-    assert solve("nonuniform.thm1", d, {"fixed_L": 1, "gamma": 3.235}).verdict == "infeasible-bounded"
+    assert solve("nonuniform.thm1", d, {"fixed_L": 1, "gamma": 3.235}).verdict == "infeasible-certified"
     D = arrays(CHUA)
     assert max(np.linalg.eigvals(D["A"] + np.array(L_CHUA_PUB) @ D["C"]).real) < 0  # Hurwitz anyway
 
