@@ -23,6 +23,7 @@ Examples
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -167,6 +168,59 @@ def _face_jacobian(problem: Problem, eigs: list, sels: list, rows: list[int]) ->
     return np.hstack(cols)
 
 
+@dataclass
+class _FaceSetup:
+    """What both centring methods share: the constraint rows (unit norm, the trace normalisation
+    last), their right-hand side, and the split of ``u`` into the blocks ``S_i``."""
+
+    nS: int
+    A: np.ndarray
+    b: np.ndarray
+    c0: np.ndarray
+    sizes: list[int]
+    tri: list[tuple[np.ndarray, np.ndarray]]
+    ge_rows: np.ndarray
+    separate: bool
+
+    def split(self, u: np.ndarray) -> list[np.ndarray]:
+        out, k = [], 0
+        for r, (a, bb) in zip(self.sizes, self.tri, strict=True):
+            S = np.zeros((r, r))
+            S[a, bb] = u[k : k + len(a)]
+            S[bb, a] = u[k : k + len(a)]
+            out.append(S)
+            k += len(a)
+        return out
+
+    def inside(self, u: np.ndarray) -> bool:
+        if self.separate and not float(self.c0 @ u) < 0:
+            return False
+        if np.any(u[self.nS :][self.ge_rows] <= 0):
+            return False
+        return all(np.linalg.eigvalsh(S)[0] > 0 for S in self.split(u) if S.size)
+
+
+def _face_setup(J: np.ndarray, u0: np.ndarray, sizes: list[int], ge_rows: np.ndarray, separate: bool) -> _FaceSetup:
+    """The rows ``g_k = 0`` (``k >= 1``) and the fixed trace ``sum_i tr S_i + sum y_r`` of the
+    centring problems, each row of unit norm (a better balanced KKT system)."""
+    m = u0.size
+    tri = [np.triu_indices(r) for r in sizes]
+    nS = sum(len(a) for a, _ in tri)
+    # trace row of the normalisation; svec -> S for every block
+    N = np.zeros(m)
+    k = 0
+    for a, b in tri:
+        N[k : k + len(a)] = (a == b).astype(float)
+        k += len(a)
+    N[nS:] = ge_rows.astype(float)
+    A = np.vstack([J[1:], N[None, :]])
+    scale = np.maximum(np.linalg.norm(A, axis=1), 1e-300)
+    A = A / scale[:, None]
+    rhs = np.zeros(A.shape[0])
+    rhs[-1] = float(N @ u0) / scale[-1]
+    return _FaceSetup(nS, A, rhs, J[0], sizes, tri, ge_rows, separate)
+
+
 #: above this many unknowns the face centring factors its Hessian block by block
 #: (:func:`_center_on_face_large`) instead of the dense null-space Newton steps (``O(m^3)`` a step)
 DENSE_CENTRE_MAX = 1000
@@ -185,38 +239,8 @@ def _center_on_face(
     m = u0.size
     if m > DENSE_CENTRE_MAX:
         return _center_on_face_large(J, u0, sizes, ge_rows, separate, max_iter)
-    tri = [np.triu_indices(r) for r in sizes]
-    nS = sum(len(a) for a, _ in tri)
-    # trace row of the normalisation; svec -> S for every block
-    N = np.zeros(m)
-    k = 0
-    for a, b in tri:
-        N[k : k + len(a)] = (a == b).astype(float)
-        k += len(a)
-    N[nS:] = ge_rows.astype(float)
-    A = np.vstack([J[1:], N[None, :]])
-    c0 = J[0]
-    scale = np.maximum(np.linalg.norm(A, axis=1), 1e-300)
-    A = A / scale[:, None]  # rows of unit norm: the KKT system is better balanced
-    b = np.zeros(A.shape[0])
-    b[-1] = float(N @ u0) / scale[-1]
-
-    def split(u: np.ndarray) -> list[np.ndarray]:
-        out, k = [], 0
-        for r, (a, bb) in zip(sizes, tri, strict=True):
-            S = np.zeros((r, r))
-            S[a, bb] = u[k : k + len(a)]
-            S[bb, a] = u[k : k + len(a)]
-            out.append(S)
-            k += len(a)
-        return out
-
-    def inside(u: np.ndarray) -> bool:
-        if separate and not float(c0 @ u) < 0:
-            return False
-        if np.any(u[nS:][ge_rows] <= 0):
-            return False
-        return all(np.linalg.eigvalsh(S)[0] > 0 for S in split(u) if S.size)
+    setup = _face_setup(J, u0, sizes, ge_rows, separate)
+    nS, A, b, c0, tri, split, inside = setup.nS, setup.A, setup.b, setup.c0, setup.tri, setup.split, setup.inside
 
     def derivatives(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         grad, H = np.zeros(m), np.zeros((m, m))
@@ -307,38 +331,8 @@ def _center_on_face_large(
     strictly interior point was reached (the face is larger than the certificates' face).
     """
     m = u0.size
-    tri = [np.triu_indices(r) for r in sizes]
-    nS = sum(len(a) for a, _ in tri)
-    # trace row of the normalisation; svec -> S for every block
-    N = np.zeros(m)
-    k = 0
-    for a, b in tri:
-        N[k : k + len(a)] = (a == b).astype(float)
-        k += len(a)
-    N[nS:] = ge_rows.astype(float)
-    A = np.vstack([J[1:], N[None, :]])
-    c0 = J[0]
-    scale = np.maximum(np.linalg.norm(A, axis=1), 1e-300)
-    A = A / scale[:, None]  # rows of unit norm: the KKT system is better balanced
-    b = np.zeros(A.shape[0])
-    b[-1] = float(N @ u0) / scale[-1]
-
-    def split(u: np.ndarray) -> list[np.ndarray]:
-        out, k = [], 0
-        for r, (a, bb) in zip(sizes, tri, strict=True):
-            S = np.zeros((r, r))
-            S[a, bb] = u[k : k + len(a)]
-            S[bb, a] = u[k : k + len(a)]
-            out.append(S)
-            k += len(a)
-        return out
-
-    def inside(u: np.ndarray) -> bool:
-        if separate and not float(c0 @ u) < 0:
-            return False
-        if np.any(u[nS:][ge_rows] <= 0):
-            return False
-        return all(np.linalg.eigvalsh(S)[0] > 0 for S in split(u) if S.size)
+    setup = _face_setup(J, u0, sizes, ge_rows, separate)
+    nS, A, b, c0, tri, split, inside = setup.nS, setup.A, setup.b, setup.c0, setup.tri, setup.split, setup.inside
 
     yr = np.flatnonzero(ge_rows) + nS
 
