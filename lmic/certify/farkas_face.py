@@ -199,6 +199,12 @@ class _FaceSetup:
             return False
         return all(np.linalg.eigvalsh(S)[0] > 0 for S in self.split(u) if S.size)
 
+    def barrier(self, u: np.ndarray) -> float:
+        """``-sum_i log det S_i - sum log y_r (- log(-g_0) when separate)`` at an interior ``u``."""
+        f = -sum(float(np.linalg.slogdet(S)[1]) for S in self.split(u) if S.size)
+        f -= float(np.sum(np.log(u[self.nS :][self.ge_rows])))
+        return f - (math.log(-float(self.c0 @ u)) if self.separate else 0.0)
+
 
 def _face_setup(J: np.ndarray, u0: np.ndarray, sizes: list[int], ge_rows: np.ndarray, separate: bool) -> _FaceSetup:
     """The rows ``g_k = 0`` (``k >= 1``) and the fixed trace ``sum_i tr S_i + sum y_r`` of the
@@ -293,10 +299,7 @@ def _center_on_face(
     if s < 1.0:
         return None
 
-    def value(u: np.ndarray) -> float:
-        f = -sum(float(np.linalg.slogdet(S)[1]) for S in split(u) if S.size)
-        f -= float(np.sum(np.log(u[nS:][ge_rows])))
-        return f - (math.log(-float(c0 @ u)) if separate else 0.0)
+    value = setup.barrier
 
     f = value(u)
     for _ in range(max_iter):
@@ -409,10 +412,7 @@ def _center_on_face_large(
     if not reached:
         return None
 
-    def value(u: np.ndarray) -> float:
-        f = -sum(float(np.linalg.slogdet(S)[1]) for S in split(u) if S.size)
-        f -= float(np.sum(np.log(u[nS:][ge_rows])))
-        return f - (math.log(-float(c0 @ u)) if separate else 0.0)
+    value = setup.barrier
 
     f = value(u)
     for _ in range(max_iter):

@@ -21,7 +21,7 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any
+from typing import Any, Self
 
 from lmic.errors import IRError
 
@@ -111,21 +111,27 @@ def _text(tree: Any) -> str:
 
 
 @dataclass(frozen=True)
-class Dim:
-    """A dimension expression (``n``, ``n + p``, ``4``) as a tree of dimension names.
-
-    >>> Dim.of({"name": "n"}).symbol, str(Dim.of({"num": 2}))
-    ('n', '2')
-    """
+class _Keyed:
+    """An expression tree with its canonical key: equal keys, equal expressions (the tree itself
+    takes no part in comparisons or hashing)."""
 
     key: str
     tree: Any = field(compare=False, hash=False, repr=False)
 
     @classmethod
-    def of(cls, tree: Any) -> Dim:
-        """The dimension of ``tree`` (checked)."""
+    def of(cls, tree: Any) -> Self:
+        """The expression of ``tree`` (checked)."""
         _check_tree(tree)
         return cls(_key(tree), tree)
+
+
+@dataclass(frozen=True)
+class Dim(_Keyed):
+    """A dimension expression (``n``, ``n + p``, ``4``) as a tree of dimension names.
+
+    >>> Dim.of({"name": "n"}).symbol, str(Dim.of({"num": 2}))
+    ('n', '2')
+    """
 
     @property
     def symbol(self) -> str | None:
@@ -167,17 +173,8 @@ def _bind_sizes(node: Any, dims: Mapping[Any, int]) -> Any:
 
 
 @dataclass(frozen=True)
-class Tree:
+class Tree(_Keyed):
     """A matrix or scalar expression whose identity and zero sizes are bound per dimensions."""
-
-    key: str
-    tree: Any = field(compare=False, hash=False, repr=False)
-
-    @classmethod
-    def of(cls, tree: Any) -> Tree:
-        """The expression of ``tree`` (checked)."""
-        _check_tree(tree)
-        return cls(_key(tree), tree)
 
     def bound(self, dims: Mapping[Any, int]) -> dict[str, Any]:
         """The IR expression tree at these dimensions."""
@@ -185,17 +182,8 @@ class Tree:
 
 
 @dataclass(frozen=True)
-class Coef:
+class Coef(_Keyed):
     """A scalar coefficient (a tree in parameters and scalar constants)."""
-
-    key: str
-    tree: Any = field(compare=False, hash=False, repr=False)
-
-    @classmethod
-    def of(cls, tree: Any) -> Coef:
-        """The coefficient of ``tree`` (checked)."""
-        _check_tree(tree)
-        return cls(_key(tree), tree)
 
     @property
     def is_number(self) -> bool:
