@@ -345,20 +345,18 @@ class _Binder:
         return LMI(lp.name, d, coeffs, lp.strict, lp.relation, tuple(sizes))
 
     def _lmi_indices(self, order, entries, sizes) -> tuple[np.ndarray, np.ndarray]:
-        """Storage row (-1: upper triangle, not stored) and IR column of every value."""
+        """Storage row (-1: upper triangle, not stored) and IR column of every value.
+
+        One gather per piece through the block's storage map (:func:`_storage_map`), no index
+        arithmetic over the values.
+        """
         starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
         d = int(starts[-1])
         rows_all, cols_all = [], []
         for i, j, si, sj in order:
+            smap = _storage_map(int(starts[i]), int(starts[j]), sizes[i], sizes[j], d, (si, sj) != (i, j))
             for r, k, _ in entries[(si, sj)]:
-                if (si, sj) == (i, j):
-                    gi, gj = starts[i] + r % sizes[i], starts[j] + r // sizes[i]
-                else:  # mirrored: entry (j, i) of size (sizes[j] x sizes[i]) transposed
-                    gi, gj = starts[i] + r // sizes[j], starts[j] + r % sizes[j]
-                srow = tril_index(gi, gj, d)
-                if i == j:
-                    srow = np.where(gi >= gj, srow, -1)  # the upper triangle is not stored
-                rows_all.append(srow)
+                rows_all.append(smap[r])
                 cols_all.append(k)
         if not rows_all:
             return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
@@ -369,23 +367,31 @@ class _Binder:
 
         Returns ``(indptr, indices, pos, nslots)``: rows sorted within each column, duplicates
         merged into one slot, ``pos`` the slot of every value (``nslots`` for dropped ones).
+
+        One stable sort of the keys ``column * rows + row``: the values come in runs already in
+        that order (a term's entries by basis column, rows increasing), which the sort merges.
         """
-        d = int(sum(sizes))
+        nrows, ncols = tril_size(int(sum(sizes))), 1 + self.n
         r, c = self._lmi_indices(order, entries, sizes)
+        idx = np.int32 if max(nrows, len(r)) < np.iinfo(np.int32).max else np.int64
         if not len(r):
-            return np.zeros(1 + self.n + 1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), 0
-        valid = np.flatnonzero(r >= 0)
-        rv, cv = r[valid], c[valid]
-        perm = _column_major_order(rv, cv, tril_size(d), 1 + self.n)
-        rs, cs = rv[perm], cv[perm]
-        new = np.ones(len(rs), dtype=bool)
-        new[1:] = (rs[1:] != rs[:-1]) | (cs[1:] != cs[:-1])  # duplicates are adjacent
-        slot = np.cumsum(new) - 1
-        nslots = int(slot[-1]) + 1 if len(slot) else 0
-        pos = np.full(len(r), nslots, dtype=np.int64)  # dropped entries go to a spare slot
-        pos[valid[perm]] = slot
-        indptr = np.concatenate([[0], np.cumsum(np.bincount(cs[new], minlength=1 + self.n))]).astype(np.int64)
-        return indptr, rs[new].astype(np.int64), pos, nslots
+            return np.zeros(ncols + 1, dtype=idx), np.zeros(0, dtype=idx), np.zeros(0, dtype=np.intp), 0
+        dropped = nrows * ncols  # above every kept key: the upper triangle sorts last
+        key = c * nrows + r
+        key[r < 0] = dropped
+        perm = np.argsort(key, kind="stable")
+        ks = key[perm]
+        new = np.empty(len(ks), dtype=bool)
+        new[0] = True
+        np.not_equal(ks[1:], ks[:-1], out=new[1:])
+        slot = np.cumsum(new, dtype=np.intp) - 1
+        unique = ks[new]
+        nslots = len(unique) - int(unique[-1] == dropped)
+        pos = np.empty(len(r), dtype=np.intp)
+        pos[perm] = np.minimum(slot, nslots)  # dropped entries go to a spare slot
+        cols, rows = np.divmod(unique[:nslots], nrows)
+        indptr = np.searchsorted(cols, np.arange(ncols + 1)).astype(idx)
+        return indptr, rows.astype(idx), pos, nslots
 
     def _check_symmetric(self, pieces, r: int, where: str) -> None:
         val, mag = self._probe(pieces, r * r)
@@ -499,6 +505,23 @@ class _Binder:
             ob = t.observer_decl
             meta["observer"] = {"model": ob.model, "time": ob.time, "roles": dict(ob.roles)}
         return Problem(list(self.vars.values()), lmis, linear, objective, data, derived, checks, meta)
+
+
+def _storage_map(row0: int, col0: int, ri: int, cj: int, d: int, mirrored: bool) -> np.ndarray:
+    """Storage row of every position of a block entry's column-major vec (``-1``: upper triangle).
+
+    The entry fills rows ``row0 ..`` and columns ``col0 ..`` (``ri x cj``) of a ``d x d`` LMI;
+    ``mirrored``: the values are those of the ``cj x ri`` entry above it, transposed.
+
+    >>> _storage_map(0, 0, 2, 2, 2, False).tolist()
+    [0, 1, -1, 2]
+    >>> _storage_map(1, 0, 1, 1, 2, True).tolist()
+    [1]
+    """
+    gi = row0 + np.arange(ri, dtype=np.int64)[:, None]
+    gj = col0 + np.arange(cj, dtype=np.int64)[None, :]
+    grid = np.where(gi >= gj, tril_index(gi, gj, d), -1)  # (ri x cj), by global position
+    return np.ascontiguousarray(grid.ravel(order="C" if mirrored else "F"))
 
 
 def _column_major_order(r: np.ndarray, c: np.ndarray, nrows: int, ncols: int) -> np.ndarray:
