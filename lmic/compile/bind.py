@@ -189,7 +189,8 @@ class _Binder:
             i, j, k = coo.row % r, coo.row // r, coo.col
             if transposed:
                 i, j, r = j, i, c
-            cached = (i.astype(np.int64), j.astype(np.int64), k.astype(np.int64), r)
+            idx = _index_dtype(max(r, c, var.size))
+            cached = (i.astype(idx), j.astype(idx), k.astype(idx), r)
             self.plan.cache[key] = cached
         return cached
 
@@ -199,27 +200,29 @@ class _Binder:
         cached = self.plan.cache.get(key)
         if cached is not None:
             return cached
+        idx = _index_dtype(max(rows * cols, 1 + self.n))
         if term.var is None or self.vars[term.var].kind == "scalar":
             col = 0 if term.var is None else 1 + self.vars[term.var].offset
-            cached = (np.arange(rows * cols, dtype=np.int64), np.full(rows * cols, col, dtype=np.int64))
+            cached = (np.arange(rows * cols, dtype=idx), np.full(rows * cols, col, dtype=idx))
         else:
             var = self.vars[term.var]
-            bi, bj, bk, vr = self.basis(term.var, term.transposed)
+            bi, bj, bk, _ = self.basis(term.var, term.transposed)
+            bi, bj, bk = (a.astype(idx, copy=False) for a in (bi, bj, bk))
             L_rows = None if self._is_identity(term.left) else rows
             R_cols = None if self._is_identity(term.right) else cols
             if L_rows is None and R_cols is None:
                 r_idx, k = bi + bj * rows, bk
             elif R_cols is None:
-                r_idx = (np.arange(rows)[None, :] + (bj * rows)[:, None]).ravel()
+                r_idx = (np.arange(rows, dtype=idx)[None, :] + (bj * rows)[:, None]).ravel()
                 k = np.repeat(bk, rows)
             elif L_rows is None:
-                r_idx = (bi[:, None] + np.arange(cols)[None, :] * rows).ravel()
+                r_idx = (bi[:, None] + np.arange(cols, dtype=idx)[None, :] * rows).ravel()
                 k = np.repeat(bk, cols)
             else:
-                a, b = np.arange(rows), np.arange(cols)
+                a, b = np.arange(rows, dtype=idx), np.arange(cols, dtype=idx)
                 r_idx = np.broadcast_to(a[None, :, None] + b[None, None, :] * rows, (len(bi), rows, cols)).ravel()
                 k = np.repeat(bk, rows * cols)
-            cached = (r_idx, k + 1 + var.offset)
+            cached = (r_idx, k + (1 + var.offset))
         self.plan.cache[key] = cached
         return cached
 
@@ -368,30 +371,42 @@ class _Binder:
         Returns ``(indptr, indices, pos, nslots)``: rows sorted within each column, duplicates
         merged into one slot, ``pos`` the slot of every value (``nslots`` for dropped ones).
 
-        One stable sort of the keys ``column * rows + row``: the values come in runs already in
-        that order (a term's entries by basis column, rows increasing), which the sort merges.
+        One stable sort of the keys ``column * rows + storage row`` (the upper triangle of a
+        diagonal block above every kept key): the values come in runs already in that order (a
+        term's entries by basis column, rows increasing), which the sort merges.
         """
-        nrows, ncols = tril_size(int(sum(sizes))), 1 + self.n
-        r, c = self._lmi_indices(order, entries, sizes)
-        idx = np.int32 if max(nrows, len(r)) < np.iinfo(np.int32).max else np.int64
-        if not len(r):
+        starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        d = int(starts[-1])
+        nrows, ncols = tril_size(d), 1 + self.n
+        dropped = nrows * ncols
+        idx = _index_dtype(max(nrows, sum(len(r) for i, j, si, sj in order for r, _, _ in entries[(si, sj)])))
+        kdt = _index_dtype(dropped + nrows)
+        keys = []
+        for i, j, si, sj in order:
+            smap = _storage_map(int(starts[i]), int(starts[j]), sizes[i], sizes[j], d, (si, sj) != (i, j))
+            smap = np.where(smap < 0, dropped, smap).astype(kdt)
+            for r, k, _ in entries[(si, sj)]:
+                key = smap[r]
+                key += k.astype(kdt, copy=False) * nrows
+                keys.append(key)
+        if not keys:
             return np.zeros(ncols + 1, dtype=idx), np.zeros(0, dtype=idx), np.zeros(0, dtype=np.intp), 0
-        dropped = nrows * ncols  # above every kept key: the upper triangle sorts last
-        key = c * nrows + r
-        key[r < 0] = dropped
+        key = np.concatenate(keys) if len(keys) > 1 else keys[0]
         perm = np.argsort(key, kind="stable")
         ks = key[perm]
         new = np.empty(len(ks), dtype=bool)
         new[0] = True
         np.not_equal(ks[1:], ks[:-1], out=new[1:])
-        slot = np.cumsum(new, dtype=np.intp) - 1
+        slot = np.cumsum(new, dtype=np.intp)
+        slot -= 1
         unique = ks[new]
-        nslots = len(unique) - int(unique[-1] == dropped)
-        pos = np.empty(len(r), dtype=np.intp)
-        pos[perm] = np.minimum(slot, nslots)  # dropped entries go to a spare slot
-        cols, rows = np.divmod(unique[:nslots], nrows)
-        indptr = np.searchsorted(cols, np.arange(ncols + 1)).astype(idx)
-        return indptr, rows.astype(idx), pos, nslots
+        nslots = int(np.searchsorted(unique, dropped))
+        np.minimum(slot, nslots, out=slot)  # dropped entries go to a spare slot
+        pos = np.empty(len(key), dtype=np.intp)
+        pos[perm] = slot
+        unique = unique[:nslots]
+        indptr = np.searchsorted(unique, np.arange(ncols + 1, dtype=np.int64) * nrows).astype(idx)
+        return indptr, (unique % nrows).astype(idx, copy=False), pos, nslots
 
     def _check_symmetric(self, pieces, r: int, where: str) -> None:
         val, mag = self._probe(pieces, r * r)
@@ -505,6 +520,15 @@ class _Binder:
             ob = t.observer_decl
             meta["observer"] = {"model": ob.model, "time": ob.time, "roles": dict(ob.roles)}
         return Problem(list(self.vars.values()), lmis, linear, objective, data, derived, checks, meta)
+
+
+def _index_dtype(top: int) -> type[np.signedinteger[Any]]:
+    """``int32`` when indices up to ``top`` (and twice it) fit, else ``int64``.
+
+    >>> _index_dtype(10).__name__, _index_dtype(2**31).__name__
+    ('int32', 'int64')
+    """
+    return np.int32 if 2 * top < np.iinfo(np.int32).max else np.int64
 
 
 def _storage_map(row0: int, col0: int, ri: int, cj: int, d: int, mirrored: bool) -> np.ndarray:
