@@ -95,13 +95,40 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(EXIT_USAGE)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The full argument parser (every available sub-command)."""
+def _wanted(argv: Sequence[str]) -> list[str] | None:
+    """The one command module ``argv`` runs (its first word names it), ``[]`` for a bare
+    ``--version``, or ``None`` (help, no command, an unknown word: every command is needed)."""
+    if list(argv) == ["--version"]:
+        return []
+    first = next((a for a in argv if not a.startswith("-")), None)
+    if first is None or any(a in ("-h", "--help") for a in argv[: argv.index(first)]):
+        return None
+    module = first.replace("-", "_")
+    return [module] if module in COMMANDS else None
+
+
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The argument parser: every available sub-command, or (``argv`` given) only the one
+    ``argv`` runs, so that a one-shot process imports no other command's module.
+
+    >>> sorted(build_parser(["backends"])._subparsers._group_actions[0].choices)
+    ['backends']
+    """
+    only = None if argv is None else _wanted(argv)
+    if only:
+        parser, sub = _build(only)
+        if {only[0], only[0].replace("_", "-")} & set(sub.choices):
+            return parser
+        only = None  # the module registers another name: build them all
+    return _build(COMMANDS if only is None else only)[0]
+
+
+def _build(names: Sequence[str]) -> tuple[argparse.ArgumentParser, argparse._SubParsersAction]:
     parser = _Parser(prog="lmic", description="Compile, solve and certify linear matrix inequalities.")
     parser.add_argument("--version", action="version", version=f"lmic {__version__}")
     parser.add_argument("--debug", action="store_true", help="show the traceback of an error (any command)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for name in COMMANDS:
+    for name in names:
         try:
             module = importlib.import_module(f"lmic.commands.{name}")
         except ModuleNotFoundError as err:
@@ -110,7 +137,7 @@ def build_parser() -> argparse.ArgumentParser:
             raise
         module.register(sub)
     _add_examples(sub)
-    return parser
+    return parser, sub
 
 
 def _notes_as_lines() -> None:
@@ -139,7 +166,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     debug = "--debug" in argv  # accepted anywhere: lmic --debug solve ..., lmic solve ... --debug
     argv = [a for a in argv if a != "--debug"]
     try:
-        parser = build_parser()
+        parser = build_parser(argv)
         args = parser.parse_args(argv)
         args.debug = debug
         if not getattr(args, "func", None):

@@ -42,11 +42,10 @@ lmic.errors.DataError: f.yaml: line 2: key 'a' appears twice
 
 from __future__ import annotations
 
+import functools
 import json
 import re
 from typing import Any
-
-import yaml
 
 from lmic.errors import DataError, LmicError
 
@@ -205,64 +204,71 @@ def load_json_text(
     return obj
 
 
-class _LimitedLoader(yaml.SafeLoader):
-    """PyYAML's safe loader with a depth limit, an alias-expansion budget, no duplicate keys,
-    and integers checked before conversion."""
+@functools.cache
+def _loader_class() -> type:
+    """The limited YAML loader class, built on first use (PyYAML is imported only for YAML input)."""
+    import yaml
 
-    def __init__(self, stream: str) -> None:
-        super().__init__(stream)
-        self._depth = 0
-        self._sizes: dict[int, int] = {}
+    class _LimitedLoader(yaml.SafeLoader):
+        """PyYAML's safe loader with a depth limit, an alias-expansion budget, no duplicate keys,
+        and integers checked before conversion."""
 
-    def compose_node(self, parent: Any, index: Any) -> Any:
-        self._depth += 1
-        if self._depth > MAX_DEPTH:
-            mark = self.peek_event().start_mark
-            raise yaml.YAMLError(f"__limit__line {mark.line + 1}: nested deeper than {MAX_DEPTH} levels")
-        try:
-            node = super().compose_node(parent, index)
-        finally:
-            self._depth -= 1
-        key = id(node)
-        if key not in self._sizes:
-            if isinstance(node, yaml.SequenceNode):
-                size = 1 + sum(self._sizes.get(id(c), 1) for c in node.value)
-            elif isinstance(node, yaml.MappingNode):
-                size = 1 + sum(self._sizes.get(id(k), 1) + self._sizes.get(id(v), 1) for k, v in node.value)
-            else:
-                size = 1
-            if size > MAX_YAML_NODES:
-                line = node.start_mark.line + 1
-                raise yaml.YAMLError(f"__limit__line {line}: expands to more than {MAX_YAML_NODES} nodes (alias bomb?)")
-            self._sizes[key] = size
-        return node
+        def __init__(self, stream: str) -> None:
+            super().__init__(stream)
+            self._depth = 0
+            self._sizes: dict[int, int] = {}
 
-    def construct_mapping(self, node: Any, deep: bool = False) -> Any:
-        seen: set[Any] = set()
-        for key_node, _ in node.value:
-            if key_node.tag == "tag:yaml.org,2002:merge":
-                continue  # '<<: *base' merges; explicit keys may override merged ones
-            key = self.construct_object(key_node, deep=True)
+        def compose_node(self, parent: Any, index: Any) -> Any:
+            self._depth += 1
+            if self._depth > MAX_DEPTH:
+                mark = self.peek_event().start_mark
+                raise yaml.YAMLError(f"__limit__line {mark.line + 1}: nested deeper than {MAX_DEPTH} levels")
             try:
-                dup = key in seen
-            except TypeError:
-                raise yaml.YAMLError(f"__limit__line {key_node.start_mark.line + 1}: a key must be a name") from None
-            if dup:
-                raise yaml.YAMLError(f"__limit__line {key_node.start_mark.line + 1}: key {key!r} appears twice")
-            seen.add(key)
-        return super().construct_mapping(node, deep=deep)
+                node = super().compose_node(parent, index)
+            finally:
+                self._depth -= 1
+            key = id(node)
+            if key not in self._sizes:
+                if isinstance(node, yaml.SequenceNode):
+                    size = 1 + sum(self._sizes.get(id(c), 1) for c in node.value)
+                elif isinstance(node, yaml.MappingNode):
+                    size = 1 + sum(self._sizes.get(id(k), 1) + self._sizes.get(id(v), 1) for k, v in node.value)
+                else:
+                    size = 1
+                if size > MAX_YAML_NODES:
+                    line = node.start_mark.line + 1
+                    raise yaml.YAMLError(
+                        f"__limit__line {line}: expands to more than {MAX_YAML_NODES} nodes (alias bomb?)"
+                    )
+                self._sizes[key] = size
+            return node
 
-    def construct_yaml_int(self, node: Any) -> int:
-        text = str(node.value).replace("_", "")
-        digits = len(text.lstrip("+-"))
-        if digits > MAX_INT_DIGITS:
-            raise yaml.YAMLError(
-                f"__limit__line {node.start_mark.line + 1}: an integer of {digits} digits (at most {MAX_INT_DIGITS})"
-            )
-        return super().construct_yaml_int(node)
+        def construct_mapping(self, node: Any, deep: bool = False) -> Any:
+            seen: set[Any] = set()
+            for key_node, _ in node.value:
+                if key_node.tag == "tag:yaml.org,2002:merge":
+                    continue  # '<<: *base' merges; explicit keys may override merged ones
+                key = self.construct_object(key_node, deep=True)
+                try:
+                    dup = key in seen
+                except TypeError:
+                    line = key_node.start_mark.line + 1
+                    raise yaml.YAMLError(f"__limit__line {line}: a key must be a name") from None
+                if dup:
+                    raise yaml.YAMLError(f"__limit__line {key_node.start_mark.line + 1}: key {key!r} appears twice")
+                seen.add(key)
+            return super().construct_mapping(node, deep=deep)
 
+        def construct_yaml_int(self, node: Any) -> int:
+            text = str(node.value).replace("_", "")
+            digits = len(text.lstrip("+-"))
+            if digits > MAX_INT_DIGITS:
+                line = node.start_mark.line + 1
+                raise yaml.YAMLError(f"__limit__line {line}: an integer of {digits} digits (at most {MAX_INT_DIGITS})")
+            return super().construct_yaml_int(node)
 
-_LimitedLoader.add_constructor("tag:yaml.org,2002:int", _LimitedLoader.construct_yaml_int)
+    _LimitedLoader.add_constructor("tag:yaml.org,2002:int", _LimitedLoader.construct_yaml_int)
+    return _LimitedLoader
 
 
 def load_yaml_text(text: str, where: str, error: type[LmicError] = DataError) -> Any:
@@ -277,9 +283,11 @@ def load_yaml_text(text: str, where: str, error: type[LmicError] = DataError) ->
     """
     if len(text) > MAX_INPUT_BYTES:
         raise error(f"{where}: exceeds the input limit of {MAX_INPUT_BYTES} bytes")
+    import yaml
+
     loader = None
     try:
-        loader = _LimitedLoader(text)  # the reader checks the characters here already
+        loader = _loader_class()(text)  # the reader checks the characters here already
         return loader.get_single_data()
     except RecursionError:
         raise error(f"{where}: nested deeper than {MAX_DEPTH} levels") from None

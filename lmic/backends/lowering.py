@@ -231,6 +231,36 @@ def _assemble(parts: list[_Part], n_rows: int, n_cols: int, sign: float = 1.0, o
     return A
 
 
+def _stack_sorted(parts: list[_Part], heights: list[int], n_cols: int, sign: float = 1.0) -> sp.csc_matrix:
+    """The CSC matrix of the parts stacked vertically, each with its own (sorted) rows.
+
+    scipy's stacking of CSC blocks along rows (one compiled pass, :func:`scipy.sparse.vstack`)
+    instead of index arithmetic; ``sign`` is applied in place on the result.
+
+    >>> p = (np.array([0, 1, 1]), np.array([0]), np.array([2.0]))
+    >>> _stack_sorted([p, p], [1, 2], 2, -1.0).toarray()
+    array([[-2.,  0.],
+           [-2.,  0.],
+           [ 0.,  0.]])
+    """
+    n_rows = int(sum(heights))
+    idx: type[np.signedinteger[Any]] = (
+        np.int32 if max(n_rows, sum(len(p[1]) for p in parts)) < np.iinfo(np.int32).max else np.int64
+    )
+    blocks = []
+    for (ip, rows, vals), h in zip(parts, heights, strict=True):
+        M = sp.csc_matrix((vals, rows.astype(idx, copy=False), ip.astype(idx, copy=False)), shape=(h, n_cols))
+        M.has_sorted_indices = True
+        blocks.append(M)
+    if not blocks:
+        return sp.csc_matrix((0, n_cols))
+    A = sp.csc_matrix(sp.vstack(blocks, format="csc")) if len(blocks) > 1 else blocks[0].copy()
+    if sign != 1.0:
+        np.multiply(A.data, sign, out=A.data)
+    A.has_sorted_indices = True
+    return A
+
+
 def conic_data(problem: Problem, psd_vec: PsdVec) -> ConicData:
     """Stack a closed problem as ``A x + s = b`` with ``s`` in ``{0} x R+ x PSD...``.
 
@@ -256,29 +286,36 @@ def conic_data(problem: Problem, psd_vec: PsdVec) -> ConicData:
     """
     lin = problem.linear
     eq_rows, ge_rows = split_rows(lin)
-    b_rows, b_vals, parts = [], [], []
+    b_rows, b_vals, parts, heights = [], [], [], []
     offset = 0
-    ordered_rows = True  # each part's rows increase within a column, parts in increasing row ranges
+    ordered_rows = True  # each part's rows increase within a column (then parts stack in order)
     if len(lin):
         ordered = lin.A if not len(eq_rows) or not len(ge_rows) else lin.A[np.concatenate([eq_rows, ge_rows])]
         r, v, part = _split_const(ordered)
         b_rows.append(r)
         b_vals.append(v)
         parts.append(part)
+        heights.append(len(lin))
         offset = len(lin)
     for lmi in problem.lmis:
         native, scale = _native_rows(psd_vec, lmi.dim)
         ordered_rows &= _increasing(native)
-        big = offset + len(native) >= np.iinfo(np.int32).max
-        r, v, part = _split_const(lmi.coeffs, (native.astype(np.int64) if big else native) + offset, scale)
-        b_rows.append(r)
+        same = bool(len(native) == 0 or (native[0] == 0 and native[-1] == len(native) - 1 and _increasing(native)))
+        r, v, part = _split_const(lmi.coeffs, None if same else native, scale)  # the block's own rows
+        b_rows.append(r + offset)
         b_vals.append(v)
         parts.append(part)
+        heights.append(len(native))
         offset += len(native)
     b = np.zeros(offset)
     if b_rows:
         np.add.at(b, np.concatenate(b_rows), np.concatenate(b_vals))
-    A = _assemble(parts, offset, problem.n, sign=-1.0, order="sorted" if ordered_rows else "sort")
+    if ordered_rows:
+        A = _stack_sorted(parts, heights, problem.n, sign=-1.0)
+    else:
+        starts = np.concatenate([[0], np.cumsum(heights)]).astype(np.int64)
+        moved = [(ip, rows + int(off), vals) for (ip, rows, vals), off in zip(parts, starts, strict=False)]
+        A = _assemble(moved, offset, problem.n, sign=-1.0, order="sort")
     c, c0, sign = objective_vector(problem)
     return ConicData(
         A=A,

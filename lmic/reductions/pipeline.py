@@ -34,7 +34,6 @@ from typing import Any
 
 from lmic.backends.backend import Backend
 from lmic.backends.sandbox import describe
-from lmic.certify.farkas import ray_report
 from lmic.ir.problem import Problem
 from lmic.options import SolveOptions
 from lmic.reductions import strict
@@ -66,6 +65,8 @@ def settle_inexact_infeasible(problem: Problem, sol: Solution, farkas: dict[str,
     if farkas is None or farkas.get("lmis") is None:
         sol.message = f"{sol.native_status}: inexact infeasibility claim without a ray"
         return sol
+    from lmic.certify.farkas import ray_report  # only for an infeasibility claim (import time)
+
     report = ray_report(problem, farkas)
     if report.get("verified"):
         sol.status = "infeasible"

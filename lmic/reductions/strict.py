@@ -105,7 +105,6 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
-from lmic.certify.farkas import verify_farkas
 from lmic.ir.problem import Problem
 from lmic.options import SolveOptions
 
@@ -327,6 +326,8 @@ def _proven_infeasible(sol: Solution, problem: Problem) -> bool:
     """A fixed-margin ``infeasible`` whose Farkas ray also proves the original problem infeasible."""
     if sol.status != "infeasible" or not sol.farkas or sol.farkas.get("lmis") is None:
         return False
+    from lmic.certify.farkas import verify_farkas  # only for an infeasible answer (import time)
+
     try:
         report = verify_farkas(problem, {k: sol.farkas[k] for k in ("lmis", "linear") if k in sol.farkas})
     except Exception:  # noqa: BLE001 - a malformed ray is just not a proof

@@ -19,7 +19,6 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from lmic.certify.farkas import ray_report, verify_farkas
 from lmic.ir.problem import LinearConstraints, Objective, Problem, Variable
 from lmic.ir.svec import tril_size
 from lmic.options import SolveOptions
@@ -132,6 +131,8 @@ def _dual_verifies(duals: dict, problem: Problem) -> bool:
     """Whether the max-margin dual (restricted to the original constraints) is a Farkas ray."""
     if duals.get("lmis") is None or len(duals["lmis"]) != len(problem.lmis):
         return False
+    from lmic.certify.farkas import verify_farkas  # only when a dual is to be judged (import time)
+
     try:
         return bool(verify_farkas(problem, duals).get("verified"))
     except Exception:  # noqa: BLE001 - a malformed dual is just not a certificate
@@ -145,6 +146,8 @@ def _inaccurate_max_margin(solution: Solution, t: float, duals: dict, problem: P
         return
     report: dict[str, Any] = {"verified": False, "reason": "the solver returned no dual"}
     if duals.get("lmis") is not None and len(duals["lmis"]) == len(problem.lmis):
+        from lmic.certify.farkas import ray_report  # only when a dual is to be judged (import time)
+
         report = ray_report(problem, duals)
     if report.get("verified"):
         solution.status = "infeasible"
