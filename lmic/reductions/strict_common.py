@@ -84,9 +84,10 @@ def _trace_row(lmi: Any) -> np.ndarray:
     on_diagonal = np.zeros(C.shape[0], dtype=bool)
     on_diagonal[_diagonal_positions(lmi.dim)] = True
     ncols = C.shape[1]
-    col = np.repeat(np.arange(ncols), np.diff(C.indptr))
-    keep = on_diagonal[C.indices[C.indptr[0] : C.indptr[-1]]]
-    return np.bincount(col[keep], weights=C.data[C.indptr[0] : C.indptr[-1]][keep], minlength=ncols).astype(float)
+    start = int(C.indptr[0])
+    hits = np.flatnonzero(on_diagonal[C.indices[start : C.indptr[-1]]]) + start  # the few diagonal entries
+    col = np.searchsorted(C.indptr, hits, side="right") - 1  # their columns
+    return np.bincount(col, weights=C.data[hits], minlength=ncols).astype(float)
 
 
 def _restrict(duals: dict | None, n_lmis: int, n_rows: int) -> dict | None:
