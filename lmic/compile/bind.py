@@ -43,7 +43,7 @@ from lmic.ir.problem import (
     Problem,
     Variable,
 )
-from lmic.ir.svec import tril_index, tril_size
+from lmic.ir.svec import tril_index, tril_rows_cols, tril_size
 from lmic.system import System, load_system
 
 if TYPE_CHECKING:  # sympy is imported only for analysed (not frozen) plans
@@ -184,9 +184,9 @@ class _Binder:
         cached = self.plan.cache.get(key)
         if cached is None:
             var = self.vars[name]
-            coo = var.basis().tocoo()
+            row, col = _basis_entries(var)
             r, c = var.shape
-            i, j, k = coo.row % r, coo.row // r, coo.col
+            i, j, k = row % r, row // r, col
             if transposed:
                 i, j, r = j, i, c
             idx = _index_dtype(max(r, c, var.size))
@@ -520,6 +520,32 @@ class _Binder:
             ob = t.observer_decl
             meta["observer"] = {"model": ob.model, "time": ob.time, "roles": dict(ob.roles)}
         return Problem(list(self.vars.values()), lmis, linear, objective, data, derived, checks, meta)
+
+
+def _basis_entries(var: Variable) -> tuple[np.ndarray, np.ndarray]:
+    """Rows and columns of the unit entries of ``var.basis()`` in its CSC order (column, then
+    row), computed with numpy alone (no sparse matrix built) for the common kinds.
+
+    >>> v = Variable("P", "symmetric", (2, 2))
+    >>> [a.tolist() for a in _basis_entries(v)]
+    [[0, 1, 2, 3], [0, 1, 1, 2]]
+    """
+    r, c = var.shape
+    if var.kind in ("scalar", "full"):
+        k = np.arange(r * c, dtype=np.int64)
+        return k, k
+    if var.kind == "symmetric":
+        i, j = (a.astype(np.int64) for a in tril_rows_cols(r))  # storage order: by column, then row
+        k = np.arange(len(i), dtype=np.int64)
+        off = i != j
+        counts = 1 + off.astype(np.int64)  # an off-diagonal x_k sets (i, j) and (j, i)
+        rows = np.empty(int(counts.sum()), dtype=np.int64)
+        first = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        rows[first] = i + j * r  # (i, j) with i >= j comes first: i + j r < j + i r
+        rows[first[off] + 1] = j[off] + i[off] * r
+        return rows, np.repeat(k, counts)
+    coo = var.basis().tocoo()  # diagonal, block-diagonal: the IR's own construction
+    return coo.row.astype(np.int64), coo.col.astype(np.int64)
 
 
 def _index_dtype(top: int) -> type[np.signedinteger[Any]]:
