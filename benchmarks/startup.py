@@ -82,7 +82,7 @@ def _env(**extra: str) -> dict[str, str]:
     """The environment of a measured process: this checkout first on the path, and (unless
     ``--no-bytecode-cache``) compiled bytecode kept in a folder of the run
     (``PYTHONPYCACHEPREFIX``), as an installed package has it: with ``PYTHONDONTWRITEBYTECODE``
-    set (this machine's default) every process compiled all of lmic's sources again (~0.3 s of
+    set (this machine's default) every process compiled all of lmic's sources again (~0.15 s of
     CPU per ``lmic solve``), a cost no installed lmic pays."""
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(
