@@ -65,6 +65,27 @@ def test_version_and_parser_import_no_numpy(tmp_path):
     assert _heavy(mods) == []
 
 
+def test_a_command_builds_only_its_own_parser_and_a_json_solve_skips_yaml_and_farkas(tmp_path):
+    """``lmic backends`` imports no other command's module; a warm ``lmic solve`` of a JSON
+    system (a verified feasible point) imports neither PyYAML nor the Farkas ray modules."""
+    code, out, _, mods = _probe(_env(tmp_path), "backends", "--json")
+    assert code == 0 and json.loads(out)
+    commands = sorted(m for m in mods if m.startswith("lmic.commands.") and not m.startswith("lmic.commands._"))
+    assert commands == ["lmic.commands.backends"]
+    system = tmp_path / "sys.json"
+    system.write_text(
+        json.dumps({"lmic": 1, "data": {"A": [[0.5, 0.1], [0.0, 0.4]], "C": [[1.0, 0.0]]}, "params": {"beta": 1e-3}})
+    )
+    for _ in range(2):  # the first run fills the plan cache
+        code, out, err, mods = _probe(_env(tmp_path / "cache"), "solve", "qib.thm1", str(system), "--json")
+    assert code == 0, err
+    assert json.loads(out)["verdict"] == "certified"
+    assert "yaml" not in mods
+    assert not [m for m in mods if m.startswith("lmic.certify.farkas")]
+    code, out, _, _ = _probe(_env(tmp_path), "bogus-command")
+    assert code == 2  # an unknown word still gets the full parser's one-line error
+
+
 def test_lazy_names_of_lmic():
     script = (
         "import sys, lmic\n"
