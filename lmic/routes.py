@@ -50,6 +50,8 @@ __all__ = [
     "ENCLOSURE_BUDGET_FACTOR",
     "ENCLOSURE_BUDGET_FLOOR_S",
     "enclosure_budget",
+    "gap_escalates",
+    "MAX_GAP_ESCALATIONS",
     "unbounded_outcome",
 ]
 
@@ -160,6 +162,7 @@ def enclosure_of(
     backend: Any,
     options: Any,
     budget_s: float | None = None,
+    target: float | None = None,
 ) -> tuple[dict[str, Any] | None, float]:
     """The certified enclosure of ``problem``'s optimal value from a solution's point and dual.
 
@@ -211,7 +214,19 @@ def enclosure_of(
         solve_s=solve_s,
         budget_s=budget,
     )
-    enc = tighten(problem, enc, x, exact, backend, options, resolve, solve_point, deadline=deadline, solve_s=solve_s)
+    enc = tighten(
+        problem,
+        enc,
+        x,
+        exact,
+        backend,
+        options,
+        resolve,
+        solve_point,
+        deadline=deadline,
+        solve_s=solve_s,
+        target=target,
+    )
     spent = time.perf_counter() - t0
     enc["budget"] = {"seconds": budget, "used": spent, "spent": spent > budget}
     if enc["budget"]["spent"] and enc.get("rel_gap") is None:
@@ -230,8 +245,9 @@ def tighten(
     solve_point: Any,
     deadline: float | None = None,
     solve_s: float = 0.0,
+    target: float | None = None,
 ) -> dict[str, Any]:
-    """A gap above :data:`lmic.certify.enclosure.GAP_TARGET` on an interior-point backend:
+    """A gap above ``target`` (default :data:`lmic.certify.enclosure.GAP_TARGET`) on an interior-point backend:
     re-solves at each of :data:`TIGHT_TOLS` below the solve's tolerance, loosest first, until
     the gap meets the target, and the better proven end of each.
 
@@ -246,9 +262,10 @@ def tighten(
     from lmic.certify.enclosure import GAP_TARGET
     from lmic.options import SolveOptions
 
+    goal = GAP_TARGET if target is None else float(target)
     gap = enc.get("rel_gap")
     label = str(getattr(backend, "name", backend) or "")
-    if (gap is not None and gap <= GAP_TARGET) or "scs" in label.lower():
+    if (gap is not None and gap <= goal) or "scs" in label.lower():
         return enc
     key = "upper" if problem.objective.sense == "min" else "lower"
     if gap is None and enc.get(key) is not None:
@@ -264,7 +281,7 @@ def tighten(
             break  # a tight re-solve (typically slower than the first) would not fit the budget
         tight = replace(options, tol=tol) if options is not None else SolveOptions(tol=tol)
         out = _tighten_once(problem, out, x, exact, backend, tight, resolve, solve_point, deadline, key)
-        if out.get("rel_gap") is not None and out["rel_gap"] <= GAP_TARGET:
+        if out.get("rel_gap") is not None and out["rel_gap"] <= goal:
             break
     return out
 
@@ -359,6 +376,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     attempts: list[Any] = []
     steps: list[dict[str, Any]] = []
     bounded = 0
+    escalated = 0
     k = -1
     while k + 1 < len(names):
         k += 1
@@ -384,7 +402,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
         enc = None
         holds = out.verdict == "undecided" and getattr(out.certificate, "verdict", None) == "certified"
         if out.verdict == "certified" or holds:
-            enc, t_enc = enclosure_of(problem, out.solution, out.certificate, exact, name, opts)
+            enc, t_enc = enclosure_of(problem, out.solution, out.certificate, exact, name, opts, target=options.gap)
             enc_s += t_enc
             rel = None if enc is None else enc.get("rel_gap")
             step["rel_gap"] = rel
@@ -400,7 +418,13 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
             if rel is not None and rel <= options.gap:
                 break  # the enclosure proves the optimum to the requested gap
             if not first_order:
-                break  # a certified interior-point answer: its enclosure is what can be proved
+                if escalated >= MAX_GAP_ESCALATIONS or not gap_escalates(problem, enc):
+                    break  # a certified interior-point answer: its enclosure is what can be proved
+                # the gap is not met and another interior-point solver may close it (its point
+                # or its dual is more accurate): the next one of the route, first-order ones skipped
+                escalated += 1
+                step["escalate"] = "gap not met"
+                names = names[: k + 1] + [nm for nm in names[k + 1 :] if method_of(nm) != "first-order"]
             continue  # a first-order point whose gap is too wide: polish
         if out.verdict == "infeasible-certified":
             break
@@ -418,6 +442,32 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     if best.solution is not None:
         best.solution.info["attempts"] = [a.to_dict() for a in attempts]
     return RouteResult(best, best_enc, enc_s, {"steps": steps, "text": describe(steps, problem), "gap": options.gap})
+
+
+#: interior-point backends a route tries after the first certified one, when its enclosure
+#: does not meet ``--gap`` (:func:`gap_escalates`)
+MAX_GAP_ESCALATIONS = 2
+
+
+def gap_escalates(problem: Problem, enc: dict[str, Any] | None) -> bool:
+    """Whether another interior-point solver may close an enclosure's gap: both ends proven but
+    too far apart (the solver's accuracy), or the dual end proven and the primal end not (its
+    point is not provably feasible). Not when the dual end is missing: the dual search has
+    tried its perturbed and centred re-solves, and a missing dual end is the dual's structure
+    (a dual interior thinner than the rounding, the bounded-real lemma's), not one solver's.
+
+    >>> from lmic.testing.conformance import CASES
+    >>> p = CASES["max_sense"].build()
+    >>> gap_escalates(p, {"lower": 1.0, "upper": 2.0, "rel_gap": 0.6}), gap_escalates(p, None)
+    (True, False)
+    """
+    if enc is None:
+        return False
+    if enc.get("rel_gap") is not None:
+        return True
+    dual_end = "lower" if problem.objective.sense == "min" else "upper"
+    primal_end = "upper" if dual_end == "lower" else "lower"
+    return enc.get(dual_end) is not None and enc.get(primal_end) is None
 
 
 def _tighter(enc: dict[str, Any] | None, best_enc: dict[str, Any] | None, out: Outcome, best: Outcome) -> bool:
