@@ -63,6 +63,7 @@ import numpy as np
 from lmic.errors import BackendError, LmicError
 from lmic.ir.problem import Problem
 from lmic.outcome import Attempt, Evidence, Outcome, evidence_of, rank, verdict_of
+from lmic.route_rule import SCHUR_PENALTY, TINY_IPM_COST, ipm_costs, optimisation_chain
 from lmic.solution import Solution
 
 __all__ = [
@@ -182,62 +183,6 @@ def route(problem: Problem, backend: Any = None) -> list[Any]:
     if not usable:
         raise BackendError("no installed backend can take this problem (tried " + ", ".join(ORDER) + ")")
     return usable
-
-
-#: per-iteration cost (flop estimate of :func:`ipm_costs`) below which an optimisation problem
-#: is tiny: Clarabel, the embedded default solver (the most accurate), whatever the shape; a
-#: 10-state bounded-real lemma (2.5e6) takes 10-70 ms on every interior-point backend
-TINY_IPM_COST = 1e7
-#: a Schur-complement method (SDPA, CVXOPT) goes first when its cost estimate times this is
-#: below Clarabel's: their measured rate is lower (bounded-real lemma n = 40, 821 variables:
-#: estimates 3.4e9 Clarabel, 3.1e9 Schur; Clarabel 0.15 s, CVXOPT 0.38 s, SDPA 0.12 s per
-#: iteration; ``uncertain_dt.thm1`` n = 8, 91 variables: 5.5e9 against 6e7; Clarabel 0.19 s,
-#: CVXOPT 0.05 s, SDPA 0.02 s per iteration; docs/backends.md)
-SCHUR_PENALTY = 2.5
-
-
-def ipm_costs(problem: Problem) -> tuple[float, float]:
-    """Per-iteration flop estimates ``(clarabel, schur)`` of the two interior-point families.
-
-    Clarabel factors a sparse KKT system holding one dense block of order ``s_i = d_i (d_i +
-    1) / 2`` per LMI (:mod:`lmic.backends.clarabel`): about ``sum s_i^3 + n sum s_i^2 + n^3``.
-    A Schur-complement method (SDPA, CVXOPT) forms and factors an ``n x n`` matrix with one
-    product per pair of variables and block: about ``n^2 sum d_i^2 + n sum d_i^3 + n^3``.
-
-    >>> from lmic.testing.conformance import lyapunov_problem
-    >>> c, s = ipm_costs(lyapunov_problem(-np.eye(2)))
-    >>> c > 0 and s > 0
-    True
-    """
-    n = float(problem.n)
-    dims = [float(lmi.dim) for lmi in problem.lmis]
-    cones = [d * (d + 1) / 2 for d in dims] + [1.0] * len(problem.linear)
-    clarabel = sum(s**3 for s in cones) + n * sum(s**2 for s in cones) + n**3
-    schur = n**2 * (sum(d**2 for d in dims) + len(problem.linear)) + n * sum(d**3 for d in dims) + n**3
-    return clarabel, schur
-
-
-def optimisation_chain(problem: Problem, first_order: bool | None = None) -> list[str]:
-    """The interior-point order of the default route for an optimisation problem.
-
-    Tiny problems (:data:`TINY_IPM_COST`) and problems whose Schur complement is not clearly
-    cheaper (:data:`SCHUR_PENALTY`, :func:`ipm_costs`): Clarabel, CVXOPT, SDPA; otherwise
-    (few variables against large PSD blocks) SDPA, CVXOPT, Clarabel. ``first_order`` puts SCS
-    first (``auto:first-order``; ``None``: :data:`lmic.backends.auto.FIRST_ORDER_OPTIMISATION`).
-
-    >>> from lmic.testing.conformance import lyapunov_problem
-    >>> optimisation_chain(lyapunov_problem(-np.eye(2)))
-    ['clarabel', 'cvxopt', 'sdpa']
-    """
-    from lmic.backends import auto
-
-    clarabel, schur = ipm_costs(problem)
-    if clarabel <= TINY_IPM_COST or SCHUR_PENALTY * schur >= clarabel:
-        ipm = ["clarabel", "cvxopt", "sdpa"]
-    else:
-        ipm = ["sdpa", "cvxopt", "clarabel"]
-    fo = auto.FIRST_ORDER_OPTIMISATION if first_order is None else first_order
-    return (["scs"] if fo else []) + ipm
 
 
 def step_options(backend: Any, options: Any) -> Any:
