@@ -267,8 +267,9 @@ def _prove_ray(problem: Problem, sol: Solution, cert: Any) -> bool:
 class _Run:
     """The state of one :func:`decide` call: attempts so far and the best outcome."""
 
-    def __init__(self, problem: Problem, exact: bool, rescue: bool) -> None:
+    def __init__(self, problem: Problem, exact: bool, rescue: bool, ray_budget_s: float | None = None) -> None:
         self.problem, self.exact, self.rescue = problem, exact, rescue
+        self.ray_budget_s = ray_budget_s  # what an outer route left of its ray-proof budget
         self.attempts: list[Attempt] = []
         self.best: Outcome | None = None
         self.rejected: list[tuple[Solution, Any, str]] = []
@@ -284,7 +285,10 @@ class _Run:
         if infeasibility_only and verdict in ("certified", "rejected"):
             # a point of the feasibility problem is no optimum: it decides nothing here
             verdict, note = "undecided", "the feasibility problem has a point; the optimum was not reached"
-        more = self.rays_tried < MAX_RAY_PROOFS and (not self.rays_tried or self.ray_s < RAY_PROOF_BUDGET_S)
+        if self.ray_budget_s is None:
+            more = self.rays_tried < MAX_RAY_PROOFS and (not self.rays_tried or self.ray_s < RAY_PROOF_BUDGET_S)
+        else:
+            more = self.rays_tried < MAX_RAY_PROOFS and self.ray_s < self.ray_budget_s
         if verdict == "infeasible-bounded" and self.rescue and not self.exact and more:
             self.rays_tried += 1  # an exact proof costs seconds: a few rays per decision, one face
             t_ray = time.process_time()  # CPU time: the same on a busy machine
@@ -344,6 +348,7 @@ def decide(
     reference: np.ndarray | None = None,
     rescue: bool = True,
     budget_s: float | None = None,
+    ray_budget_s: float | None = None,
 ) -> Outcome:
     """Decide ``problem`` by the policy of the module docstring.
 
@@ -368,6 +373,11 @@ def decide(
         their time limit unless ``options.time_limit`` is set). An escalating route budgets
         every backend but its last by :func:`backend_budget`; a backend cut by its budget is
         retried without one when no backend decided.
+    ray_budget_s : float, optional
+        CPU seconds left for exact proofs of bounded rays (an outer route that calls this once
+        per backend shares :data:`RAY_PROOF_BUDGET_S` across them, :mod:`lmic.routes`); default:
+        the first proof always runs, the next ones while the proofs took less than
+        :data:`RAY_PROOF_BUDGET_S`.
 
     Returns
     -------
@@ -392,7 +402,7 @@ def decide(
         ok, why = be.supports(solve_as, explain=True)
         if not ok:
             raise BackendError(f"backend '{be.label}' cannot take this problem: {why}")
-    run = _Run(problem, exact, rescue)
+    run = _Run(problem, exact, rescue, ray_budget_s)
     bounded = 0
     feasibility_strict = problem.objective.sense == "feasibility" and has_strict(problem)
     cut: list[Any] = []  # backends stopped by their budget (retried without one at the end)

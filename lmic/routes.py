@@ -38,6 +38,13 @@ import numpy as np
 
 from lmic.ir.problem import Problem
 from lmic.outcome import Outcome, rank
+from lmic.route_rule import (
+    GAP_ESCALATION_FACTOR,
+    GAP_ESCALATION_FLOOR_S,
+    MAX_GAP_ESCALATIONS,
+    gap_escalates,
+    ray_proof_s,
+)
 
 __all__ = [
     "RouteResult",
@@ -361,7 +368,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     RouteResult
     """
     from lmic.options import SolveOptions
-    from lmic.policy import backend_budget, decide, is_auto, route
+    from lmic.policy import RAY_PROOF_BUDGET_S, backend_budget, decide, is_auto, route
 
     options = options or SolveOptions()
     if not is_auto(backend) or problem.objective.sense == "feasibility":
@@ -396,7 +403,11 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
             )
         budget = backend_budget(problem) if budgeted and k < last else None
         t_b = time.perf_counter()
-        out = _unbounded_checked(problem, decide(problem, name, opts, exact=exact, budget_s=budget), options)
+        # the exact proofs of bounded rays share one budget over the route, as in one decide()
+        rays = None if k == 0 else max(0.0, RAY_PROOF_BUDGET_S - ray_proof_s(attempts))
+        out = _unbounded_checked(
+            problem, decide(problem, name, opts, exact=exact, budget_s=budget, ray_budget_s=rays), options
+        )
         if budget is not None and not out.decided and time.perf_counter() - t_b >= budget:
             cut.append(name)  # stopped by its budget: the next backend now; retried at the end
         attempts.extend(out.attempts)
@@ -447,38 +458,6 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     if best.solution is not None:
         best.solution.info["attempts"] = [a.to_dict() for a in attempts]
     return RouteResult(best, best_enc, enc_s, {"steps": steps, "text": describe(steps, problem), "gap": options.gap})
-
-
-#: interior-point backends a route tries after the first certified one, when its enclosure
-#: does not meet ``--gap`` (:func:`gap_escalates`)
-MAX_GAP_ESCALATIONS = 2
-#: ... and only while the route has run less than ``max(FLOOR, FACTOR x)`` the time to its
-#: first certified interior-point answer and its enclosure (each escalation pays a solve and an
-#: enclosure; on a random 8-state bounded-real lemma without the exact face the three
-#: enclosures took 10 s and closed the gap from 6e-2 to 1.2e-4)
-GAP_ESCALATION_FACTOR = 2.0
-GAP_ESCALATION_FLOOR_S = 20.0
-
-
-def gap_escalates(problem: Problem, enc: dict[str, Any] | None) -> bool:
-    """Whether another interior-point solver may close an enclosure's gap: both ends proven but
-    too far apart (the solver's accuracy), or the dual end proven and the primal end not (its
-    point is not provably feasible). Not when the dual end is missing: the dual search has
-    tried its perturbed and centred re-solves, and a missing dual end is the dual's structure
-    (a dual interior thinner than the rounding, the bounded-real lemma's), not one solver's.
-
-    >>> from lmic.testing.conformance import CASES
-    >>> p = CASES["max_sense"].build()
-    >>> gap_escalates(p, {"lower": 1.0, "upper": 2.0, "rel_gap": 0.6}), gap_escalates(p, None)
-    (True, False)
-    """
-    if enc is None:
-        return False
-    if enc.get("rel_gap") is not None:
-        return True
-    dual_end = "lower" if problem.objective.sense == "min" else "upper"
-    primal_end = "upper" if dual_end == "lower" else "lower"
-    return enc.get(dual_end) is not None and enc.get(primal_end) is None
 
 
 def _tighter(enc: dict[str, Any] | None, best_enc: dict[str, Any] | None, out: Outcome, best: Outcome) -> bool:

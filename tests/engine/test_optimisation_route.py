@@ -190,3 +190,26 @@ def test_gap_escalates_rule():
     assert lmic.routes.gap_escalates(p, {"lower": None, "upper": 1.5, "rel_gap": None})
     assert not lmic.routes.gap_escalates(p, {"lower": 1.0, "upper": None, "rel_gap": None})
     assert not lmic.routes.gap_escalates(p, None)
+
+
+def test_the_route_shares_one_budget_for_exact_ray_proofs():
+    """x >= 1 and x <= -1 as one 2x2 LMI: infeasible, with an inhomogeneous ray (bounded in
+    float, global once proved exactly). With the ray-proof budget spent (what an earlier backend
+    of the route used), no exact proof is tried and the verdict stays bounded."""
+    import scipy.sparse as sp
+
+    from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+
+    F = sp.csc_matrix(np.array([[-1.0, 1.0], [0.0, 0.0], [-1.0, -1.0]]))  # diag(x - 1, -x - 1)
+    p = Problem(
+        [Variable("x", "scalar", (1, 1))],
+        [LMI("x >= 1, x <= -1", 2, F, strict=False)],
+        LinearConstraints.empty(1),
+        Objective("min", np.array([0.0, 1.0])),
+    )
+    proved = policy.decide(p, "clarabel")
+    assert proved.verdict == "infeasible-certified"
+    assert certify(p, proved.solution, exact=True).verdict == "infeasible-certified"
+    spent = policy.decide(p, "clarabel", ray_budget_s=0.0)
+    assert spent.verdict == "infeasible-bounded"
+    assert not any("exact proof of the ray" in a.note for a in spent.attempts)
