@@ -31,9 +31,9 @@ infeasible-certified > infeasible-bounded > rejected > undecided), with every at
 
 Escalation order: the shape- and size-based first choice of :func:`lmic.backends.auto.route`
 (strict feasibility problems above a tiny size: the certified first-order route, SCS then
-CVXOPT; small problems: Clarabel; larger optimisation problems: the interior-point method that
-suits the shape, CVXOPT or Clarabel, then SDPA; :mod:`lmic.routes` adds the ``--gap`` test of
-the optimal-value enclosure), then the rest of :data:`ORDER` (Clarabel -> CVXOPT -> SDPA ->
+CVXOPT; small problems: Clarabel; optimisation problems: the interior-point order of
+:func:`lmic.route_rule.optimisation_chain`, by a per-iteration cost model; :mod:`lmic.routes`
+adds the ``--gap`` test of the optimal-value enclosure and the escalation), then the rest of :data:`ORDER` (Clarabel -> CVXOPT -> SDPA ->
 SCS), skipping backends that are not installed or cannot take the problem (Clarabel's memory
 guard on large PSD blocks). SCS, a first-order method, runs at tolerance
 :data:`FIRST_ORDER_TOL` in the route (its answers are certified, not trusted; alone it runs at

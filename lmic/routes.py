@@ -7,14 +7,18 @@ With no backend (or ``"auto"``) :func:`decide_route` runs:
   certified first-order route (SCS under the trace normalisation, a fixed-margin point, checked
   by the certifier), escalating to CVXOPT and the rest of :data:`lmic.policy.ORDER` when it
   fails; tiny ones take Clarabel, the embedded default solver;
-* **optimisation problems**: each backend of the route alone (:func:`lmic.policy.decide`) until
-  one gives a certified point, then the certified enclosure of the optimal value
-  (:func:`lmic.certify.enclosure.enclosure`, from the primal point and the repaired dual). A
-  first-order step (``auto:first-order``) whose enclosure does not meet
-  :attr:`lmic.options.SolveOptions.gap` is polished by the interior-point method that suits the
-  shape (:func:`lmic.backends.auto.schur_complement_shape`: CVXOPT when the variables are few
-  against the PSD dimension, Clarabel otherwise); the route stops at the first certified
-  interior-point answer (a gap it cannot close is reported, never hidden).
+* **optimisation problems**: each backend of the route alone (:func:`lmic.policy.decide`), in
+  the interior-point order of :func:`lmic.route_rule.optimisation_chain` (Clarabel first when
+  the problem is tiny or its Schur complement is not clearly cheaper, else SDPA then CVXOPT: a
+  per-iteration cost model, :func:`lmic.route_rule.ipm_costs`), until one gives a certified
+  point, then the certified enclosure of the optimal value
+  (:func:`lmic.certify.enclosure.enclosure`, from the primal point and the repaired dual).
+  When the enclosure misses :attr:`lmic.options.SolveOptions.gap`, the route escalates to the
+  next interior point (:func:`lmic.route_rule.gap_escalates`: a gap too wide or a primal end
+  missing; at most :data:`MAX_GAP_ESCALATIONS`, within a time cap) and keeps the tightest
+  certified enclosure. A first-order step (``auto:first-order``) whose enclosure does not meet
+  the gap is polished by the interior points. The exact proofs of bounded rays share one
+  budget over the route's backends.
 
 An explicit backend is that backend alone, as before. :func:`describe` gives the one line the
 CLI prints (``route: scs (first-order, n=40) -> certified``), also in the JSON (``route``).
