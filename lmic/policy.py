@@ -33,8 +33,9 @@ Escalation order: the shape- and size-based first choice of :func:`lmic.backends
 (strict feasibility problems above a tiny size: the certified first-order route, SCS then
 CVXOPT; small problems: Clarabel; optimisation problems: the interior-point order of
 :func:`lmic.route_rule.optimisation_chain`, by a per-iteration cost model; :mod:`lmic.routes`
-adds the ``--gap`` test of the optimal-value enclosure and the escalation), then the rest of :data:`ORDER` (Clarabel -> CVXOPT -> SDPA ->
-SCS), skipping backends that are not installed or cannot take the problem (Clarabel's memory
+adds the ``--gap`` test of the optimal-value enclosure and the escalation), then the rest of
+:data:`ORDER` (Clarabel -> CVXOPT -> SDPA -> SCS), skipping backends that are not installed or
+cannot take the problem (Clarabel's memory
 guard on large PSD blocks). SCS, a first-order method, runs at tolerance
 :data:`FIRST_ORDER_TOL` in the route (its answers are certified, not trusted; alone it runs at
 its own floor). ``backend="X"`` means X alone (strategies and exact rescue still apply, no other
