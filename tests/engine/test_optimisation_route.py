@@ -213,3 +213,24 @@ def test_the_route_shares_one_budget_for_exact_ray_proofs():
     spent = policy.decide(p, "clarabel", ray_budget_s=0.0)
     assert spent.verdict == "infeasible-bounded"
     assert not any("exact proof of the ray" in a.note for a in spent.attempts)
+
+
+def test_sdpa_skips_its_feasibility_error_recomputation_and_restores_it(monkeypatch):
+    """SDPA first on the Schur-complement order: sdpa-python's ARPACK recomputation of its
+    feasibility errors (half of its time, never read by lmic) is skipped during the solve only;
+    the answer is certified by the certifier."""
+    sdpaputils = pytest.importorskip("sdpap.sdpaputils")
+    calls: list[str] = []
+
+    def recorder(*args, **kwargs):
+        calls.append("called")
+        return 0.0
+
+    monkeypatch.setattr(sdpaputils, "get_primalerror", recorder)
+    monkeypatch.setattr(sdpaputils, "get_dualerror", recorder)
+    system, (lo, hi) = _brl(4, 6, eighths=True)
+    r = lmic.api.solve("tutorial.bounded_real", system, backend="sdpa", backoff=0)
+    assert certify(r.problem, r.solution).verdict == "certified"
+    assert r.enclosure["upper"] >= hi and r.enclosure["lower"] <= lo
+    assert calls == []
+    assert sdpaputils.get_primalerror is recorder and sdpaputils.get_dualerror is recorder
