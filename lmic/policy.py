@@ -31,10 +31,11 @@ infeasible-certified > infeasible-bounded > rejected > undecided), with every at
 
 Escalation order: the shape- and size-based first choice of :func:`lmic.backends.auto.route`
 (strict feasibility problems above a tiny size: the certified first-order route, SCS then
-CVXOPT; small problems: Clarabel; larger optimisation problems: the interior-point method that
-suits the shape, CVXOPT or Clarabel, then SDPA; :mod:`lmic.routes` adds the ``--gap`` test of
-the optimal-value enclosure), then the rest of :data:`ORDER` (Clarabel -> CVXOPT -> SDPA ->
-SCS), skipping backends that are not installed or cannot take the problem (Clarabel's memory
+CVXOPT; small problems: Clarabel; optimisation problems: the interior-point order of
+:func:`lmic.route_rule.optimisation_chain`, by a per-iteration cost model; :mod:`lmic.routes`
+adds the ``--gap`` test of the optimal-value enclosure and the escalation), then the rest of
+:data:`ORDER` (Clarabel -> CVXOPT -> SDPA -> SCS), skipping backends that are not installed or
+cannot take the problem (Clarabel's memory
 guard on large PSD blocks). SCS, a first-order method, runs at tolerance
 :data:`FIRST_ORDER_TOL` in the route (its answers are certified, not trusted; alone it runs at
 its own floor). ``backend="X"`` means X alone (strategies and exact rescue still apply, no other
@@ -63,6 +64,7 @@ import numpy as np
 from lmic.errors import BackendError, LmicError
 from lmic.ir.problem import Problem
 from lmic.outcome import Attempt, Evidence, Outcome, evidence_of, rank, verdict_of
+from lmic.route_rule import SCHUR_PENALTY, TINY_IPM_COST, ipm_costs, optimisation_chain
 from lmic.solution import Solution
 
 __all__ = [
@@ -74,6 +76,10 @@ __all__ = [
     "backend_budget",
     "AUTO_VARIANTS",
     "route",
+    "ipm_costs",
+    "optimisation_chain",
+    "TINY_IPM_COST",
+    "SCHUR_PENALTY",
     "decide",
     "step_options",
     "is_auto",
@@ -169,7 +175,10 @@ def route(problem: Problem, backend: Any = None) -> list[Any]:
     variant = backend.split(":", 1)[1].lower() if isinstance(backend, str) and ":" in backend else ""
     if variant not in AUTO_VARIANTS:
         raise BackendError(f"backend '{backend}': unknown auto variant; choose " + ", ".join(sorted(AUTO_VARIANTS)))
-    chain = auto.route(problem) if AUTO_VARIANTS[variant] is None else auto.route(problem, AUTO_VARIANTS[variant])
+    if problem.objective.sense != "feasibility":
+        chain = optimisation_chain(problem, AUTO_VARIANTS[variant])
+    else:
+        chain = auto.route(problem) if AUTO_VARIANTS[variant] is None else auto.route(problem, AUTO_VARIANTS[variant])
     first = [name for name in chain if _usable(name, problem)]
     usable = first + [name for name in ORDER if name not in first and _usable(name, problem)]
     if not usable:
@@ -259,8 +268,9 @@ def _prove_ray(problem: Problem, sol: Solution, cert: Any) -> bool:
 class _Run:
     """The state of one :func:`decide` call: attempts so far and the best outcome."""
 
-    def __init__(self, problem: Problem, exact: bool, rescue: bool) -> None:
+    def __init__(self, problem: Problem, exact: bool, rescue: bool, ray_budget_s: float | None = None) -> None:
         self.problem, self.exact, self.rescue = problem, exact, rescue
+        self.ray_budget_s = ray_budget_s  # what an outer route left of its ray-proof budget
         self.attempts: list[Attempt] = []
         self.best: Outcome | None = None
         self.rejected: list[tuple[Solution, Any, str]] = []
@@ -276,7 +286,10 @@ class _Run:
         if infeasibility_only and verdict in ("certified", "rejected"):
             # a point of the feasibility problem is no optimum: it decides nothing here
             verdict, note = "undecided", "the feasibility problem has a point; the optimum was not reached"
-        more = self.rays_tried < MAX_RAY_PROOFS and (not self.rays_tried or self.ray_s < RAY_PROOF_BUDGET_S)
+        if self.ray_budget_s is None:
+            more = self.rays_tried < MAX_RAY_PROOFS and (not self.rays_tried or self.ray_s < RAY_PROOF_BUDGET_S)
+        else:
+            more = self.rays_tried < MAX_RAY_PROOFS and self.ray_s < self.ray_budget_s
         if verdict == "infeasible-bounded" and self.rescue and not self.exact and more:
             self.rays_tried += 1  # an exact proof costs seconds: a few rays per decision, one face
             t_ray = time.process_time()  # CPU time: the same on a busy machine
@@ -336,6 +349,7 @@ def decide(
     reference: np.ndarray | None = None,
     rescue: bool = True,
     budget_s: float | None = None,
+    ray_budget_s: float | None = None,
 ) -> Outcome:
     """Decide ``problem`` by the policy of the module docstring.
 
@@ -360,6 +374,11 @@ def decide(
         their time limit unless ``options.time_limit`` is set). An escalating route budgets
         every backend but its last by :func:`backend_budget`; a backend cut by its budget is
         retried without one when no backend decided.
+    ray_budget_s : float, optional
+        CPU seconds left for exact proofs of bounded rays (an outer route that calls this once
+        per backend shares :data:`RAY_PROOF_BUDGET_S` across them, :mod:`lmic.routes`); default:
+        the first proof always runs, the next ones while the proofs took less than
+        :data:`RAY_PROOF_BUDGET_S`.
 
     Returns
     -------
@@ -384,7 +403,7 @@ def decide(
         ok, why = be.supports(solve_as, explain=True)
         if not ok:
             raise BackendError(f"backend '{be.label}' cannot take this problem: {why}")
-    run = _Run(problem, exact, rescue)
+    run = _Run(problem, exact, rescue, ray_budget_s)
     bounded = 0
     feasibility_strict = problem.objective.sense == "feasibility" and has_strict(problem)
     cut: list[Any] = []  # backends stopped by their budget (retried without one at the end)

@@ -7,14 +7,18 @@ With no backend (or ``"auto"``) :func:`decide_route` runs:
   certified first-order route (SCS under the trace normalisation, a fixed-margin point, checked
   by the certifier), escalating to CVXOPT and the rest of :data:`lmic.policy.ORDER` when it
   fails; tiny ones take Clarabel, the embedded default solver;
-* **optimisation problems**: each backend of the route alone (:func:`lmic.policy.decide`) until
-  one gives a certified point, then the certified enclosure of the optimal value
-  (:func:`lmic.certify.enclosure.enclosure`, from the primal point and the repaired dual). A
-  first-order step (``auto:first-order``) whose enclosure does not meet
-  :attr:`lmic.options.SolveOptions.gap` is polished by the interior-point method that suits the
-  shape (:func:`lmic.backends.auto.schur_complement_shape`: CVXOPT when the variables are few
-  against the PSD dimension, Clarabel otherwise); the route stops at the first certified
-  interior-point answer (a gap it cannot close is reported, never hidden).
+* **optimisation problems**: each backend of the route alone (:func:`lmic.policy.decide`), in
+  the interior-point order of :func:`lmic.route_rule.optimisation_chain` (Clarabel first when
+  the problem is tiny or its Schur complement is not clearly cheaper, else SDPA then CVXOPT: a
+  per-iteration cost model, :func:`lmic.route_rule.ipm_costs`), until one gives a certified
+  point, then the certified enclosure of the optimal value
+  (:func:`lmic.certify.enclosure.enclosure`, from the primal point and the repaired dual).
+  When the enclosure misses :attr:`lmic.options.SolveOptions.gap`, the route escalates to the
+  next interior point (:func:`lmic.route_rule.gap_escalates`: a gap too wide or a primal end
+  missing; at most :data:`MAX_GAP_ESCALATIONS`, within a time cap) and keeps the tightest
+  certified enclosure. A first-order step (``auto:first-order``) whose enclosure does not meet
+  the gap is polished by the interior points. The exact proofs of bounded rays share one
+  budget over the route's backends.
 
 An explicit backend is that backend alone, as before. :func:`describe` gives the one line the
 CLI prints (``route: scs (first-order, n=40) -> certified``), also in the JSON (``route``).
@@ -38,6 +42,13 @@ import numpy as np
 
 from lmic.ir.problem import Problem
 from lmic.outcome import Outcome, rank
+from lmic.route_rule import (
+    GAP_ESCALATION_FACTOR,
+    GAP_ESCALATION_FLOOR_S,
+    MAX_GAP_ESCALATIONS,
+    gap_escalates,
+    ray_proof_s,
+)
 
 __all__ = [
     "RouteResult",
@@ -50,6 +61,10 @@ __all__ = [
     "ENCLOSURE_BUDGET_FACTOR",
     "ENCLOSURE_BUDGET_FLOOR_S",
     "enclosure_budget",
+    "gap_escalates",
+    "MAX_GAP_ESCALATIONS",
+    "GAP_ESCALATION_FACTOR",
+    "GAP_ESCALATION_FLOOR_S",
     "unbounded_outcome",
 ]
 
@@ -160,6 +175,7 @@ def enclosure_of(
     backend: Any,
     options: Any,
     budget_s: float | None = None,
+    target: float | None = None,
 ) -> tuple[dict[str, Any] | None, float]:
     """The certified enclosure of ``problem``'s optimal value from a solution's point and dual.
 
@@ -211,7 +227,19 @@ def enclosure_of(
         solve_s=solve_s,
         budget_s=budget,
     )
-    enc = tighten(problem, enc, x, exact, backend, options, resolve, solve_point, deadline=deadline, solve_s=solve_s)
+    enc = tighten(
+        problem,
+        enc,
+        x,
+        exact,
+        backend,
+        options,
+        resolve,
+        solve_point,
+        deadline=deadline,
+        solve_s=solve_s,
+        target=target,
+    )
     spent = time.perf_counter() - t0
     enc["budget"] = {"seconds": budget, "used": spent, "spent": spent > budget}
     if enc["budget"]["spent"] and enc.get("rel_gap") is None:
@@ -230,8 +258,9 @@ def tighten(
     solve_point: Any,
     deadline: float | None = None,
     solve_s: float = 0.0,
+    target: float | None = None,
 ) -> dict[str, Any]:
-    """A gap above :data:`lmic.certify.enclosure.GAP_TARGET` on an interior-point backend:
+    """A gap above ``target`` (default :data:`lmic.certify.enclosure.GAP_TARGET`) on an interior-point backend:
     re-solves at each of :data:`TIGHT_TOLS` below the solve's tolerance, loosest first, until
     the gap meets the target, and the better proven end of each.
 
@@ -246,9 +275,10 @@ def tighten(
     from lmic.certify.enclosure import GAP_TARGET
     from lmic.options import SolveOptions
 
+    goal = GAP_TARGET if target is None else float(target)
     gap = enc.get("rel_gap")
     label = str(getattr(backend, "name", backend) or "")
-    if (gap is not None and gap <= GAP_TARGET) or "scs" in label.lower():
+    if (gap is not None and gap <= goal) or "scs" in label.lower():
         return enc
     key = "upper" if problem.objective.sense == "min" else "lower"
     if gap is None and enc.get(key) is not None:
@@ -264,7 +294,7 @@ def tighten(
             break  # a tight re-solve (typically slower than the first) would not fit the budget
         tight = replace(options, tol=tol) if options is not None else SolveOptions(tol=tol)
         out = _tighten_once(problem, out, x, exact, backend, tight, resolve, solve_point, deadline, key)
-        if out.get("rel_gap") is not None and out["rel_gap"] <= GAP_TARGET:
+        if out.get("rel_gap") is not None and out["rel_gap"] <= goal:
             break
     return out
 
@@ -342,7 +372,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     RouteResult
     """
     from lmic.options import SolveOptions
-    from lmic.policy import backend_budget, decide, is_auto, route
+    from lmic.policy import RAY_PROOF_BUDGET_S, backend_budget, decide, is_auto, route
 
     options = options or SolveOptions()
     if not is_auto(backend) or problem.objective.sense == "feasibility":
@@ -359,6 +389,8 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     attempts: list[Any] = []
     steps: list[dict[str, Any]] = []
     bounded = 0
+    escalated = 0
+    t_route, first_s = time.perf_counter(), 0.0
     k = -1
     while k + 1 < len(names):
         k += 1
@@ -375,7 +407,11 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
             )
         budget = backend_budget(problem) if budgeted and k < last else None
         t_b = time.perf_counter()
-        out = _unbounded_checked(problem, decide(problem, name, opts, exact=exact, budget_s=budget), options)
+        # the exact proofs of bounded rays share one budget over the route, as in one decide()
+        rays = None if k == 0 else max(0.0, RAY_PROOF_BUDGET_S - ray_proof_s(attempts))
+        out = _unbounded_checked(
+            problem, decide(problem, name, opts, exact=exact, budget_s=budget, ray_budget_s=rays), options
+        )
         if budget is not None and not out.decided and time.perf_counter() - t_b >= budget:
             cut.append(name)  # stopped by its budget: the next backend now; retried at the end
         attempts.extend(out.attempts)
@@ -384,7 +420,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
         enc = None
         holds = out.verdict == "undecided" and getattr(out.certificate, "verdict", None) == "certified"
         if out.verdict == "certified" or holds:
-            enc, t_enc = enclosure_of(problem, out.solution, out.certificate, exact, name, opts)
+            enc, t_enc = enclosure_of(problem, out.solution, out.certificate, exact, name, opts, target=options.gap)
             enc_s += t_enc
             rel = None if enc is None else enc.get("rel_gap")
             step["rel_gap"] = rel
@@ -400,7 +436,15 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
             if rel is not None and rel <= options.gap:
                 break  # the enclosure proves the optimum to the requested gap
             if not first_order:
-                break  # a certified interior-point answer: its enclosure is what can be proved
+                first_s = first_s or (time.perf_counter() - t_route)
+                late = time.perf_counter() - t_route > max(GAP_ESCALATION_FLOOR_S, GAP_ESCALATION_FACTOR * first_s)
+                if escalated >= MAX_GAP_ESCALATIONS or late or not gap_escalates(problem, enc):
+                    break  # a certified interior-point answer: its enclosure is what can be proved
+                # the gap is not met and another interior-point solver may close it (its point
+                # or its dual is more accurate): the next one of the route, first-order ones skipped
+                escalated += 1
+                step["escalate"] = "gap not met"
+                names = names[: k + 1] + [nm for nm in names[k + 1 :] if method_of(nm) != "first-order"]
             continue  # a first-order point whose gap is too wide: polish
         if out.verdict == "infeasible-certified":
             break

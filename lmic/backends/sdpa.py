@@ -28,6 +28,8 @@ from __future__ import annotations
 
 import time
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any, ClassVar
 
 import numpy as np
@@ -62,6 +64,39 @@ def sdpa_data(problem: Problem) -> tuple[sp.csc_matrix, np.ndarray, np.ndarray, 
     parts = [data.A_eq[:, 0].toarray().ravel(), data.A_ge[:, 0].toarray().ravel()]
     c = np.concatenate(parts + [F0.ravel(order="F") for F0 in data.F0])
     return (-M).T.tocsc(), -data.c, c, data
+
+
+@contextmanager
+def _no_error_recomputation(active: bool = True) -> Iterator[None]:
+    """Skip sdpa-python's recomputation of the answer's feasibility errors during a solve.
+
+    After every solve ``sdpap.solve`` recomputes the primal and dual feasibility errors of the
+    converted answer with ARPACK (``scipy.sparse.linalg.eigs``, smallest magnitude): 0.43 of
+    0.93 s on a random ``uncertain_dt.thm1`` with 8 states (profiled), SDPA itself 0.42 s. lmic
+    never reads them (``pinfo``'s ``primalError`` / ``dualError``; the certifier checks the
+    answer), so they are reported as ``None``, as sdpa-python does when ARPACK fails (its
+    ``RuntimeWarning`` about it is silenced by the caller). Not ``active`` (a ``resultFile``
+    asked through ``extra``, whose writer formats them as numbers): computed as usual.
+    """
+    if not active:
+        yield
+        return
+    try:
+        from sdpap import sdpaputils
+    except ImportError:  # pragma: no cover - the backend is unavailable then
+        yield
+        return
+    saved = sdpaputils.get_primalerror, sdpaputils.get_dualerror
+    sdpaputils.get_primalerror = sdpaputils.get_dualerror = _not_recomputed
+    try:
+        yield
+    finally:
+        sdpaputils.get_primalerror, sdpaputils.get_dualerror = saved
+
+
+def _not_recomputed(*args: Any, **kwargs: Any) -> None:
+    """sdpa-python's feasibility error, not recomputed (:func:`_no_error_recomputation`)."""
+    return None
 
 
 class SDPABackend(Backend):
@@ -105,7 +140,11 @@ class SDPABackend(Backend):
         K = sdpap.SymCone(f=len(data.eq), l=len(data.ge), s=tuple(data.dims))
         J = sdpap.SymCone(f=problem.n)
         t0 = time.perf_counter()
-        with quiet_native(settings.get("print") == "no"), warnings.catch_warnings():
+        with (
+            quiet_native(settings.get("print") == "no"),
+            warnings.catch_warnings(),
+            _no_error_recomputation(not settings.get("resultFile")),
+        ):
             # sdpa-python recomputes feasibility errors with scipy eigs and warns on tiny blocks
             warnings.simplefilter("ignore", RuntimeWarning)
             xi, y, _pinfo, _tinfo, info = sdpap.solve(A, b, c, K, J, dict(settings))

@@ -14,6 +14,7 @@ import scipy.sparse as sp
 from certify_helpers import hinf_norm
 
 import lmic.api
+from lmic import policy
 from lmic.backends import auto
 from lmic.certify import certify
 from lmic.errors import BackendError, LmicError
@@ -42,19 +43,24 @@ def test_tiny_strict_feasibility_takes_clarabel_larger_takes_the_first_order_rou
 
 
 def test_optimisation_route_picks_the_interior_point_method_by_shape():
-    # small: Clarabel
-    assert route(_shape([10, 14], 20, "min", strict=False))[0] == "clarabel"
-    # few variables against the PSD cone dimension (sum d(d+1)/2 = 1830): CVXOPT, SDPA last
+    # tiny: Clarabel, the embedded default solver
+    tiny = _shape([10, 14], 20, "min", strict=False)
+    assert policy.ipm_costs(tiny)[0] <= policy.TINY_IPM_COST and route(tiny)[0] == "clarabel"
+    # few variables against large PSD blocks: the Schur complement is far cheaper (SDPA, CVXOPT)
     few = _shape([60], 100, "min", strict=False)
-    assert auto.schur_complement_shape(few)
+    clarabel, schur = policy.ipm_costs(few)
+    assert policy.SCHUR_PENALTY * schur < clarabel
     r = route(few)
-    assert r[0] == "cvxopt" and r.index("sdpa") > r.index("clarabel")
-    # many variables against it (55 < 300): Clarabel first
+    assert r[:3] == ["sdpa", "cvxopt", "clarabel"]
+    # many variables against the blocks: Clarabel first, then the Schur-complement methods
     many = _shape([10], 300, "min", strict=False)
-    assert not auto.schur_complement_shape(many) and route(many)[0] == "clarabel"
+    clarabel, schur = policy.ipm_costs(many)
+    assert policy.SCHUR_PENALTY * schur >= clarabel and route(many)[:3] == ["clarabel", "cvxopt", "sdpa"]
     # the first-order variant starts with SCS; the interior-point variant never does
-    assert route(few, "auto:first-order")[:2] == ["scs", "cvxopt"]
-    assert route(few, "auto:interior-point")[0] == "cvxopt"
+    assert route(few, "auto:first-order")[:2] == ["scs", "sdpa"]
+    assert route(few, "auto:interior-point")[0] == "sdpa"
+    # feasibility problems keep their own rule (lmic.backends.auto.route)
+    assert route(_shape([60], 100))[0] == auto.route(_shape([60], 100))[0]
 
 
 def test_unknown_auto_variant_and_explicit_backend():
@@ -95,15 +101,18 @@ def test_default_route_small_brl_certifies_and_encloses_the_hinf_norm(seed):
 
 
 @pytest.mark.parametrize("variant", ["auto", "auto:first-order"])
-def test_default_route_above_the_small_size_polishes_with_the_schur_complement_method(monkeypatch, variant):
-    # the size threshold is a measured parameter: lowering it exercises the large-problem route
+def test_default_route_with_the_schur_complement_order(monkeypatch, variant):
+    # the crossover is a measured parameter: no penalty puts the Schur-complement methods first
     # on an instance that solves in well under a second
-    monkeypatch.setattr(auto, "SMALL", 10)
+    import lmic.route_rule
+
+    monkeypatch.setattr(lmic.route_rule, "TINY_IPM_COST", 0.0)
+    monkeypatch.setattr(lmic.route_rule, "SCHUR_PENALTY", 0.0)
     system, (lo, hi) = _brl(5, 3)
     r = lmic.api.solve("tutorial.bounded_real", system, backend=variant)
     _check_enclosure(r, lo, hi)
     steps = [s["backend"] for s in r.route["steps"]]
-    assert steps[0] == ("scs" if variant == "auto:first-order" else "cvxopt")
+    assert steps[0] == ("scs" if variant == "auto:first-order" else "sdpa")
     if variant == "auto:first-order":
         gap = r.route["steps"][0].get("rel_gap")
         # the first-order step stops the route only when its proven gap meets --gap
@@ -113,13 +122,13 @@ def test_default_route_above_the_small_size_polishes_with_the_schur_complement_m
 def test_first_order_optimisation_step_that_fails_escalates(monkeypatch):
     import lmic.routes
 
-    monkeypatch.setattr(auto, "SMALL", 10)
     monkeypatch.setattr(lmic.routes, "OPTIMISATION_FIRST_ORDER_ITERS", 1)  # SCS cannot converge
     system, (lo, hi) = _brl(5, 4)
     r = lmic.api.solve("tutorial.bounded_real", system, backend="auto:first-order")
     _check_enclosure(r, lo, hi)
     assert r.route["steps"][0]["backend"] == "scs" and r.route["steps"][0]["verdict"] != "certified"
-    assert r.backend == "cvxopt"
+    chain = policy.optimisation_chain(r.problem, False)
+    assert r.route["steps"][1]["backend"] == chain[0] and r.backend in chain
 
 
 def test_feasibility_first_order_failure_escalates_to_an_interior_point_method():

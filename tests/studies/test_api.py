@@ -66,7 +66,10 @@ def test_auto_route_by_size():
 
 
 def test_auto_falls_back_when_the_certificate_fails(monkeypatch):
-    monkeypatch.setattr(auto, "route", lambda problem: ["scs", "clarabel"])
+    import lmic.policy
+
+    # an optimisation problem: the default route's order is lmic.route_rule.optimisation_chain
+    monkeypatch.setattr(lmic.policy, "optimisation_chain", lambda problem, first_order=None: ["scs", "clarabel"])
     from lmic.backends.base import SolveOptions
 
     # SCS stopped after 5 iterations cannot be certified; Clarabel then is

@@ -1,0 +1,133 @@
+"""The interior-point order of the default route for optimisation problems, by shape and size.
+
+A per-iteration cost model (:func:`ipm_costs`) of the two interior-point families decides
+which goes first (:func:`optimisation_chain`); :func:`lmic.policy.route` uses it for every
+optimisation problem on the default route, :mod:`lmic.routes` adds the ``--gap`` test and the
+escalation. Measured numbers: ``benchmarks/optimisation.py``, docs/backends.md.
+
+Examples
+--------
+>>> import numpy as np
+>>> from lmic.testing.conformance import lyapunov_problem
+>>> optimisation_chain(lyapunov_problem(-np.eye(2)))
+['clarabel', 'cvxopt', 'sdpa']
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from lmic.ir.problem import Problem
+
+__all__ = [
+    "TINY_IPM_COST",
+    "SCHUR_PENALTY",
+    "ipm_costs",
+    "optimisation_chain",
+    "MAX_GAP_ESCALATIONS",
+    "GAP_ESCALATION_FACTOR",
+    "GAP_ESCALATION_FLOOR_S",
+    "gap_escalates",
+    "ray_proof_s",
+]
+
+#: per-iteration cost (flop estimate of :func:`ipm_costs`) below which an optimisation problem
+#: is tiny: Clarabel, the embedded default solver (the most accurate), whatever the shape; a
+#: 10-state bounded-real lemma (2.5e6) takes 10-70 ms on every interior-point backend
+TINY_IPM_COST = 1e7
+#: a Schur-complement method (SDPA, CVXOPT) goes first when its cost estimate times this is
+#: below Clarabel's: their measured rate is lower (bounded-real lemma n = 40, 821 variables:
+#: estimates 3.4e9 Clarabel, 3.1e9 Schur; Clarabel 0.15 s, CVXOPT 0.38 s, SDPA 0.12 s per
+#: iteration; ``uncertain_dt.thm1`` n = 8, 91 variables: 5.5e9 against 6e7; Clarabel 0.19 s,
+#: CVXOPT 0.05 s, SDPA 0.02 s per iteration; docs/backends.md)
+SCHUR_PENALTY = 2.5
+
+
+def ipm_costs(problem: Problem) -> tuple[float, float]:
+    """Per-iteration flop estimates ``(clarabel, schur)`` of the two interior-point families.
+
+    Clarabel factors a sparse KKT system holding one dense block of order ``s_i = d_i (d_i +
+    1) / 2`` per LMI (:mod:`lmic.backends.clarabel`): about ``sum s_i^3 + n sum s_i^2 + n^3``.
+    A Schur-complement method (SDPA, CVXOPT) forms and factors an ``n x n`` matrix with one
+    product per pair of variables and block: about ``n^2 sum d_i^2 + n sum d_i^3 + n^3``.
+
+    >>> import numpy as np
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> c, s = ipm_costs(lyapunov_problem(-np.eye(2)))
+    >>> c > 0 and s > 0
+    True
+    """
+    n = float(problem.n)
+    dims = [float(lmi.dim) for lmi in problem.lmis]
+    cones = [d * (d + 1) / 2 for d in dims] + [1.0] * len(problem.linear)
+    clarabel = sum(s**3 for s in cones) + n * sum(s**2 for s in cones) + n**3
+    schur = n**2 * (sum(d**2 for d in dims) + len(problem.linear)) + n * sum(d**3 for d in dims) + n**3
+    return clarabel, schur
+
+
+def optimisation_chain(problem: Problem, first_order: bool | None = None) -> list[str]:
+    """The interior-point order of the default route for an optimisation problem.
+
+    Tiny problems (:data:`TINY_IPM_COST`) and problems whose Schur complement is not clearly
+    cheaper (:data:`SCHUR_PENALTY`, :func:`ipm_costs`): Clarabel, CVXOPT, SDPA; otherwise
+    (few variables against large PSD blocks) SDPA, CVXOPT, Clarabel. ``first_order`` puts SCS
+    first (``auto:first-order``; ``None``: :data:`lmic.backends.auto.FIRST_ORDER_OPTIMISATION`).
+
+    >>> import numpy as np
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> optimisation_chain(lyapunov_problem(-np.eye(2)))
+    ['clarabel', 'cvxopt', 'sdpa']
+    """
+    from lmic.backends import auto
+
+    clarabel, schur = ipm_costs(problem)
+    if clarabel <= TINY_IPM_COST or SCHUR_PENALTY * schur >= clarabel:
+        ipm = ["clarabel", "cvxopt", "sdpa"]
+    else:
+        ipm = ["sdpa", "cvxopt", "clarabel"]
+    fo = auto.FIRST_ORDER_OPTIMISATION if first_order is None else first_order
+    return (["scs"] if fo else []) + ipm
+
+
+#: interior-point backends a route tries after the first certified one, when its enclosure
+#: does not meet ``--gap`` (:func:`gap_escalates`)
+MAX_GAP_ESCALATIONS = 2
+#: ... and only while the route has run less than ``max(FLOOR, FACTOR x)`` the time to its
+#: first certified interior-point answer and its enclosure (each escalation pays a solve and an
+#: enclosure; on a random 8-state bounded-real lemma without the exact face the three
+#: enclosures took 10 s and closed the gap from 6e-2 to 1.2e-4)
+GAP_ESCALATION_FACTOR = 2.0
+GAP_ESCALATION_FLOOR_S = 20.0
+
+
+def ray_proof_s(attempts: list[Any]) -> float:
+    """Seconds the attempts spent in exact proofs of bounded rays (their certification time).
+
+    >>> from lmic.outcome import Attempt
+    >>> a = Attempt("sdpa", "default", "infeasible", "", "infeasible-bounded", 9.0, "exact proof of the ray failed")
+    >>> a.certify_s = 8.5
+    >>> ray_proof_s([a])
+    8.5
+    """
+    return float(sum(a.certify_s for a in attempts if "exact proof of the ray" in (a.note or "")))
+
+
+def gap_escalates(problem: Problem, enc: dict[str, Any] | None) -> bool:
+    """Whether another interior-point solver may close an enclosure's gap: both ends proven but
+    too far apart (the solver's accuracy), or the dual end proven and the primal end not (its
+    point is not provably feasible). Not when the dual end is missing: the dual search has
+    tried its perturbed and centred re-solves, and a missing dual end is the dual's structure
+    (a dual interior thinner than the rounding, the bounded-real lemma's), not one solver's.
+
+    >>> from lmic.testing.conformance import CASES
+    >>> p = CASES["max_sense"].build()
+    >>> gap_escalates(p, {"lower": 1.0, "upper": 2.0, "rel_gap": 0.6}), gap_escalates(p, None)
+    (True, False)
+    """
+    if enc is None:
+        return False
+    if enc.get("rel_gap") is not None:
+        return True
+    dual_end = "lower" if problem.objective.sense == "min" else "upper"
+    primal_end = "upper" if dual_end == "lower" else "lower"
+    return enc.get(dual_end) is not None and enc.get(primal_end) is None
