@@ -1,0 +1,494 @@
+"""The exact algebra of facial reduction (:mod:`lmic.certify.enclosure_facial`): exposing
+certificates verified in rational arithmetic, the reduced problem and its lineality.
+
+Everything here is exact (python-flint integers, python fractions; the IR's float coefficients
+are dyadic rationals): :func:`exact_step` turns the solver's exposing direction into an exact
+certificate, :func:`verify_step` checks one, :func:`reduce_problem` builds the reduced problem
+(``V_i^T F_i(x) V_i >= 0``, the rows with ``a_r . d > 0`` removed) and fixes the variables
+along its exact lineality space (:func:`lineality`, :func:`fix_lineality`: after a reduction
+the exposing direction itself changes nothing in the reduced problem, so its dual equality
+rows are dependent; fixing ``x_P = 0`` on a complement of that space keeps the optimal value
+and makes them independent).
+
+Examples
+--------
+>>> import numpy as np, scipy.sparse as sp
+>>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+>>> # inf x1 s.t. [[x1, 1], [1, x2]] >= 0 is 0 (not attained); every dual Z is [[1, 0], [0, 0]]
+>>> C = sp.csc_matrix(np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]))
+>>> p = Problem([Variable("x", "full", (2, 1))], [LMI("M", 2, C, strict=False)],
+...             LinearConstraints.empty(2), Objective("min", [0.0, 1.0, 0.0]))
+>>> st = exact_step(p, np.array([1e-12, 1.0]))  # the solver's d ~ (0, 1): W = [[0, 0], [0, 1]]
+>>> st["ok"], st["d"], st["V"][0]
+(True, ['0', '1'], [['1'], ['0']])
+>>> red = reduce_v(p, st)  # x1 >= 0
+>>> [lmi.dim for lmi in red.lmis], red.lmis[0].coeffs.toarray().tolist()
+([1], [[0.0, 1.0, 0.0]])
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from lmic.certify.enclosure_repair import _target
+from lmic.errors import CertificateError
+from lmic.ir.problem import LMI, LinearConstraints, Problem
+from lmic.ir.svec import tril_rows_cols, tril_unvec
+
+__all__ = [
+    "NULL_TOL",
+    "DENOMINATORS",
+    "exact_step",
+    "verify_step",
+    "reduce_problem",
+    "reduce_v",
+    "lineality",
+    "fix_lineality",
+]
+
+#: an eigenvalue of ``W_i`` below this times its largest is read as zero (the null space)
+NULL_TOL = 1e-6
+#: denominators tried when rationalising the null space basis (smallest first)
+DENOMINATORS = (64, 10_000, 1_000_000)
+
+
+def _fr(v: float) -> Fraction:
+    return Fraction(float(v))
+
+
+def _dyadic(tril: np.ndarray, dim: int) -> tuple[Any, int]:
+    """The symmetric matrix of the tril vector ``tril`` (floats) as ``(N, e)``: ``N / 2^e``
+    exactly, ``N`` a flint integer matrix."""
+    from lmic.certify.psd import load_flint
+
+    flint = load_flint()
+    F = tril_unvec(np.asarray(tril, dtype=float), dim)
+    nz = F[F != 0]
+    e = max((int(v).bit_length() - 1 for v in (abs(x.as_integer_ratio()[1]) for x in nz.tolist())), default=0)
+    return flint.fmpz_mat(dim, dim, [int(Fraction(float(v)) * (1 << e)) for v in F.ravel()]), e
+
+
+def _block_exact(lmi: LMI, d: list[int]) -> list[list[Fraction]]:
+    """``W = sum_k d_k F^(k)`` of one LMI, exactly (``d`` integers)."""
+    C = sp.csr_matrix(lmi.coeffs)
+    i, j = tril_rows_cols(lmi.dim)
+    W = [[Fraction(0)] * lmi.dim for _ in range(lmi.dim)]
+    for t in range(C.shape[0]):
+        s = Fraction(0)
+        for col, v in zip(C.indices[C.indptr[t] : C.indptr[t + 1]], C.data[C.indptr[t] : C.indptr[t + 1]], strict=True):
+            if col and d[col - 1]:
+                s += _fr(v) * d[col - 1]
+        W[i[t]][j[t]] = W[j[t]][i[t]] = s
+    return W
+
+
+def _int_rows(rows: list[list[Fraction]]) -> list[list[int]]:
+    """Each row times the lcm of its denominators (same null space)."""
+    out = []
+    for r in rows:
+        den = 1
+        for f in r:
+            den = den * f.denominator // math.gcd(den, f.denominator)
+        out.append([int(f * den) for f in r])
+    return out
+
+
+def _pivots(V: list[list[int]]) -> list[int] | None:
+    """Rows ``P`` of the integer matrix ``V`` (``d x r``) with ``V[P]`` invertible, or ``None``
+    when ``V`` has rank below ``r``."""
+    from lmic.certify.psd import load_flint
+
+    flint = load_flint()
+    d = len(V)
+    r = len(V[0]) if d else 0
+    if r == 0:
+        return []
+    R, rank = flint.fmpq_mat(r, d, [V[a][b] for b in range(r) for a in range(d)]).rref()
+    if rank != r:
+        return None
+    piv = []
+    for row in range(r):
+        for col in range(d):
+            if R[row, col] != 0:
+                piv.append(col)
+                break
+    return piv
+
+
+def verify_step(problem: Problem, step: dict[str, Any]) -> dict[str, Any]:
+    """Verify one exposing certificate exactly (module docstring, step 2).
+
+    ``step``: ``d`` (integers, decimal strings), ``V`` (per LMI an integer ``dim x r`` basis, as
+    lists of decimal strings), ``drop`` (indices of the ``ge`` rows with ``a_r . d > 0``).
+    Returns ``ok`` and ``reason``.
+
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> C = sp.csc_matrix(np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]))
+    >>> p = Problem([Variable("x", "full", (2, 1))], [LMI("M", 2, C, strict=False)],
+    ...             LinearConstraints.empty(2), Objective("min", [0.0, 1.0, 0.0]))
+    >>> good = {"d": ["0", "1"], "V": [[["1"], ["0"]]], "drop": []}
+    >>> verify_step(p, good)["ok"], verify_step(p, dict(good, d=["1", "1"]))["ok"]
+    (True, False)
+    """
+    from lmic.certify.psd import prove_pd
+
+    try:
+        d = [int(v) for v in step["d"]]
+        Vs = [[[int(v) for v in row] for row in V] for V in step["V"]]
+        drop = sorted({int(r) for r in step.get("drop", [])})
+    except (KeyError, TypeError, ValueError) as exc:
+        return {"ok": False, "reason": f"unusable exposing certificate: {exc}"}
+    n = problem.n
+    if len(d) != n or len(Vs) != len(problem.lmis):
+        return {"ok": False, "reason": "the exposing certificate does not match the problem's size"}
+    _, q = _target(problem)
+    if sum((_fr(q[k + 1]) * d[k] for k in range(n)), Fraction(0)) != 0:
+        return {"ok": False, "reason": "q . d is not exactly 0"}
+    A = sp.csr_matrix(problem.linear.A) if len(problem.linear) else None
+    nonzero = False
+    for r, kind in enumerate(problem.linear.kinds):
+        assert A is not None
+        lo, hi = A.indptr[r], A.indptr[r + 1]
+        s = sum((_fr(v) * d[c - 1] for c, v in zip(A.indices[lo:hi], A.data[lo:hi], strict=True) if c), Fraction(0))
+        if (kind == "eq" and s != 0) or (kind == "ge" and s < 0) or ((r in drop) != (s > 0)):
+            return {"ok": False, "reason": f"row '{problem.linear.names[r]}': a . d = {s} breaks the certificate"}
+        nonzero = nonzero or s > 0
+    for lmi, V in zip(problem.lmis, Vs, strict=True):
+        W = _block_exact(lmi, d)
+        dim = lmi.dim
+        if len(V) != dim or any(len(row) != (len(V[0]) if V else 0) for row in V):
+            return {"ok": False, "reason": f"V of '{lmi.name}' has the wrong shape"}
+        r = len(V[0]) if V else 0
+        piv = _pivots(V) if r else []
+        if piv is None:
+            return {"ok": False, "reason": f"V of '{lmi.name}' is rank deficient"}
+        for a in range(dim):
+            for c in range(r):
+                if sum((W[a][b] * V[b][c] for b in range(dim) if V[b][c]), Fraction(0)) != 0:
+                    return {"ok": False, "reason": f"W V != 0 on '{lmi.name}'"}
+        rest = [a for a in range(dim) if a not in set(piv)]
+        if rest:
+            # one common scale for the whole block (row scaling alone would break symmetry)
+            den = 1
+            for a in rest:
+                for b in rest:
+                    den = den * W[a][b].denominator // math.gcd(den, W[a][b].denominator)
+            sub = [[int(W[a][b] * den) for b in rest] for a in rest]
+            pr = prove_pd(sub)
+            if not pr["proven"]:
+                return {"ok": False, "reason": f"W of '{lmi.name}' is not proved PSD with null space span V"}
+            nonzero = True
+    if not nonzero:
+        return {"ok": False, "reason": "the exposing certificate is zero"}
+    return {"ok": True, "reason": "exposing certificate verified exactly"}
+
+
+def _nullspace_int(rows: list[list[Fraction]], n: int) -> list[list[int]]:
+    """An integer basis (columns, as a list of column vectors) of ``{d : rows d = 0}``."""
+    from lmic.certify.psd import load_flint
+
+    flint = load_flint()
+    if not rows:
+        return [[int(i == j) for i in range(n)] for j in range(n)]
+    M = _int_rows(rows)
+    X, nullity = flint.fmpz_mat(len(M), n, [v for r in M for v in r]).nullspace()
+    return [[int(X[i, j]) for i in range(n)] for j in range(int(nullity))]
+
+
+def _rational_basis(N: np.ndarray, den: int) -> tuple[list[list[Fraction]], list[int]] | None:
+    """``N`` (``dim x r``, a numerical null space basis) as ``N N[P]^-1`` (the identity on the
+    pivot rows ``P``), entries rounded to fractions of denominator at most ``den``."""
+    import scipy.linalg as sla
+
+    dim, r = N.shape
+    _, _, piv = sla.qr(N.T, pivoting=True)
+    P = sorted(int(p) for p in piv[:r])
+    B = N @ np.linalg.inv(N[P])
+    out = [[Fraction(0)] * r for _ in range(dim)]
+    for a in range(dim):
+        for c in range(r):
+            f = Fraction(float(B[a, c])).limit_denominator(den)
+            if abs(float(f) - B[a, c]) > 1e-5 * max(1.0, abs(B[a, c])):
+                return None
+            out[a][c] = f
+    for c, p in enumerate(P):
+        for a in P:
+            out[a][c] = Fraction(int(a == p))
+    return out, P
+
+
+def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
+    """An exact exposing certificate near the solver's direction ``d_float`` (step 1 of the
+    module docstring), verified by :func:`verify_step`. Returns ``ok``, ``reason`` and, when
+    ``ok``, ``d``, ``V`` and ``drop`` (the record of :func:`verify_step`)."""
+    from lmic.certify.psd import load_flint
+
+    flint = load_flint()
+    n = problem.n
+    dfl = np.asarray(d_float, dtype=float).ravel()
+    if dfl.size != n:
+        return {"ok": False, "reason": f"the exposing direction has {dfl.size} entries, not {n}"}
+    _, q = _target(problem)
+    scale = float(np.max(np.abs(dfl), initial=0.0))
+    if not scale > 0 or not np.all(np.isfinite(dfl)):
+        return {"ok": False, "reason": "the exposing direction is zero or not finite"}
+    dfl = dfl / scale
+    last = "no exact exposing direction found"
+    for den in DENOMINATORS:
+        eqs: list[list[Fraction]] = []
+        bases: list[tuple[list[list[Fraction]], list[int]]] = []
+        ok = True
+        for lmi in problem.lmis:
+            C = sp.csc_matrix(lmi.coeffs)
+            W = tril_unvec(np.asarray(C[:, 1:] @ dfl).ravel(), lmi.dim)
+            w, U = np.linalg.eigh(0.5 * (W + W.T))
+            top = float(np.max(np.abs(w), initial=0.0))
+            null = w <= NULL_TOL * top if top > 0 else np.ones(lmi.dim, bool)
+            if not null.any():
+                bases.append(([], []))
+                continue
+            rb = _rational_basis(U[:, null], den)
+            if rb is None:
+                ok = False
+                last = f"the null space of W[{lmi.name}] has no basis of denominators <= {den}"
+                break
+            bases.append(rb)
+            B = rb[0]
+            r = len(B[0])
+            Bi = _int_rows([list(col) for col in zip(*B, strict=True)])  # columns scaled to integers
+            Bm = flint.fmpz_mat(lmi.dim, r, [Bi[c][a] for a in range(lmi.dim) for c in range(r)])
+            # (W(d) B)[a, c] = sum_k d_k (F^(k) B)[a, c] = 0, every column k scaled by 2^(E - e_k)
+            prods = {}
+            for k in range(n):
+                if C[:, 1 + k].nnz:
+                    Fi, e = _dyadic(C[:, 1 + k].toarray().ravel(), lmi.dim)
+                    prods[k] = (Fi * Bm, e)
+            E = max((e for _, e in prods.values()), default=0)
+            for a in range(lmi.dim):
+                for c in range(r):
+                    row = [0] * n
+                    for k, (Mk, e) in prods.items():
+                        row[k] = int(Mk[a, c]) << (E - e)
+                    if any(row):
+                        eqs.append([Fraction(v) for v in row])
+        if not ok:
+            continue
+        eqs.append([_fr(v) for v in q[1:]])
+        A = sp.csr_matrix(problem.linear.A) if len(problem.linear) else None
+        for r, kind in enumerate(problem.linear.kinds):
+            assert A is not None
+            a = A[r].toarray().ravel()[1:]
+            if kind == "eq" or abs(float(a @ dfl)) <= NULL_TOL * max(1.0, float(np.abs(a).sum())):
+                eqs.append([_fr(v) for v in a])
+        basis = _nullspace_int(eqs, n)
+        if not basis:
+            last = f"the exact conditions leave no exposing direction (denominators <= {den})"
+            continue
+        X = np.array([[float(v) for v in col] for col in basis]).T
+        norms = np.linalg.norm(X, axis=0)
+        alpha = np.linalg.lstsq(X / norms, dfl, rcond=None)[0] / norms
+        al = [Fraction(float(v)) for v in alpha]
+        dq = [sum((al[j] * basis[j][k] for j in range(len(basis))), Fraction(0)) for k in range(n)]
+        L = 1
+        for f in dq:
+            L = L * f.denominator // math.gcd(L, f.denominator)
+        g = 0
+        dint = [int(f * L) for f in dq]
+        for v in dint:
+            g = math.gcd(g, v)
+        dint = [v // g for v in dint] if g else dint
+        Vs: list[list[list[str]]] = []
+        for (B, _P), lmi in zip(bases, problem.lmis, strict=True):
+            if not B:
+                Vs.append([[] for _ in range(lmi.dim)] if lmi.dim else [])
+                continue
+            Bi = _int_rows([list(col) for col in zip(*B, strict=True)])  # columns scaled to integers
+            Vs.append([[str(Bi[c][a]) for c in range(len(Bi))] for a in range(lmi.dim)])
+        drop = []
+        if len(problem.linear):
+            Af = sp.csr_matrix(problem.linear.A)
+            for r, kind in enumerate(problem.linear.kinds):
+                lo, hi = Af.indptr[r], Af.indptr[r + 1]
+                s = sum(
+                    (_fr(v) * dint[c - 1] for c, v in zip(Af.indices[lo:hi], Af.data[lo:hi], strict=True) if c),
+                    Fraction(0),
+                )
+                if kind == "ge" and s > 0:
+                    drop.append(r)
+        step = {"d": [str(v) for v in dint], "V": Vs, "drop": drop}
+        chk = verify_step(problem, step)
+        if chk["ok"]:
+            return dict(step, ok=True, reason=chk["reason"])
+        last = f"denominators <= {den}: {chk['reason']}"
+    return {"ok": False, "reason": last}
+
+
+def reduce_problem(problem: Problem, step: dict[str, Any]) -> Problem:
+    """The reduced problem of a verified step (module docstring, step 3): LMIs ``V_i^T F_i(x)
+    V_i >= 0``, the rows of ``step["drop"]`` removed, and the variables ``x_p = 0`` (``p`` in
+    ``step["fix"]``) fixed along its lineality directions ``step["lineality"]`` (checked exactly:
+    :func:`fix_lineality`). Raises :class:`CertificateError` when a reduced coefficient is not
+    exactly a float or a lineality direction does not hold.
+
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> C = sp.csc_matrix(np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]))
+    >>> p = Problem([Variable("x", "full", (2, 1))], [LMI("M", 2, C, strict=False)],
+    ...             LinearConstraints.empty(2), Objective("min", [0.0, 1.0, 0.0]))
+    >>> r = reduce_problem(p, {"d": ["0", "1"], "V": [[["1"], ["0"]]], "drop": [], "lineality": [["0", "1"]],
+    ...                        "fix": [1]})
+    >>> r.linear.A.toarray().tolist(), r.linear.kinds
+    ([[0.0, 0.0, 1.0]], ['eq'])
+    """
+    red = reduce_v(problem, step)
+    return fix_lineality(red, step.get("lineality", []), step.get("fix", []))
+
+
+def lineality(problem: Problem) -> tuple[list[list[str]], list[int]]:
+    """An exact integer basis ``l_j`` of the lineality space ``{d : F_i^(k)-combination 0 on
+    every LMI, a_r . d = 0 on every row, q . d = 0}`` (moving ``x`` along it changes nothing) and
+    variables ``P`` with ``[l_j]_P`` invertible: fixing ``x_P = 0`` loses no value.
+
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("x", "full", (2, 1))], [LMI("M", 1, sp.csc_matrix([[0.0, 1.0, 0.0]]), strict=False)],
+    ...             LinearConstraints.empty(2), Objective("min", [0.0, 1.0, 0.0]))
+    >>> basis, fix = lineality(p)
+    >>> [abs(int(v)) for v in basis[0]], fix
+    ([0, 1], [1])
+    """
+    from lmic.certify.psd import load_flint
+
+    flint = load_flint()
+    n = problem.n
+    rows: list[list[int]] = []
+    for lmi in problem.lmis:
+        C = sp.csr_matrix(lmi.coeffs)
+        for t in range(C.shape[0]):
+            lo, hi = C.indptr[t], C.indptr[t + 1]
+            ent = {int(c) - 1: _fr(v) for c, v in zip(C.indices[lo:hi], C.data[lo:hi], strict=True) if c}
+            if ent:
+                rows.append(_int_rows([[ent.get(k, Fraction(0)) for k in range(n)]])[0])
+    A = sp.csr_matrix(problem.linear.A) if len(problem.linear) else sp.csr_matrix((0, 1 + n))
+    _, q = _target(problem)
+    for a in [A[r].toarray().ravel()[1:] for r in range(A.shape[0])] + [np.asarray(q[1:], dtype=float)]:
+        if np.any(a):
+            rows.append(_int_rows([[_fr(v) for v in a]])[0])
+    if rows:
+        X, nullity = flint.fmpz_mat(len(rows), n, [v for r in rows for v in r]).nullspace()
+        basis = [[int(X[i, j]) for i in range(n)] for j in range(int(nullity))]
+    else:
+        basis = [[int(i == j) for i in range(n)] for j in range(n)]
+    if not basis:
+        return [], []
+    piv = _pivots([list(r) for r in zip(*basis, strict=True)])
+    assert piv is not None  # a nullspace basis has full rank
+    return [[str(v) for v in b] for b in basis], piv
+
+
+def fix_lineality(problem: Problem, basis: list[list[str]], fix: list[int]) -> Problem:
+    """``problem`` with rows ``x_p = 0`` (``p`` in ``fix``), after checking exactly that every
+    ``l`` of ``basis`` is a lineality direction (changes no LMI, row or objective) and that
+    ``[l_j]_fix`` is invertible, so that every ``x`` has a point with ``x_fix = 0`` of the same
+    constraint values and objective: the optimal value is unchanged.
+
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("x", "full", (2, 1))], [LMI("M", 1, sp.csc_matrix([[0.0, 1.0, 0.0]]), strict=False)],
+    ...             LinearConstraints.empty(2), Objective("min", [0.0, 1.0, 0.0]))
+    >>> fix_lineality(p, [["0", "1"]], [1]).linear.kinds
+    ['eq']
+    >>> fix_lineality(p, [["1", "1"]], [1])
+    Traceback (most recent call last):
+    lmic.errors.CertificateError: lineality direction 1 is not exact
+    """
+    n = problem.n
+    try:
+        L = [[int(v) for v in b] for b in basis]
+        P = [int(p) for p in fix]
+    except (TypeError, ValueError) as exc:
+        raise CertificateError(f"unusable lineality record: {exc}") from exc
+    if len(L) != len(P) or any(len(b) != n for b in L) or any(not 0 <= p < n for p in P) or len(set(P)) != len(P):
+        raise CertificateError("the lineality record does not match the problem")
+    if not L:
+        return problem
+    _, q = _target(problem)
+    A = sp.csr_matrix(problem.linear.A) if len(problem.linear) else sp.csr_matrix((0, 1 + n))
+    mats = [sp.csr_matrix(lmi.coeffs) for lmi in problem.lmis] + [A]
+    for j, ell in enumerate(L):
+        for M in mats:
+            for t in range(M.shape[0]):
+                lo, hi = M.indptr[t], M.indptr[t + 1]
+                if sum(
+                    (_fr(v) * ell[c - 1] for c, v in zip(M.indices[lo:hi], M.data[lo:hi], strict=True) if c),
+                    Fraction(0),
+                ):
+                    raise CertificateError(f"lineality direction {j + 1} is not exact")
+        if sum((_fr(q[k + 1]) * ell[k] for k in range(n)), Fraction(0)) != 0:
+            raise CertificateError(f"lineality direction {j + 1} is not exact")
+    from lmic.certify.psd import load_flint
+
+    flint = load_flint()
+    if flint.fmpz_mat(len(P), len(P), [L[j][p] for p in P for j in range(len(L))]).det() == 0:
+        raise CertificateError("the fixed variables do not complement the lineality space")
+    rows = sp.csr_matrix(([1.0] * len(P), (list(range(len(P))), [1 + p for p in P])), shape=(len(P), 1 + n))
+    lin = problem.linear
+    new = LinearConstraints(
+        sp.vstack([A, rows]).tocsr(),
+        list(lin.kinds) + ["eq"] * len(P),
+        list(lin.strict) + [False] * len(P),
+        list(lin.names) + [f"x[{p}] = 0 (lineality)" for p in P],
+    )
+    return dataclasses.replace(problem, linear=new)
+
+
+def reduce_v(problem: Problem, step: dict[str, Any]) -> Problem:
+    """:func:`reduce_problem` without the lineality rows."""
+    from lmic.certify.psd import load_flint
+
+    flint = load_flint()
+    n = problem.n
+    lmis = []
+    for lmi, Vraw in zip(problem.lmis, step["V"], strict=True):
+        V = [[int(v) for v in row] for row in Vraw]
+        r = len(V[0]) if V else 0
+        if r == 0:
+            continue
+        Vm = flint.fmpz_mat(lmi.dim, r, [v for row in V for v in row])
+        C = sp.csc_matrix(lmi.coeffs)
+        ri, ci = tril_rows_cols(r)
+        vals, rows_, cols_ = [], [], []
+        for k in range(1 + n):
+            col = C[:, k]
+            if not col.nnz:
+                continue
+            Fi, e = _dyadic(col.toarray().ravel(), lmi.dim)
+            R = Vm.transpose() * Fi * Vm
+            for t in range(ri.size):
+                m = int(R[int(ri[t]), int(ci[t])])
+                if m:
+                    f = Fraction(m, 1 << e)
+                    fl = float(f)
+                    if Fraction(fl) != f:
+                        raise CertificateError(f"the reduced coefficient of '{lmi.name}' is not exactly a float")
+                    vals.append(fl)
+                    rows_.append(t)
+                    cols_.append(k)
+        coeffs = sp.csc_matrix((vals, (rows_, cols_)), shape=(ri.size, 1 + n))
+        lmis.append(LMI(f"V^T {lmi.name} V", r, coeffs, strict=lmi.strict, relation=lmi.relation))
+    drop = set(int(r) for r in step.get("drop", []))
+    keep = [r for r in range(len(problem.linear)) if r not in drop]
+    lin = problem.linear
+    if len(lin):
+        A = sp.csr_matrix(lin.A)[keep] if keep else sp.csr_matrix((0, 1 + n))
+        lin = LinearConstraints(
+            A, [lin.kinds[r] for r in keep], [lin.strict[r] for r in keep], [lin.names[r] for r in keep]
+        )
+    return dataclasses.replace(problem, lmis=lmis, linear=lin)
