@@ -289,7 +289,11 @@ def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
                 eqs.append([_fr(v) for v in a])
         basis = _nullspace_int(eqs, n)
         if not basis:
-            last = f"the exact conditions leave no exposing direction (denominators <= {den})"
+            last = (
+                f"the solver's face is not rational: with its null spaces rounded to denominators <= {den}, "
+                "W(d) V = 0 and q . d = 0 leave only d = 0 (an irrational face, e.g. spanned by eigenvectors "
+                "of floating-point data, has no exposing certificate in rational arithmetic)"
+            )
             continue
         X = np.array([[float(v) for v in col] for col in basis]).T
         norms = np.linalg.norm(X, axis=0)
