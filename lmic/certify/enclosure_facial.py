@@ -292,7 +292,10 @@ def facial_or(
         return dual
     if deadline is not None and time.perf_counter() > deadline:
         return dict(dual, reason=f"{dual.get('reason')}; facial reduction not tried (time budget spent)")
-    fac = facial_bound(problem, duals, solve_point, exact=exact, resolve=resolve, deadline=deadline)
+    try:
+        fac = facial_bound(problem, duals, solve_point, exact=exact, resolve=resolve, deadline=deadline)
+    except (OverflowError, ValueError, ZeroDivisionError, ArithmeticError, np.linalg.LinAlgError) as exc:
+        fac = {"proven": False, "reason": f"numerical failure ({type(exc).__name__}: {exc})"}
     if fac["proven"]:
         return fac
     return dict(dual, reason=f"{dual.get('reason')}; facial reduction: {fac['reason']}")

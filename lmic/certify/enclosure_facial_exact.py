@@ -54,6 +54,9 @@ __all__ = [
 
 #: an eigenvalue of ``W_i`` below this times its largest is read as zero (the null space)
 NULL_TOL = 1e-6
+#: the float pre-test of :func:`exact_step`: a smallest singular value of the (row-normalised)
+#: system ``W(d) B = 0`` above this times the largest means no exact solution but ``d = 0``
+PRETEST = 1e-13
 #: denominators tried when rationalising the null space basis (smallest first)
 DENOMINATORS = (64, 10_000, 1_000_000)
 
@@ -241,15 +244,18 @@ def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
         return {"ok": False, "reason": "the exposing direction is zero or not finite"}
     dfl = dfl / scale
     last = "no exact exposing direction found"
+    spectra = []
+    for lmi in problem.lmis:
+        W = tril_unvec(np.asarray(sp.csc_matrix(lmi.coeffs)[:, 1:] @ dfl).ravel(), lmi.dim)
+        spectra.append(np.linalg.eigh(0.5 * (W + W.T)))
+    # one scale for every block: a block whose W is round-off only is all null space
+    top = max([float(np.max(np.abs(w), initial=0.0)) for w, _ in spectra] + [0.0])
     for den in DENOMINATORS:
         eqs: list[list[Fraction]] = []
         bases: list[tuple[list[list[Fraction]], list[int]]] = []
         ok = True
-        for lmi in problem.lmis:
+        for lmi, (w, U) in zip(problem.lmis, spectra, strict=True):
             C = sp.csc_matrix(lmi.coeffs)
-            W = tril_unvec(np.asarray(C[:, 1:] @ dfl).ravel(), lmi.dim)
-            w, U = np.linalg.eigh(0.5 * (W + W.T))
-            top = float(np.max(np.abs(w), initial=0.0))
             null = w <= NULL_TOL * top if top > 0 else np.ones(lmi.dim, bool)
             if not null.any():
                 bases.append(([], []))
@@ -260,7 +266,34 @@ def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
                 last = f"the null space of W[{lmi.name}] has no basis of denominators <= {den}"
                 break
             bases.append(rb)
-            B = rb[0]
+        if not ok:
+            continue
+        # float pre-test: the system W(d) B_i = 0 (with q . d = 0) must have a non-trivial null
+        # space, else the exact one is trivial too (an irrational face): skip the exact work
+        fl_rows = [np.asarray(q[1:], dtype=float)[None, :]]
+        for lmi, (B, _P) in zip(problem.lmis, bases, strict=True):
+            if B:
+                Bf = np.array([[float(f) for f in row] for row in B])
+                Ck = sp.csc_matrix(lmi.coeffs)[:, 1:].toarray()
+                Fk = np.stack([tril_unvec(Ck[:, k], lmi.dim) for k in range(n)])
+                fl_rows.append(np.einsum("kab,bc->ack", Fk, Bf).reshape(-1, n))
+        Ef = np.vstack(fl_rows)
+        Ef = Ef[np.linalg.norm(Ef, axis=1) > 0]
+        if Ef.size and min(Ef.shape) == n:
+            Ef = Ef / np.linalg.norm(Ef, axis=1)[:, None]
+            sv = np.linalg.svd(Ef, compute_uv=False)
+            if sv[-1] > PRETEST * sv[0]:
+                last = (
+                    f"the solver's face is not rational: with its null spaces rounded to denominators <= {den}, "
+                    f"W(d) V = 0 and q . d = 0 leave only d = 0 (smallest singular value {sv[-1] / sv[0]:.2g}; an "
+                    "irrational face, e.g. spanned by eigenvectors of floating-point data, has no exposing "
+                    "certificate in rational arithmetic)"
+                )
+                continue
+        for lmi, (B, _P) in zip(problem.lmis, bases, strict=True):
+            if not B:
+                continue
+            C = sp.csc_matrix(lmi.coeffs)
             r = len(B[0])
             Bi = _int_rows([list(col) for col in zip(*B, strict=True)])  # columns scaled to integers
             Bm = flint.fmpz_mat(lmi.dim, r, [Bi[c][a] for a in range(lmi.dim) for c in range(r)])
@@ -278,8 +311,6 @@ def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
                         row[k] = int(Mk[a, c]) << (E - e)
                     if any(row):
                         eqs.append([Fraction(v) for v in row])
-        if not ok:
-            continue
         eqs.append([_fr(v) for v in q[1:]])
         A = sp.csr_matrix(problem.linear.A) if len(problem.linear) else None
         for r, kind in enumerate(problem.linear.kinds):
@@ -295,10 +326,12 @@ def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
                 "of floating-point data, has no exposing certificate in rational arithmetic)"
             )
             continue
-        X = np.array([[float(v) for v in col] for col in basis]).T
+        # columns scaled by 2^-s_j (their integers may exceed the float range)
+        shifts = [max(0, max(abs(v).bit_length() for v in col) - 60) for col in basis]
+        X = np.array([[float(Fraction(v, 1 << s_)) for v in col] for col, s_ in zip(basis, shifts, strict=True)]).T
         norms = np.linalg.norm(X, axis=0)
         alpha = np.linalg.lstsq(X / norms, dfl, rcond=None)[0] / norms
-        al = [Fraction(float(v)) for v in alpha]
+        al = [Fraction(float(v)) / (1 << s_) for v, s_ in zip(alpha, shifts, strict=True)]
         dq = [sum((al[j] * basis[j][k] for j in range(len(basis))), Fraction(0)) for k in range(n)]
         L = 1
         for f in dq:
