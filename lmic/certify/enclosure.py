@@ -453,6 +453,8 @@ def describe(record: dict[str, Any] | None) -> list[str]:
         how = "exact rational arithmetic" if dual.get("method") == "exact" else "rigorous floating-point error bounds"
         if dual.get("route") == "face":
             where = f"the optimal face W = 0 of a Lyapunov-type LMI, rank {dual.get('rank')}"
+        elif dual.get("route") == "facial":
+            where = f"on the face of {dual.get('steps')} exactly verified exposing step(s), facial reduction"
         elif dual.get("route") == "centred":
             where = f"centred dual point, weight {dual.get('theta'):g} at loss {dual.get('centring_loss'):g}"
         else:
