@@ -118,6 +118,7 @@ from lmic.certify.enclosure_exact import EXACT_MAX_N
 from lmic.certify.enclosure_facial import facial_or, verify_any
 from lmic.certify.enclosure_float import lambda_min_lower, polish_primal, primal_end
 from lmic.certify.enclosure_repair import PERTURBATIONS, SHIFTS, perturbed_problem
+from lmic.certify.snap import exact_primal_end
 from lmic.errors import CertificateError
 from lmic.ir.problem import Problem
 
@@ -241,7 +242,7 @@ def enclosure(
     if x is None:
         out["primal"] = "no certified point"
     else:
-        pe = primal_end(problem, x)
+        pe = exact_primal_end(problem, x, primal_end(problem, x))  # a point on a face: exactly
         upper_value = pe["value"] if pe["proven"] else None
         out["primal"] = "certified point" if pe["proven"] else "no rigorous primal end: " + pe["reason"]
         in_time = deadline is None or time.perf_counter() <= deadline
@@ -535,7 +536,8 @@ def audit_enclosure(
             xs = record.get("restored_x")
         else:
             xs = getattr(certificate, "x", None)
-        pe = primal_end(problem, np.asarray(xs, dtype=float)) if xs is not None else {"proven": False}
+        xa = np.asarray(xs, dtype=float) if xs is not None else None
+        pe = exact_primal_end(problem, xa, primal_end(problem, xa)) if xa is not None else {"proven": False}
         if not pe["proven"] or float(pv) != pe["value"]:
             return {
                 "ok": False,

@@ -35,7 +35,7 @@ import numpy as np
 from lmic.certify.exact import prove
 from lmic.ir.problem import Problem
 
-__all__ = ["ZERO_REL", "GRID_BITS", "MAX_VARIABLES", "SNAP_ABS", "snappable", "snap_point"]
+__all__ = ["ZERO_REL", "GRID_BITS", "MAX_VARIABLES", "SNAP_ABS", "snappable", "snap_point", "exact_primal_end"]
 
 #: entries below this times ``max(1, ||x||_inf)`` are candidates for 0
 ZERO_REL = 1e-9
@@ -111,3 +111,39 @@ def snap_point(problem: Problem, x: np.ndarray, *, tol: Any = None) -> dict[str,
         if again["proven"] and again["at_x"]:
             return {"x": xf, "proof": again, "distance": float(np.max(np.abs(xf - x), initial=0.0)), "how": how}
     return None
+
+
+def exact_primal_end(problem: Problem, x: np.ndarray, float_end: dict[str, Any]) -> dict[str, Any]:
+    """``float_end`` (:func:`lmic.certify.enclosure_float.primal_end` at ``x``) when proven;
+    else, for a point on a face (singular ``F(x)``, which no floating-point bound proves), the
+    exact proof at ``x`` itself: the objective then is exact, rounded outwards (up for ``min``,
+    down for ``max``).
+
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+    >>> p = Problem([Variable("x", "scalar", (1, 1))],
+    ...             [LMI("M", 2, sp.csc_matrix([[0.0, 0.0], [0.0, 1.0], [0.0, 0.0]]), strict=False)],
+    ...             LinearConstraints.empty(1), Objective("min", [0.5, 1.0]))
+    >>> exact_primal_end(p, np.array([0.0]), {"proven": False, "value": None, "reason": "lambda_min >= -inf"})
+    {'proven': True, 'value': 0.5, 'reason': 'every LMI and row proved exactly at the point'}
+    """
+    import math
+
+    if float_end.get("proven") or problem.objective.sense == "feasibility":
+        return float_end
+    x = np.asarray(x, dtype=float).ravel()
+    if x.size != problem.n or x.size > MAX_VARIABLES or not np.all(np.isfinite(x)):
+        return float_end
+    r = prove(problem, x)
+    if not (r["proven"] and r["at_x"] and not r["rows_within_tolerance"]):
+        return float_end
+    c = problem.objective.c
+    exact = Fraction(float(c[0])) + sum(
+        (Fraction(float(ck)) * Fraction(float(xk)) for ck, xk in zip(c[1:], x, strict=True)), Fraction(0)
+    )
+    v = float(exact)
+    if problem.objective.sense == "min" and Fraction(v) < exact:
+        v = math.nextafter(v, math.inf)
+    elif problem.objective.sense == "max" and Fraction(v) > exact:
+        v = math.nextafter(v, -math.inf)
+    return {"proven": True, "value": v, "reason": "every LMI and row proved exactly at the point"}
