@@ -186,6 +186,58 @@ def random_problem(seed: int, extra_faces: int = 0) -> Problem:
     return np.array(c), F, blocks
 
 
+def qap_problem(n: int, seed: int) -> Problem:
+    """SDPLIB's qap form (the layout of ``qap5.dat-s``): ``Y`` of order ``n^2 + 1`` (index 0 and
+    the assignments ``(i, j) -> 1 + i n + j``), ``<J, Y_N> = n^2``, ``tr Y_N + tr`` of a row or a
+    column group ``= n + 1`` (``2n - 1`` groups), the arrow ``Y_0p = Y_pp``, ``Y_00 + <J, Y_N> =
+    n^2 + 1`` and the gangster zeros ``Y_pq = 0`` (same row or column, different assignment); the
+    cost ``-(A kron B)`` with random symmetric integer ``A``, ``B`` (zero diagonal). The dual has
+    no strictly feasible point (the case of :mod:`lmic.certify.enclosure_facial`)."""
+    rng = np.random.default_rng(seed)
+    N, d = n * n, n * n + 1
+
+    def sym_int(hi: int) -> np.ndarray:
+        M = np.triu(rng.integers(1, hi, size=(n, n)), 1).astype(float)
+        return M + M.T
+
+    A, B = sym_int(10), sym_int(6)
+    F0 = np.zeros((d, d))
+    F0[1:, 1:] = -np.kron(A, B)
+    F: list[list[np.ndarray]] = [[F0]]
+    c: list[float] = []
+    J = np.zeros((d, d))
+    J[1:, 1:] = 1.0
+    F.append([J])
+    c.append(float(N))
+    idx = np.arange(N).reshape(n, n)
+    groups = [idx[i, :] for i in range(n)] + [idx[:, j] for j in range(1, n)]
+    for g in groups:
+        D = np.zeros((d, d))
+        D[1:, 1:] = np.eye(N)
+        D[1 + g, 1 + g] += 1.0
+        F.append([D])
+        c.append(float(n + 1))
+    for p_ in range(N):
+        E = np.zeros((d, d))
+        E[0, 1 + p_] = E[1 + p_, 0] = 1.0
+        E[1 + p_, 1 + p_] = -2.0
+        F.append([E])
+        c.append(0.0)
+    K = J.copy()
+    K[0, 0] = 1.0
+    F.append([K])
+    c.append(float(N + 1))
+    for p_ in range(N):
+        for q_ in range(p_ + 1, N):
+            (i, j), (k, l) = divmod(p_, n), divmod(q_, n)
+            if (i == k) != (j == l):
+                G = np.zeros((d, d))
+                G[1 + p_, 1 + q_] = G[1 + q_, 1 + p_] = 1.0
+                F.append([G])
+                c.append(0.0)
+    return np.array(c), F, [d]
+
+
 def cvxpy_value(prob: Problem) -> float:
     """The optimum by CVXPY + Clarabel at tolerance 1e-10 (the dual ``max <F_0, Y>``)."""
     import cvxpy as cp
@@ -224,6 +276,8 @@ def instances(only: set[str] | None = None) -> list[tuple[str, Problem, float, s
         add(f"mcp_C{n}", lambda g=g: (mcp_problem(g), mcp_value(g, "cycle"), "closed form"))
     for ns, seed in ((3, 0), (5, 1), (8, 2)):
         add(f"lyap_{ns}", lambda ns=ns, seed=seed: (*lyap_problem(ns, seed), "scipy Lyapunov"))
+    for n in (4, 5, 6):
+        add(f"qap_{n}", lambda n=n: (qap_problem(n, n), cvxpy_value(qap_problem(n, n)), "cvxpy+clarabel"))
     for s in range(3):
         add(f"truss_like_{s}", lambda s=s: (random_problem(s), cvxpy_value(random_problem(s)), "cvxpy+clarabel"))
     for s in range(3):

@@ -71,10 +71,59 @@ def _dyadic(tril: np.ndarray, dim: int) -> tuple[Any, int]:
     from lmic.certify.psd import load_flint
 
     flint = load_flint()
-    F = tril_unvec(np.asarray(tril, dtype=float), dim)
-    nz = F[F != 0]
-    e = max((int(v).bit_length() - 1 for v in (abs(x.as_integer_ratio()[1]) for x in nz.tolist())), default=0)
-    return flint.fmpz_mat(dim, dim, [int(Fraction(float(v)) * (1 << e)) for v in F.ravel()]), e
+    N, e = _int_scaled(tril_unvec(np.asarray(tril, dtype=float), dim))
+    return flint.fmpz_mat(dim, dim, [int(v) for v in N.ravel().tolist()]), e
+
+
+#: below this, sums of products of integers held in floats are exact
+EXACT_INT = float(2**53)
+
+
+def _int_scaled(F: np.ndarray) -> tuple[np.ndarray, int]:
+    """``(N, e)`` with ``F = N / 2^e`` exactly and ``N`` integer-valued floats (or Python ints
+    in an object array when they exceed :data:`EXACT_INT`)."""
+    nz = np.abs(F[F != 0])
+    if not nz.size:
+        return np.zeros_like(F), 0
+    # the largest power of two in any denominator: 2^-(exponent of the lowest set bit)
+    e = max(int(abs(x).as_integer_ratio()[1]).bit_length() - 1 for x in np.unique(nz).tolist())
+    N = np.ldexp(F, e)
+    if float(np.max(np.abs(N))) < EXACT_INT:
+        return N, e
+    return np.array([[int(Fraction(float(v)) * (1 << e)) for v in row] for row in np.atleast_2d(F)], dtype=object), e
+
+
+def _exact_product(*mats: np.ndarray) -> np.ndarray | None:
+    """The product of integer-valued float matrices when it is exact in floating point (every
+    partial sum below :data:`EXACT_INT`, checked on the product of the absolute values), else
+    ``None``."""
+    if any(m.dtype == object for m in mats):
+        return None
+    out, bound = mats[0], np.abs(mats[0])
+    for m in mats[1:]:
+        out, bound = out @ m, bound @ np.abs(m)
+    return out if float(np.max(bound, initial=0.0)) < EXACT_INT else None
+
+
+def _is_zero_product(M: np.ndarray, L: np.ndarray) -> bool:
+    """Whether ``M @ L == 0`` exactly (``M`` floats, ``L`` integer-valued floats): each row of
+    ``M`` scaled by a power of two to integers, the product in floats where every partial sum
+    stays below :data:`EXACT_INT`, in rationals elsewhere."""
+    if not M.size or not L.size:
+        return True
+    _, p = np.frexp(M)
+    s_r = np.where(M != 0, 53 - p, -(10**6)).max(axis=1)
+    s_r = np.where(s_r < -(10**5), 0, s_r)
+    N = np.ldexp(M, s_r[:, None])
+    fast = np.all(np.isfinite(N), axis=1)
+    fast &= (np.abs(np.where(np.isfinite(N), N, 0.0)) @ np.abs(L)).max(axis=1, initial=0.0) < EXACT_INT
+    if np.any((N[fast] @ L) != 0):
+        return False
+    for r in np.flatnonzero(~fast):
+        for c in range(L.shape[1]):
+            if sum((_fr(v) * int(L[k, c]) for k, v in enumerate(M[r]) if v and L[k, c]), Fraction(0)):
+                return False
+    return True
 
 
 def _block_exact(lmi: LMI, d: list[int]) -> list[list[Fraction]]:
@@ -193,15 +242,14 @@ def verify_step(problem: Problem, step: dict[str, Any]) -> dict[str, Any]:
     return {"ok": True, "reason": "exposing certificate verified exactly"}
 
 
-def _nullspace_int(rows: list[list[Fraction]], n: int) -> list[list[int]]:
+def _nullspace_int(rows: list[list[int]], n: int) -> list[list[int]]:
     """An integer basis (columns, as a list of column vectors) of ``{d : rows d = 0}``."""
     from lmic.certify.psd import load_flint
 
     flint = load_flint()
     if not rows:
         return [[int(i == j) for i in range(n)] for j in range(n)]
-    M = _int_rows(rows)
-    X, nullity = flint.fmpz_mat(len(M), n, [v for r in M for v in r]).nullspace()
+    X, nullity = flint.fmpz_mat(len(rows), n, [v for r in rows for v in r]).nullspace()
     return [[int(X[i, j]) for i in range(n)] for j in range(int(nullity))]
 
 
@@ -251,7 +299,7 @@ def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
     # one scale for every block: a block whose W is round-off only is all null space
     top = max([float(np.max(np.abs(w), initial=0.0)) for w, _ in spectra] + [0.0])
     for den in DENOMINATORS:
-        eqs: list[list[Fraction]] = []
+        eqs: list[list[int]] = []
         bases: list[tuple[list[list[Fraction]], list[int]]] = []
         ok = True
         for lmi, (w, U) in zip(problem.lmis, spectra, strict=True):
@@ -310,14 +358,14 @@ def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
                     for k, (Mk, e) in prods.items():
                         row[k] = int(Mk[a, c]) << (E - e)
                     if any(row):
-                        eqs.append([Fraction(v) for v in row])
-        eqs.append([_fr(v) for v in q[1:]])
+                        eqs.append(row)
+        eqs += _int_rows([[_fr(v) for v in q[1:]]])
         A = sp.csr_matrix(problem.linear.A) if len(problem.linear) else None
         for r, kind in enumerate(problem.linear.kinds):
             assert A is not None
             a = A[r].toarray().ravel()[1:]
             if kind == "eq" or abs(float(a @ dfl)) <= NULL_TOL * max(1.0, float(np.abs(a).sum())):
-                eqs.append([_fr(v) for v in a])
+                eqs += _int_rows([[_fr(v) for v in a]])
         basis = _nullspace_int(eqs, n)
         if not basis:
             last = (
@@ -444,7 +492,7 @@ def fix_lineality(problem: Problem, basis: list[list[str]], fix: list[int]) -> P
     ['eq']
     >>> fix_lineality(p, [["1", "1"]], [1])
     Traceback (most recent call last):
-    lmic.errors.CertificateError: lineality direction 1 is not exact
+    lmic.errors.CertificateError: a lineality direction is not exact
     """
     n = problem.n
     try:
@@ -459,17 +507,14 @@ def fix_lineality(problem: Problem, basis: list[list[str]], fix: list[int]) -> P
     _, q = _target(problem)
     A = sp.csr_matrix(problem.linear.A) if len(problem.linear) else sp.csr_matrix((0, 1 + n))
     mats = [sp.csr_matrix(lmi.coeffs) for lmi in problem.lmis] + [A]
-    for j, ell in enumerate(L):
-        for M in mats:
-            for t in range(M.shape[0]):
-                lo, hi = M.indptr[t], M.indptr[t + 1]
-                if sum(
-                    (_fr(v) * ell[c - 1] for c, v in zip(M.indices[lo:hi], M.data[lo:hi], strict=True) if c),
-                    Fraction(0),
-                ):
-                    raise CertificateError(f"lineality direction {j + 1} is not exact")
-        if sum((_fr(q[k + 1]) * ell[k] for k in range(n)), Fraction(0)) != 0:
-            raise CertificateError(f"lineality direction {j + 1} is not exact")
+    if max(abs(v) for ell in L for v in ell) >= EXACT_INT:
+        raise CertificateError("the lineality record's integers are too large")
+    Lf = np.array(L, dtype=float).T
+    for M in mats:
+        if not _is_zero_product(M[:, 1:].toarray(), Lf):
+            raise CertificateError("a lineality direction is not exact")
+    if not _is_zero_product(np.asarray(q[1:], dtype=float)[None, :], Lf):
+        raise CertificateError("a lineality direction is not exact")
     from lmic.certify.psd import load_flint
 
     flint = load_flint()
@@ -499,6 +544,7 @@ def reduce_v(problem: Problem, step: dict[str, Any]) -> Problem:
         if r == 0:
             continue
         Vm = flint.fmpz_mat(lmi.dim, r, [v for row in V for v in row])
+        Vf = np.array(V, dtype=float) if max(abs(v) for row in V for v in row) < EXACT_INT else None
         C = sp.csc_matrix(lmi.coeffs)
         ri, ci = tril_rows_cols(r)
         vals, rows_, cols_ = [], [], []
@@ -506,16 +552,28 @@ def reduce_v(problem: Problem, step: dict[str, Any]) -> Problem:
             col = C[:, k]
             if not col.nnz:
                 continue
-            Fi, e = _dyadic(col.toarray().ravel(), lmi.dim)
-            R = Vm.transpose() * Fi * Vm
+            N, e = _int_scaled(tril_unvec(col.toarray().ravel(), lmi.dim))
+            R = _exact_product(Vf.T, N, Vf) if Vf is not None else None
+            if R is not None:
+                Rt = R[ri, ci]
+                nz = np.flatnonzero(Rt)
+                fl = np.ldexp(Rt[nz], -e)
+                if np.any(np.ldexp(fl, e) != Rt[nz]):
+                    raise CertificateError(f"the reduced coefficient of '{lmi.name}' is not exactly a float")
+                vals += fl.tolist()
+                rows_ += nz.tolist()
+                cols_ += [k] * nz.size
+                continue
+            Fi = flint.fmpz_mat(lmi.dim, lmi.dim, [int(v) for v in N.ravel().tolist()])
+            Rm = Vm.transpose() * Fi * Vm
             for t in range(ri.size):
-                m = int(R[int(ri[t]), int(ci[t])])
+                m = int(Rm[int(ri[t]), int(ci[t])])
                 if m:
                     f = Fraction(m, 1 << e)
-                    fl = float(f)
-                    if Fraction(fl) != f:
+                    fv = float(f)
+                    if Fraction(fv) != f:
                         raise CertificateError(f"the reduced coefficient of '{lmi.name}' is not exactly a float")
-                    vals.append(fl)
+                    vals.append(fv)
                     rows_.append(t)
                     cols_.append(k)
         coeffs = sp.csc_matrix((vals, (rows_, cols_)), shape=(ri.size, 1 + n))
