@@ -77,7 +77,15 @@ import numpy as np
 import scipy.sparse as sp
 
 from lmic.certify.enclosure_dual import dual_bound, verify_dual_bound
-from lmic.certify.enclosure_facial_exact import exact_step, lineality, reduce_problem, reduce_v, verify_step
+from lmic.certify.enclosure_facial_exact import (
+    exact_step,
+    lineality,
+    reduce_problem,
+    reduce_v,
+    scale_exponents,
+    scale_variables,
+    verify_step,
+)
 from lmic.certify.enclosure_repair import _target
 from lmic.errors import CertificateError
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
@@ -213,12 +221,15 @@ def facial_bound(
         cur = red
         left = 3.0 if deadline is None else max(0.0, deadline - time.perf_counter())
         try:
-            inner = dual_bound(cur, cur_duals, exact=exact, resolve=resolve, budget_s=left)
+            # the variables scaled by powers of two (exact): a well-conditioned equality map
+            exps = scale_exponents(cur)
+            scaled = scale_variables(cur, exps)
+            inner = dual_bound(scaled, cur_duals, exact=exact, resolve=resolve, budget_s=left)
             if not inner.get("proven") and resolve is not None and time.perf_counter() < (deadline or np.inf):
-                d2 = resolve(cur)
+                d2 = resolve(scaled)
                 if d2 and d2.get("lmis") is not None:
                     left = 3.0 if deadline is None else max(0.0, deadline - time.perf_counter())
-                    inner2 = dual_bound(cur, d2, exact=exact, budget_s=left)
+                    inner2 = dual_bound(scaled, d2, exact=exact, budget_s=left)
                     inner = inner2 if inner2.get("proven") else inner
         except CertificateError as exc:
             inner = {"proven": False, "reason": str(exc)}
@@ -230,6 +241,7 @@ def facial_bound(
                 "reduced": inner.get("dual"),
                 "inner_route": inner.get("route"),
                 "inner_method": inner.get("method"),
+                "scale": exps,
             }
             out.update(
                 route="facial",
@@ -261,6 +273,11 @@ def verify_facial(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
             cur = reduce_problem(cur, st)
         except CertificateError as exc:
             return {"ok": False, "lower": None, "reason": f"facial step {s + 1}: {exc}"}
+    if d.get("scale") is not None:
+        try:
+            cur = scale_variables(cur, [int(e) for e in d["scale"]])
+        except (CertificateError, TypeError, ValueError) as exc:
+            return {"ok": False, "lower": None, "reason": f"the recorded variable scaling: {exc}"}
     inner = {
         "dual": d.get("reduced"),
         "lower": record.get("lower"),

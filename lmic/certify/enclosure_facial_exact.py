@@ -50,6 +50,8 @@ __all__ = [
     "reduce_v",
     "lineality",
     "fix_lineality",
+    "scale_exponents",
+    "scale_variables",
 ]
 
 #: an eigenvalue of ``W_i`` below this times its largest is read as zero (the null space)
@@ -149,6 +151,18 @@ def _int_rows(rows: list[list[Fraction]]) -> list[list[int]]:
             den = den * f.denominator // math.gcd(den, f.denominator)
         out.append([int(f * den) for f in r])
     return out
+
+
+def _short(rows: list[list[int]]) -> list[list[int]]:
+    """An LLL-reduced basis of the lattice of the integer ``rows`` (same rational span, short
+    entries: the reduced problem's coefficients ``V^T F V`` stay small and well scaled)."""
+    from lmic.certify.psd import load_flint
+
+    flint = load_flint()
+    if not rows:
+        return rows
+    M = flint.fmpz_mat(len(rows), len(rows[0]), [v for r in rows for v in r]).lll()
+    return [[int(M[i, j]) for j in range(M.ncols())] for i in range(M.nrows())]
 
 
 def _pivots(V: list[list[int]]) -> list[int] | None:
@@ -394,7 +408,7 @@ def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
             if not B:
                 Vs.append([[] for _ in range(lmi.dim)] if lmi.dim else [])
                 continue
-            Bi = _int_rows([list(col) for col in zip(*B, strict=True)])  # columns scaled to integers
+            Bi = _short(_int_rows([list(col) for col in zip(*B, strict=True)]))  # integer columns, LLL
             Vs.append([[str(Bi[c][a]) for c in range(len(Bi))] for a in range(lmi.dim)])
         drop = []
         if len(problem.linear):
@@ -587,3 +601,52 @@ def reduce_v(problem: Problem, step: dict[str, Any]) -> Problem:
             A, [lin.kinds[r] for r in keep], [lin.strict[r] for r in keep], [lin.names[r] for r in keep]
         )
     return dataclasses.replace(problem, lmis=lmis, linear=lin)
+
+
+def scale_exponents(problem: Problem) -> list[int]:
+    """Power-of-two exponents ``e_k`` that equilibrate the rows of the dual equality map (row
+    ``k``: every coefficient of ``x_k``): :func:`scale_variables` with them makes the proof's
+    ``J_S J_S^T`` well conditioned (the exact correction it defines does not change).
+
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+    >>> p = Problem([Variable("x", "full", (2, 1))],
+    ...             [LMI("M", 1, sp.csc_matrix([[0.0, 1024.0, 0.25]]), strict=False)],
+    ...             LinearConstraints.empty(2), Objective("min", [0.0, 1.0, 1.0]))
+    >>> scale_exponents(p)
+    [-10, 2]
+    """
+    from lmic.certify.enclosure_repair import jacobian
+
+    J, _ = jacobian(problem)
+    norms = sp.linalg.norm(J[1:], axis=1) if J.shape[1] else np.zeros(problem.n)
+    return [0 if not v > 0 else -round(math.log2(float(v))) for v in np.asarray(norms).ravel()]
+
+
+def scale_variables(problem: Problem, exps: list[int]) -> Problem:
+    """The same problem in ``x_k = 2^e_k x'_k``: column ``1 + k`` of every coefficient and of
+    the objective times ``2^e_k`` (exact; a :class:`CertificateError` when a scaled coefficient
+    under- or overflows). Its optimal value is the original's (a bijection of the points)."""
+    import dataclasses
+
+    n = problem.n
+    if len(exps) != n or any(not isinstance(e, int) or abs(e) > 200 for e in exps):
+        raise CertificateError("the variable scaling does not match the problem")
+    f = np.ldexp(1.0, np.array([0] + list(exps)))
+    D = sp.diags(f)
+
+    def scaled(M: sp.spmatrix) -> sp.csc_matrix:
+        out = sp.csc_matrix(M @ D)
+        back = sp.csc_matrix(out @ sp.diags(1.0 / f))
+        if abs(back - sp.csc_matrix(M)).max() != 0 or not np.all(np.isfinite(out.data)):
+            raise CertificateError("a scaled coefficient is not exact")
+        return out
+
+    lmis = [dataclasses.replace(lmi, coeffs=scaled(lmi.coeffs)) for lmi in problem.lmis]
+    lin = problem.linear
+    if len(lin):
+        lin = LinearConstraints(sp.csr_matrix(scaled(lin.A)), list(lin.kinds), list(lin.strict), list(lin.names))
+    c = np.asarray(problem.objective.c, dtype=float) * f
+    if np.any(c / f != problem.objective.c):
+        raise CertificateError("a scaled objective coefficient is not exact")
+    return dataclasses.replace(problem, lmis=lmis, linear=lin, objective=dataclasses.replace(problem.objective, c=c))
