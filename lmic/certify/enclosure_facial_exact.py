@@ -107,6 +107,32 @@ def _exact_product(*mats: np.ndarray) -> np.ndarray | None:
     return out if float(np.max(bound, initial=0.0)) < EXACT_INT else None
 
 
+def _exact_int_rows(M: np.ndarray) -> list[list[int]]:
+    """Every row of the float matrix ``M`` times a power of two that makes it integer (exact:
+    ``ldexp`` scaling, and a float that is an integer converts exactly), as Python ints."""
+    if not M.size:
+        return []
+    _, p = np.frexp(M)
+    s_r = np.where(M != 0, 53 - p, -(10**6)).max(axis=1)
+    s_r = np.where(s_r < -(10**5), 0, s_r)
+    N = np.ldexp(M, s_r[:, None])
+    if not np.all(np.isfinite(N)):
+        return _int_rows([[_fr(v) for v in row] for row in M])
+    if float(np.max(np.abs(N))) < 2.0**62:
+        rows = N.astype(np.int64).tolist()
+    else:
+        rows = [[int(v) for v in row] for row in N.tolist()]
+    return [_primitive(r) for r in rows]
+
+
+def _primitive(v: list[int]) -> list[int]:
+    """``v`` divided by the gcd of its entries."""
+    g = 0
+    for a in v:
+        g = math.gcd(g, a)
+    return [a // g for a in v] if g > 1 else v
+
+
 def _is_zero_product(M: np.ndarray, L: np.ndarray) -> bool:
     """Whether ``M @ L == 0`` exactly (``M`` floats, ``L`` integer-valued floats): each row of
     ``M`` scaled by a power of two to integers, the product in floats where every partial sum
@@ -264,7 +290,7 @@ def _nullspace_int(rows: list[list[int]], n: int) -> list[list[int]]:
     if not rows:
         return [[int(i == j) for i in range(n)] for j in range(n)]
     X, nullity = flint.fmpz_mat(len(rows), n, [v for r in rows for v in r]).nullspace()
-    return [[int(X[i, j]) for i in range(n)] for j in range(int(nullity))]
+    return [_primitive([int(X[i, j]) for i in range(n)]) for j in range(int(nullity))]
 
 
 def _rational_basis(N: np.ndarray, den: int) -> tuple[list[list[Fraction]], list[int]] | None:
@@ -467,22 +493,14 @@ def lineality(problem: Problem) -> tuple[list[list[str]], list[int]]:
 
     flint = load_flint()
     n = problem.n
-    rows: list[list[int]] = []
-    for lmi in problem.lmis:
-        C = sp.csr_matrix(lmi.coeffs)
-        for t in range(C.shape[0]):
-            lo, hi = C.indptr[t], C.indptr[t + 1]
-            ent = {int(c) - 1: _fr(v) for c, v in zip(C.indices[lo:hi], C.data[lo:hi], strict=True) if c}
-            if ent:
-                rows.append(_int_rows([[ent.get(k, Fraction(0)) for k in range(n)]])[0])
     A = sp.csr_matrix(problem.linear.A) if len(problem.linear) else sp.csr_matrix((0, 1 + n))
     _, q = _target(problem)
-    for a in [A[r].toarray().ravel()[1:] for r in range(A.shape[0])] + [np.asarray(q[1:], dtype=float)]:
-        if np.any(a):
-            rows.append(_int_rows([[_fr(v) for v in a]])[0])
+    mats = [sp.csr_matrix(lmi.coeffs)[:, 1:] for lmi in problem.lmis] + [A[:, 1:], sp.csr_matrix(q[None, 1:])]
+    M = sp.vstack(mats).toarray() if mats else np.zeros((0, n))
+    rows = _exact_int_rows(M[np.any(M != 0, axis=1)])
     if rows:
         X, nullity = flint.fmpz_mat(len(rows), n, [v for r in rows for v in r]).nullspace()
-        basis = [[int(X[i, j]) for i in range(n)] for j in range(int(nullity))]
+        basis = [_primitive([int(X[i, j]) for i in range(n)]) for j in range(int(nullity))]
     else:
         basis = [[int(i == j) for i in range(n)] for j in range(n)]
     if not basis:
