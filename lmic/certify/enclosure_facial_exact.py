@@ -119,10 +119,10 @@ def _exact_int_rows(M: np.ndarray) -> list[list[int]]:
     if not np.all(np.isfinite(N)):
         return _int_rows([[_fr(v) for v in row] for row in M])
     if float(np.max(np.abs(N))) < 2.0**62:
-        rows = N.astype(np.int64).tolist()
-    else:
-        rows = [[int(v) for v in row] for row in N.tolist()]
-    return [_primitive(r) for r in rows]
+        Ni = N.astype(np.int64)
+        g = np.gcd.reduce(np.abs(Ni), axis=1)
+        return (Ni // np.where(g > 0, g, 1)[:, None]).tolist()
+    return [_primitive([int(v) for v in row]) for row in N.tolist()]
 
 
 def _primitive(v: list[int]) -> list[int]:
@@ -131,6 +131,26 @@ def _primitive(v: list[int]) -> list[int]:
     for a in v:
         g = math.gcd(g, a)
     return [a // g for a in v] if g > 1 else v
+
+
+def _exact_rows_block(C: sp.spmatrix, Bf: np.ndarray, dim: int, n: int) -> list[list[int]] | None:
+    """The rows ``(a, c)`` of ``d -> (sum_k d_k F^(k) B)[a, c]`` (``C``: an LMI's coefficients,
+    ``Bf``: an integer basis as floats) as primitive integer rows, when every product is exact
+    in floating point (:func:`_exact_product`); else ``None``."""
+    C = sp.csc_matrix(C)
+    cols = np.zeros((dim * Bf.shape[1], n))
+    for k in range(n):
+        if not C[:, 1 + k].nnz:
+            continue
+        N, e = _int_scaled(tril_unvec(C[:, 1 + k].toarray().ravel(), dim))
+        P = _exact_product(N, Bf)
+        if P is None:
+            return None
+        v = np.ldexp(P.ravel(), -e)
+        if np.any(np.ldexp(v, e) != P.ravel()):
+            return None
+        cols[:, k] = v
+    return _exact_int_rows(cols[np.any(cols != 0, axis=1)])
 
 
 def _is_zero_product(M: np.ndarray, L: np.ndarray) -> bool:
@@ -385,7 +405,16 @@ def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
             r = len(B[0])
             Bi = _int_rows([list(col) for col in zip(*B, strict=True)])  # columns scaled to integers
             Bm = flint.fmpz_mat(lmi.dim, r, [Bi[c][a] for a in range(lmi.dim) for c in range(r)])
-            # (W(d) B)[a, c] = sum_k d_k (F^(k) B)[a, c] = 0, every column k scaled by 2^(E - e_k)
+            # (W(d) B)[a, c] = sum_k d_k (F^(k) B)[a, c] = 0: in floats where provably exact
+            fast = (
+                _exact_rows_block(C, np.array(Bi, dtype=float).T, lmi.dim, n)
+                if max(abs(v) for col in Bi for v in col) < EXACT_INT
+                else None
+            )
+            if fast is not None:
+                eqs += [row for row in fast if any(row)]
+                continue
+            # every column k scaled by 2^(E - e_k), in flint
             prods = {}
             for k in range(n):
                 if C[:, 1 + k].nnz:
