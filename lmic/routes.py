@@ -188,7 +188,9 @@ def enclosure_of(
     budget = enclosure_budget(solve_s) if budget_s is None else float(budget_s)
     deadline = t0 + budget
     # the certified point (the certifier may have moved the solver's onto a face: lmic.certify.snap)
-    x = (cert.x if cert.x is not None else sol.x) if getattr(cert, "verdict", None) == "certified" else None
+    x = None
+    if getattr(cert, "verdict", None) == "certified":
+        x = np.asarray(cert.x, dtype=float) if getattr(cert, "x", None) is not None else sol.x
 
     def resolve(perturbed: Problem) -> dict[str, Any] | None:
         if time.perf_counter() + solve_s > deadline:
