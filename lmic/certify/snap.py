@@ -10,7 +10,9 @@ every LMI and row there exactly (a non-strict LMI ``>= 0``, a strict one ``> 0``
 holding with margin 0 is never accepted).
 
 The candidates, in order: ``x`` with its entries below :data:`ZERO_REL` times ``max(1, ||x||_inf)``
-set to 0; ``x`` rounded to the grids ``2^-K`` of :data:`GRID_BITS`. A candidate counts only when
+set to 0; ``x`` rounded to the grids ``2^-K`` of :data:`GRID_BITS`; only those within
+:data:`SNAP_DIST` (relative) of ``x``: the point the solver approximates, not another feasible
+point (rounding an optimal point to integers may be feasible, at a much worse objective). A candidate counts only when
 it is exactly a float vector (so that ``x_q`` is the point recorded and re-certified).
 
 Examples
@@ -35,12 +37,25 @@ import numpy as np
 from lmic.certify.exact import prove
 from lmic.ir.problem import Problem
 
-__all__ = ["ZERO_REL", "GRID_BITS", "MAX_VARIABLES", "SNAP_ABS", "snappable", "snap_point", "exact_primal_end"]
+__all__ = [
+    "ZERO_REL",
+    "SNAP_DIST",
+    "GRID_BITS",
+    "MAX_VARIABLES",
+    "SNAP_ABS",
+    "snappable",
+    "snap_point",
+    "exact_primal_end",
+]
 
 #: entries below this times ``max(1, ||x||_inf)`` are candidates for 0
 ZERO_REL = 1e-9
-#: grids ``2^-K`` tried (coarsest first)
-GRID_BITS = (0, 10, 20, 30)
+#: grids ``2^-K`` tried (coarsest first; a grid that moves ``x`` by more than :data:`SNAP_DIST`
+#: is skipped)
+GRID_BITS = (0, 10, 20, 30, 40)
+#: a candidate moves no entry by more than this times ``max(1, ||x||_inf)`` (a point on the
+#: face next to the solver's, not another feasible point)
+SNAP_DIST = 1e-6
 #: no snapping above this many variables (each candidate costs an exact proof)
 MAX_VARIABLES = 2000
 #: a failing constraint is worth a snap when its violation is below this times its largest
@@ -97,7 +112,11 @@ def snap_point(problem: Problem, x: np.ndarray, *, tol: Any = None) -> dict[str,
         cands.append((f"entries below {ZERO_REL:g} set to 0", xz, None))
     cands += [(f"rounded to the grid 2^-{K}", x, K) for K in GRID_BITS]
     seen: set[tuple[float, ...]] = set()
+    cap = SNAP_DIST * scale
     for how, xc, K in cands:
+        moved = xc if K is None else np.ldexp(np.round(np.ldexp(x, K)), -K)
+        if float(np.max(np.abs(moved - x), initial=0.0)) > cap:
+            continue  # too far from the solver's point: not the point it approximates
         r = prove(problem, xc, tol=tol, bits=K)
         if not r["proven"]:
             continue
@@ -108,16 +127,16 @@ def snap_point(problem: Problem, x: np.ndarray, *, tol: Any = None) -> dict[str,
             continue
         seen.add(tuple(xf))
         again = prove(problem, xf, tol=tol)
-        if again["proven"] and again["at_x"]:
+        if again["proven"] and again["at_x"] and float(np.max(np.abs(xf - x), initial=0.0)) <= cap:
             return {"x": xf, "proof": again, "distance": float(np.max(np.abs(xf - x), initial=0.0)), "how": how}
     return None
 
 
 def exact_primal_end(problem: Problem, x: np.ndarray, float_end: dict[str, Any]) -> dict[str, Any]:
     """``float_end`` (:func:`lmic.certify.enclosure_float.primal_end` at ``x``) when proven;
-    else, for a point on a face (singular ``F(x)``, which no floating-point bound proves), the
-    exact proof at ``x`` itself: the objective then is exact, rounded outwards (up for ``min``,
-    down for ``max``).
+    else, for a point on a face that :func:`snap_point` produced (singular ``F(x)``, which no
+    floating-point bound proves; entries on the grid ``2^-40`` or coarser), the exact proof at
+    ``x`` itself: the objective then is exact, rounded outwards (up for ``min``, down for ``max``).
 
     >>> import numpy as np, scipy.sparse as sp
     >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
@@ -131,8 +150,14 @@ def exact_primal_end(problem: Problem, x: np.ndarray, float_end: dict[str, Any])
 
     if float_end.get("proven") or problem.objective.sense == "feasibility":
         return float_end
+    from lmic.certify.exact import _float_bits
+
     x = np.asarray(x, dtype=float).ravel()
     if x.size != problem.n or x.size > MAX_VARIABLES or not np.all(np.isfinite(x)):
+        return float_end
+    if _float_bits(x) > max(GRID_BITS):
+        # only the points :func:`snap_point` produces (short dyadic entries): a full-precision
+        # point gets its end from the restoration of :mod:`lmic.backoff`, near the optimum
         return float_end
     r = prove(problem, x)
     if not (r["proven"] and r["at_x"] and not r["rows_within_tolerance"]):
