@@ -17,6 +17,9 @@ known independently:
   edge-transitive graphs), ``n`` for an even one;
 * ``lyap_n``: control-like, ``min tr P`` s.t. ``-(A^T P + P A) - Q >= 0`` with ``A`` random
   Hurwitz: the optimum is ``tr P*`` of the Lyapunov solution (scipy, no SDP solver);
+* ``qap_n``: SDPLIB's qap layout (``qap5.dat-s``: order ``n^2 + 1``, the arrow, row/column
+  and gangster constraints) with random integer flows and distances; the dual has no strictly
+  feasible point (facial reduction); reference CVXPY + Clarabel;
 * ``truss_like_s`` / ``face_s``: random multi-block problems (two matrix blocks and a diagonal
   one, like SDPLIB ``truss``), and the same with extra variables whose coefficient is ``v v^T``
   (integer ``v``, objective 0): the dual then has *no* strictly feasible point (``v^T Y v = 0``
