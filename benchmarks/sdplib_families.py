@@ -27,7 +27,8 @@ known independently:
   is CVXPY + Clarabel at tolerance 1e-10 (a second, independent solve).
 
 Columns: problem, verdict, lower, upper, relative gap, whether the reference is inside the
-enclosure (a tolerance of ``1e-7`` relative for the CVXPY references, none for closed forms),
+enclosure (a tolerance of ``1e-6`` relative for the CVXPY references, whose duals have no interior on
+the face and qap families, none for closed forms),
 the dual route that proved, wall time. Usage::
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/sdplib_families.py            # all families
@@ -255,7 +256,10 @@ def cvxpy_value(prob: Problem) -> float:
     cons += [inner(F[i + 1]) == c[i] for i in range(len(c))]
     pr = cp.Problem(cp.Maximize(inner(F[0])), cons)
     tol = {"tol_gap_abs": 1e-10, "tol_gap_rel": 1e-10, "tol_feas": 1e-10}
-    pr.solve(solver="CLARABEL", **tol)
+    try:
+        pr.solve(solver="CLARABEL", **tol)
+    except cp.error.SolverError:
+        pr.solve(solver="CLARABEL")  # no dual interior (qap): the default tolerances (1e-8)
     return float(pr.value)
 
 
@@ -308,10 +312,10 @@ def run_one(path: Path, timeout: float = 300.0) -> tuple[dict[str, Any], float]:
 
 
 def inside(enc: dict[str, Any] | None, ref: float, source: str) -> bool | None:
-    """The reference within the enclosure (closed forms: exactly; solver references: to 1e-7)."""
+    """The reference within the enclosure (closed forms: exactly; solver references: to 1e-6)."""
     if not enc or enc.get("lower") is None or enc.get("upper") is None:
         return None
-    slack = 0.0 if source in ("closed form", "scipy Lyapunov") else 1e-7 * max(1.0, abs(ref))
+    slack = 0.0 if source in ("closed form", "scipy Lyapunov") else 1e-6 * max(1.0, abs(ref))
     if source == "scipy Lyapunov":
         slack = 1e-12 * max(1.0, abs(ref))  # scipy's own rounding
     return bool(enc["lower"] - slack <= ref <= enc["upper"] + slack)
