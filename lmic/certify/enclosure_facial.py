@@ -93,6 +93,7 @@ from lmic.ir.svec import tril_rows_cols
 
 __all__ = [
     "MAX_STEPS",
+    "INNER_MIN_S",
     "exposing_problem",
     "exact_step",
     "verify_step",
@@ -105,6 +106,10 @@ __all__ = [
 
 #: largest number of facial reduction steps
 MAX_STEPS = 3
+#: CPU seconds the reduced dual's proof may take even when the enclosure's budget is spent (the
+#: exposing step found a face: the proof on it is the only lower end there is; the dual search
+#: before it spent the budget on a dual that has no interior)
+INNER_MIN_S = 3.0
 
 
 def exposing_problem(problem: Problem) -> Problem:
@@ -219,7 +224,7 @@ def facial_bound(
         steps.append(rec)
         cur_duals = _map_duals(cur, st, cur_duals)
         cur = red
-        left = 3.0 if deadline is None else max(0.0, deadline - time.perf_counter())
+        left = INNER_MIN_S if deadline is None else max(INNER_MIN_S, deadline - time.perf_counter())
         try:
             # the variables scaled by powers of two (exact): a well-conditioned equality map
             exps = scale_exponents(cur)
@@ -228,7 +233,7 @@ def facial_bound(
             if not inner.get("proven") and resolve is not None and time.perf_counter() < (deadline or np.inf):
                 d2 = resolve(scaled)
                 if d2 and d2.get("lmis") is not None:
-                    left = 3.0 if deadline is None else max(0.0, deadline - time.perf_counter())
+                    left = INNER_MIN_S if deadline is None else max(INNER_MIN_S, deadline - time.perf_counter())
                     inner2 = dual_bound(scaled, d2, exact=exact, budget_s=left)
                     inner = inner2 if inner2.get("proven") else inner
         except CertificateError as exc:
