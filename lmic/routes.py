@@ -203,7 +203,10 @@ def enclosure_of(
     solve_s = float(getattr(sol, "solve_s", 0.0) or 0.0)
     budget = enclosure_budget(solve_s) if budget_s is None else float(budget_s)
     deadline = t0 + budget
-    x = sol.x if getattr(cert, "verdict", None) == "certified" else None
+    # the certified point (the certifier may have moved the solver's onto a face: lmic.certify.snap)
+    x = None
+    if getattr(cert, "verdict", None) == "certified":
+        x = np.asarray(cert.x, dtype=float) if getattr(cert, "x", None) is not None else sol.x
 
     def resolve(perturbed: Problem) -> dict[str, Any] | None:
         if time.perf_counter() + solve_s > deadline:

@@ -188,6 +188,30 @@ def _apply_exact(cert: Certificate, ex: dict[str, Any]) -> None:
 # the certifier
 
 
+def _snapped(problem: Problem, solution: Solution, cert: Certificate, exact: bool, tol: Any, why: str):
+    """The certificate at an exactly feasible point next to a rejected ``x``
+    (:mod:`lmic.certify.snap`), or ``None``."""
+    import dataclasses
+
+    from lmic.certify.snap import snap_point, snappable
+
+    if not snappable(problem, cert):
+        return None
+    snap = snap_point(problem, np.asarray(cert.x, dtype=float), tol=Tolerances.coerce(tol))
+    if snap is None:
+        return None
+    moved = dataclasses.replace(solution, x=snap["x"], objective=problem.objective.value(snap["x"]), strategy="snapped")
+    # re-certified with the exact proof (the snap rests on it; an audit re-runs it)
+    again = certify(problem, moved, exact=True, tol=tol)
+    if again.verdict != "certified":
+        return None
+    again.reason += (
+        f"; the solver's point was rejected ({why}) and moved to x_q, proved exactly feasible "
+        f"({snap['how']}, max |x_q - x| = {snap['distance']:.3g}): the feasible set has no interior there"
+    )
+    return again
+
+
 def certify(
     problem: Problem,
     solution: Solution,
@@ -305,6 +329,11 @@ def certify(
         cert.exact = prove(problem, x, inaccurate=inaccurate, tol=tolr, min_eigs=[r["min_eig"] for r in cert.lmis])
         _apply_exact(cert, cert.exact)
     reasons = _reasons(cert)
+    if reasons and solution.strategy != "snapped":
+        snapped = _snapped(problem, solution, cert, exact, tol, reasons[0])  # no interior: x_q on the face
+        if snapped is not None:
+            snapped.time_s = time.perf_counter() - t0
+            return snapped
 
     if reasons:
         cert.verdict, cert.reason = "rejected", reasons[0]

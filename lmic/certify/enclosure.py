@@ -115,8 +115,10 @@ from lmic.certify.enclosure_centre import centred_bound, centring_problem
 from lmic.certify.enclosure_conditional import RADIUS_FACTOR, best_box_bound, box_bound, verify_box_bound
 from lmic.certify.enclosure_dual import dual_bound, verify_dual_bound
 from lmic.certify.enclosure_exact import EXACT_MAX_N
+from lmic.certify.enclosure_facial import facial_or, verify_any
 from lmic.certify.enclosure_float import lambda_min_lower, polish_primal, primal_end
 from lmic.certify.enclosure_repair import PERTURBATIONS, SHIFTS, perturbed_problem
+from lmic.certify.snap import exact_primal_end
 from lmic.errors import CertificateError
 from lmic.ir.problem import Problem
 
@@ -233,12 +235,14 @@ def enclosure(
             )
         except CertificateError as exc:
             dual = {"proven": False, "reason": str(exc)}
+        # no strictly feasible dual point: the face it lives on (lmic.certify.enclosure_facial)
+        dual = facial_or(problem, duals, dual, solve_point, exact=exact, resolve=resolve, deadline=deadline)
     out["dual"] = dual
     upper_value = None
     if x is None:
         out["primal"] = "no certified point"
     else:
-        pe = primal_end(problem, x)
+        pe = exact_primal_end(problem, x, primal_end(problem, x))  # a point on a face: exactly
         upper_value = pe["value"] if pe["proven"] else None
         out["primal"] = "certified point" if pe["proven"] else "no rigorous primal end: " + pe["reason"]
         in_time = deadline is None or time.perf_counter() <= deadline
@@ -450,6 +454,8 @@ def describe(record: dict[str, Any] | None) -> list[str]:
         how = "exact rational arithmetic" if dual.get("method") == "exact" else "rigorous floating-point error bounds"
         if dual.get("route") == "face":
             where = f"the optimal face W = 0 of a Lyapunov-type LMI, rank {dual.get('rank')}"
+        elif dual.get("route") == "facial":
+            where = f"on the face of {dual.get('steps')} exactly verified exposing step(s), facial reduction"
         elif dual.get("route") == "centred":
             where = f"centred dual point, weight {dual.get('theta'):g} at loss {dual.get('centring_loss'):g}"
         else:
@@ -530,7 +536,8 @@ def audit_enclosure(
             xs = record.get("restored_x")
         else:
             xs = getattr(certificate, "x", None)
-        pe = primal_end(problem, np.asarray(xs, dtype=float)) if xs is not None else {"proven": False}
+        xa = np.asarray(xs, dtype=float) if xs is not None else None
+        pe = exact_primal_end(problem, xa, primal_end(problem, xa)) if xa is not None else {"proven": False}
         if not pe["proven"] or float(pv) != pe["value"]:
             return {
                 "ok": False,
@@ -554,7 +561,7 @@ def audit_enclosure(
                 "field": f"enclosure.{dual_key}",
                 "message": f"enclosure.{dual_key} differs from the recorded dual bound",
             }
-        v = verify_dual_bound(problem, dual)
+        v = verify_any(problem, dual)
         if not v["ok"]:
             return {"ok": False, "field": "enclosure.dual", "message": "enclosure.dual: " + v["reason"]}
     cond = record.get("conditional") or {}
