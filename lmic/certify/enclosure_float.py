@@ -120,7 +120,11 @@ def residuals(J: sp.spmatrix, u: np.ndarray, q: np.ndarray) -> tuple[np.ndarray,
         prods = Jc.data[a:b] * u[Jc.indices[a:b]]
         out[k] = math.fsum([float(q[k]), *(-prods).tolist()])
         terms = float(np.sum(np.abs(prods))) * (1.0 + _gamma(b - a + 1))
-        err[k] = (_U * terms + _U * abs(out[k]) + (b - a + 1) * _ETA) * _SAFE
+        # a product with a zero factor is exactly zero (no rounding, no underflow): a row no
+        # nonzero multiplier touches has the exact residual q_k (a variable that appears in
+        # no constraint, e.g. a part of a gain the projector V annihilates)
+        nnz = int(np.count_nonzero((Jc.data[a:b] != 0) & (u[Jc.indices[a:b]] != 0)))
+        err[k] = (_U * terms + _U * abs(out[k]) + (nnz + 1) * _ETA * (nnz > 0)) * _SAFE
     return out, err
 
 
