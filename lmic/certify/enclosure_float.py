@@ -284,7 +284,7 @@ prove_float = _prove_float
 
 
 #: weights of the inner point tried by :func:`polish_primal`, smallest first
-POLISH_WEIGHTS = tuple(float(f"{m}e{e}") for e in range(-9, 0) for m in (1, 3)) + (1.0,)
+POLISH_WEIGHTS = tuple(float(f"{m}e{e}") for e in range(-9, 0) for m in (1, 3)) + (0.5, 0.7, 0.9, 1.0)
 
 
 def polish_primal(problem: Problem, inner: np.ndarray, outer: np.ndarray) -> dict[str, Any]:
