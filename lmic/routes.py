@@ -265,8 +265,8 @@ def tighten(
         # the strict margin shrinks with the tolerance (never below what the solver resolves:
         # strict.py keeps delta >= 10 tol): at the default 1e-7 the primal end of a problem
         # whose multipliers have trace ~300 stays 3e-5 above the optimum at any tolerance
-        margin = min(options.margin if options is not None else SolveOptions().margin, 10.0 * tol)
-        tight = replace(options, tol=tol, margin=margin) if options is not None else SolveOptions(tol=tol, margin=margin)
+        base = options if options is not None else SolveOptions()
+        tight = replace(base, tol=tol, margin=min(base.margin, 10.0 * tol))
         out = _tighten_once(problem, out, x, exact, backend, tight, resolve, solve_point, deadline, key)
         if out.get("rel_gap") is not None and out["rel_gap"] <= GAP_TARGET:
             break

@@ -111,6 +111,12 @@ def residuals(J: sp.spmatrix, u: np.ndarray, q: np.ndarray) -> tuple[np.ndarray,
     >>> r, e = residuals(sp.csr_matrix([[1.0, 1.0]]), np.array([0.1, 0.2]), np.array([0.3]))
     >>> bool(abs(r[0]) <= 1e-16 and e[0] < 1e-16)
     True
+
+    A row no nonzero multiplier touches (a variable the constraints do not involve) has the
+    exact residual ``q_k`` and no error:
+
+    >>> residuals(sp.csr_matrix([[0.0, 0.0], [0.0, 2.0]]), np.array([1.0, 0.0]), np.zeros(2))
+    (array([0., 0.]), array([0., 0.]))
     """
     Jc = sp.csr_matrix(J)
     out = np.empty(Jc.shape[0])

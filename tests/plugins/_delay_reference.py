@@ -166,7 +166,10 @@ def reference(
 def closed_reference(data: dict, params: dict, *, pareto: bool, settings: dict):
     """The closed problem's optimum (margin 0): ``(status, value, tol)``, ``tol`` its accuracy
     (1e-7 relative, :data:`optimisation_instances.REF_TOL`)."""
-    out = reference(data, params, pareto=pareto, margin=0.0, settings=settings)
+    try:
+        out = reference(data, params, pareto=pareto, margin=0.0, settings=settings)
+    except cp.error.SolverError:
+        return "error", None, float("inf")
     if out["status"] not in ("optimal", "optimal_inaccurate") or out["value"] is None:
         return out["status"], None, float("inf")
     value = float(out["value"])
