@@ -173,7 +173,7 @@ def draw(tid: str, seed: int, n: int, k: int = 0) -> dict[str, Any]:
         }
         return {"lmic": 1, "data": _lists(data), "params": {}}
     if family == "uir":
-        p, q1 = 2, 2
+        p, q1 = 2, max(2, n - 1)  # rank [R; Cbar] = n + h needs q1 + p >= n + 1
         Ah = rng.standard_normal((n, n))
         Ah = Ah - (max(np.linalg.eigvals(Ah).real) + 1.0) * np.eye(n)
         data = {
