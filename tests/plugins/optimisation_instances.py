@@ -120,10 +120,12 @@ def draw(tid: str, seed: int, n: int, k: int = 0) -> dict[str, Any]:
         if family == "delay_b":
             data["Cd"] = 0.2 * rng.standard_normal((1, n))
             data["M4"] = 0.1 * rng.standard_normal((1, 1))
+        psi1 = ("printed", "corrected")[seed % 2]  # both variants of Psi1 (catalogue 2.1)
         if item in ("thm3_2", "thm4_1"):
-            params = {"tau1": 1, "tau2": 2, "eps2": 0.5, "eps3": 0.5, "lambda": 0.6, "psi1": "printed"}
+            lam = round(float(0.2 + 0.7 * rng.random()), 3)
+            params = {"tau1": 1, "tau2": 2, "eps2": 0.5, "eps3": 0.5, "lambda": lam, "psi1": psi1}
         else:
-            params = {"tau1": 0, "tau2": 1, "eps2": 0.3, "eps3": 0.3, "eta": 3.0, "psi1": "printed"}
+            params = {"tau1": 0, "tau2": 1, "eps2": 0.3, "eps3": 0.3, "eta": 3.0, "psi1": psi1}
         return {"lmic": 1, "data": _lists(data), "params": params}
     if family == "sampled_euler":
         p = 1 if n <= 2 else 2
@@ -159,7 +161,8 @@ def draw(tid: str, seed: int, n: int, k: int = 0) -> dict[str, Any]:
             return {"lmic": 1, "data": _lists({k: data[k] for k in keep}), "params": {"mu": 3.0}}
         if item == "thm1":
             data.pop("Cw")
-            return {"lmic": 1, "data": _lists(data), "params": {"mu": 3.0, "beta": 0.05, "psi1": "printed"}}
+            psi1 = ("printed", "corrected")[seed % 2]
+            return {"lmic": 1, "data": _lists(data), "params": {"mu": 3.0, "beta": 0.05, "psi1": psi1}}
         return {"lmic": 1, "data": _lists(data), "params": {"mu": 3.0, "beta": 0.05}}
     if family == "uio_dt":
         # p = 2 outputs, h = 1 unknown input, q = 2 nonlinearity channels (q > p - h: M D = 0
