@@ -44,7 +44,7 @@ from lmic.template import (
     schur_stable,
     theorem,
 )
-from lmic.template.numeric import left_null_basis, null_projector, pinv, rank
+from lmic.template.numeric import null_projector, pinv, rank
 
 CITATION = (
     "Delshad & Gustafsson, 'Observer design for a class of nonlinear systems subject to unknown "
@@ -73,16 +73,6 @@ def _U(values: Mapping[str, Any]) -> np.ndarray:
 def _V(values: Mapping[str, Any]) -> np.ndarray:
     """``V = I - (C D1)(C D1)^+`` (19), an exact orthogonal projector."""
     return null_projector(_cd1(values))
-
-
-def _W(values: Mapping[str, Any]) -> np.ndarray:
-    """``W`` (``p x p``): an orthonormal basis of range(V) in its first ``rank V`` columns, zero
-    columns after it, so that ``V = W W^T`` (Theorem 4.1's parametrisation of ``Ybar V``)."""
-    CD1 = _cd1(values)
-    B = left_null_basis(CD1)
-    W = np.zeros((CD1.shape[0], CD1.shape[0]))
-    W[:, : B.shape[1]] = B
-    return W
 
 
 def _uio_data(t: Template) -> tuple[tuple[sympy.Symbol, ...], tuple[sympy.MatrixExpr, ...], tuple[Any, Any]]:
@@ -116,17 +106,12 @@ def _gains(
     P: sympy.MatrixExpr,
     Ybar: sympy.MatrixExpr,
     Kbar: sympy.MatrixExpr,
-    W: Any = None,
 ) -> tuple[sympy.MatrixExpr, sympy.MatrixExpr]:
-    """Back-substitution (22)/(27); returns the symbols of N and M. With ``W`` (Theorem 4.1),
-    ``Ybar`` stands for the paper's ``Ybar V = Ybar W^T``: ``Y = P^-1 Ybar W^T`` (then ``Y V = Y``)."""
+    """Back-substitution (22)/(27); returns the symbols of N and M."""
     A, B, C, D, D1 = mats
     U, V = consts
     # fixes=: the audit variants fixed_Y / fixed_K take printed Y, K as data (Ybar = P Y, Kbar = P K)
-    if W is None:
-        Y = t.derive("Y", P.inv() * Ybar, doc="Y = P^-1 Ybar", fixes=Ybar)
-    else:
-        Y = t.derive("Y", P.inv() * Ybar * W.T, doc="Y = P^-1 Ybar W^T (the paper's P^-1 Ybar V)")
+    Y = t.derive("Y", P.inv() * Ybar, doc="Y = P^-1 Ybar", fixes=Ybar)
     K = t.derive("K", P.inv() * Kbar, doc="K = P^-1 Kbar", fixes=Kbar)
     E = t.derive("E", U + Y * V, doc="E = U + Y V (18)")
     M = t.derive("M", I(n) + E * C, doc="M = I + E C")
@@ -258,16 +243,11 @@ def uio_dt_thm4_1(t: Template) -> None:
         domain="nonnegative",
         doc="required Lipschitz constant: adds rho <= 1/gamma^2 (0 = none); for bisection",
     )
-    # Ybar enters (25) only as Ybar V: written Ybar W^T (V = W W^T, W's columns past rank V
-    # exactly zero), the directions of Ybar that V annihilates have exactly zero coefficients
-    # instead of round-off ones (a float V = I - X X^+ leaves them ~1e-17, which makes the
-    # compiled problem a different one, with a spurious free direction, for the dual bound)
-    W = t.const("W", _W, shape=(p, p), doc="V = W W^T: orthonormal basis of range(V), zero columns after rank V")
     P = t.symmetric("P", n)
-    Ybar = t.full("Ybar", n, p, doc="Ybar V = Ybar W^T (the paper's Ybar V)")
+    Ybar = t.full("Ybar", n, p)
     Kbar = t.full("Kbar", n, p)
     rho = t.scalar("rho", sign="positive", doc="rho = 1/gamma^2 (29)")
-    d13, d23 = _deltas(A, C, D, U, W.T, P, Ybar, Kbar)
+    d13, d23 = _deltas(A, C, D, U, V, P, Ybar, Kbar)
     t.lmi(
         "(25)",
         block(
@@ -283,7 +263,7 @@ def uio_dt_thm4_1(t: Template) -> None:
     t.constraint("gamma^2 rho <= 1", gamma**2 * rho <= 1)
     t.minimize(rho)
     g = t.derive("gamma_max", 1 / sympy.sqrt(rho), doc="gamma_max = sqrt(1/rho) (28)")
-    N, M = _gains(t, n, p, mats, consts, P, Ybar, Kbar, W=W)
+    N, M = _gains(t, n, p, mats, consts, P, Ybar, Kbar)
     t.check(
         "(9) at the recovered N, M, P with gamma = gamma_max",
         negative_definite(_nine(n, q, P, N, M, D, g**2)),
