@@ -59,6 +59,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--sizes", type=int, nargs="+", default=[2, 4])
     ap.add_argument("--backends", nargs="+", default=["auto", "clarabel", "cvxopt", "sdpa", "scs"])
     ap.add_argument("--only", nargs="*", default=None)
+    ap.add_argument("--verbose", action="store_true", help="one line per instance as well")
     args = ap.parse_args(argv)
     warnings.filterwarnings("ignore")
     print(
@@ -75,6 +76,9 @@ def main(argv: list[str] | None = None) -> int:
                 cases.append((system, oi.reference(tid, system)))
         for backend in args.backends:
             rows = [run(tid, system, backend, ref) for system, ref in cases]
+            if args.verbose:
+                for k, r in enumerate(rows):
+                    print(f"    {tid} {backend} case {k}: {r}")
             gaps = [r["rel_gap"] for r in rows if r["lower"] and r["rel_gap"] is not None]
             inside = [r["inside"] for r in rows if r.get("inside") is not None]
             verdicts: dict[str, int] = {}
