@@ -54,7 +54,7 @@ __all__ = ["dual_bound", "verify_dual_bound", "FACE_SLACK", "LOOSE"]
 FACE_SLACK = 1e-6
 #: a shifted bound further than this (relative) below the solver's dual objective also tries
 #: the centred route (:func:`dual_bound`)
-LOOSE = 1e-7
+LOOSE = 3e-7
 
 
 def dual_bound(
