@@ -10,8 +10,11 @@ contain the reference (within its accuracy), the median time of ``lmic.api.solve
 
 Usage::
 
-    PYTHONPATH=.:plugins python benchmarks/theorem_enclosures.py [--seeds 5] [--sizes 2 4]
-        [--backends auto clarabel cvxopt sdpa scs] [--only delay_a.thm3_2 ...]
+    OPENBLAS_NUM_THREADS=1 PYTHONPATH=.:plugins python benchmarks/theorem_enclosures.py [--seeds 5]
+        [--sizes 2 4] [--backends auto clarabel cvxopt sdpa scs] [--only delay_a.thm3_2 ...] [--verbose]
+
+The times are wall-clock on whatever else the machine runs: the enclosure's re-solves are
+skipped when its (wall-clock) budget is spent, so a loaded machine can show larger gaps.
 """
 
 from __future__ import annotations
