@@ -111,6 +111,12 @@ def residuals(J: sp.spmatrix, u: np.ndarray, q: np.ndarray) -> tuple[np.ndarray,
     >>> r, e = residuals(sp.csr_matrix([[1.0, 1.0]]), np.array([0.1, 0.2]), np.array([0.3]))
     >>> bool(abs(r[0]) <= 1e-16 and e[0] < 1e-16)
     True
+
+    A row no nonzero multiplier touches (a variable the constraints do not involve) has the
+    exact residual ``q_k`` and no error:
+
+    >>> residuals(sp.csr_matrix([[0.0, 0.0], [0.0, 2.0]]), np.array([1.0, 0.0]), np.zeros(2))
+    (array([0., 0.]), array([0., 0.]))
     """
     Jc = sp.csr_matrix(J)
     out = np.empty(Jc.shape[0])
@@ -120,7 +126,11 @@ def residuals(J: sp.spmatrix, u: np.ndarray, q: np.ndarray) -> tuple[np.ndarray,
         prods = Jc.data[a:b] * u[Jc.indices[a:b]]
         out[k] = math.fsum([float(q[k]), *(-prods).tolist()])
         terms = float(np.sum(np.abs(prods))) * (1.0 + _gamma(b - a + 1))
-        err[k] = (_U * terms + _U * abs(out[k]) + (b - a + 1) * _ETA) * _SAFE
+        # a product with a zero factor is exactly zero (no rounding, no underflow): a row no
+        # nonzero multiplier touches has the exact residual q_k (a variable that appears in
+        # no constraint, e.g. a part of a gain the projector V annihilates)
+        nnz = int(np.count_nonzero((Jc.data[a:b] != 0) & (u[Jc.indices[a:b]] != 0)))
+        err[k] = (_U * terms + _U * abs(out[k]) + (nnz + 1) * _ETA * (nnz > 0)) * _SAFE
     return out, err
 
 
@@ -280,7 +290,7 @@ prove_float = _prove_float
 
 
 #: weights of the inner point tried by :func:`polish_primal`, smallest first
-POLISH_WEIGHTS = tuple(float(f"{m}e{e}") for e in range(-9, 0) for m in (1, 3)) + (1.0,)
+POLISH_WEIGHTS = tuple(float(f"{m}e{e}") for e in range(-9, 0) for m in (1, 3)) + (0.5, 0.7, 0.9, 1.0)
 
 
 def polish_primal(problem: Problem, inner: np.ndarray, outer: np.ndarray) -> dict[str, Any]:

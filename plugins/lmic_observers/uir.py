@@ -32,9 +32,14 @@ LMI (11) at the printed observer (51) is feasible only for ``gamma < 0.0401``.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
 import sympy
 
 from lmic.template import STAR, I, Template, block, hurwitz, less_than, negative_definite, theorem
+from lmic.template.numeric import left_null_basis
 from lmic_observers.descriptor import (
     hinf_block,
     reduced_order_blocks,
@@ -117,11 +122,37 @@ def uir_thm3_2(t: Template) -> None:
     t.observer("filter_error", "continuous", N=N, J=J, L=L, M=M, E=E, D1=D1, D2=D2, gamma=mu)
 
 
+def _range_basis_t(values: Mapping[str, Any]) -> np.ndarray:
+    """``W^T`` for ``I - T T^+ = W W^T``: ``W`` an orthonormal basis of the left null space of
+    ``T`` in its first columns, zero columns after it."""
+    T = np.atleast_2d(values["T"])
+    B = left_null_basis(T)
+    W = np.zeros((T.shape[0], T.shape[0]))
+    W[:, : B.shape[1]] = B
+    return W.T
+
+
+def _beta1_w(values: Mapping[str, Any]) -> np.ndarray:
+    return _range_basis_t(values)[:, : values["R"].shape[0]]
+
+
+def _beta2_w(values: Mapping[str, Any]) -> np.ndarray:
+    return _range_basis_t(values)[:, values["R"].shape[0] :]
+
+
 def _robust(t: Template, multiobjective: bool) -> None:
     """Theorems 4.1 (``multiobjective=False``) and 5.1: the LMI (38)/(41), objective, checks."""
     n, h, p, q1 = t.dims("n h p q1")
     s = reduced_order_constants(t, n, h, p, q1, with_D=False)
     nw = s["D1"].shape[1]
+    # Ybar1 and Y2 enter only through Ybar1 Pi and Y2 Pi (Pi = I - T T^+ = [beta1 beta2]):
+    # written Ybar1 W^T, Y2 W^T (Pi = W W^T, W's columns past rank Pi exactly zero), the
+    # directions Pi annihilates get exactly zero coefficients instead of round-off ones (with a
+    # float Pi they make the compiled problem a different one, with spurious free directions,
+    # which no dual bound can then enclose); Y1 and Y2 below are the paper's Y1 W, Y2 W
+    s = dict(s)
+    s["beta1"] = t.const("beta1_W", _beta1_w, shape=(q1 + p, q1), doc="W^T [I; 0], I - T T^+ = W W^T")
+    s["beta2"] = t.const("beta2_W", _beta2_w, shape=(q1 + p, p), doc="W^T [0; I], I - T T^+ = W W^T")
     gamma0 = t.param("gamma0", domain="nonnegative", doc="Lipschitz constant of the nominal f0")
     if multiobjective:
         lam = t.param("lambda", domain="unit", doc="weight of rho in lambda rho + (1-lambda) mubar")

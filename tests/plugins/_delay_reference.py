@@ -66,12 +66,15 @@ def tau0_of(params: dict) -> int:
     return int(params.get("tau2", 0)) - int(params.get("tau1", 0)) + 1
 
 
-def reference(data: dict, params: dict, *, pareto: bool, solver: str = "CLARABEL"):
+def reference(
+    data: dict, params: dict, *, pareto: bool, solver: str = "CLARABEL", margin: float = MARGIN, settings=None
+):
     """Paper A/B Theorem 3.1 (``pareto=False``, eta given) or 3.2 / 4.1 (``pareto=True``).
 
     Block sizes of the big LMI: Psi1 rows ``e, x, alpha-e`` (``corrected``: ``+ alpha-x``), then
     Psi2 columns ``n, n, n, n, r, n, n, r`` (catalogue 2.1). Returns a dict with ``status``,
-    ``value`` and, when solved, ``gamma_star``, ``eta_star``, ``L``.
+    ``value`` and, when solved, ``gamma_star``, ``eta_star``, ``L``. ``margin``: the strict
+    margin (0: the closed problem); ``settings``: the solver's options.
     """
     g = {k: np.atleast_2d(np.asarray(v, dtype=float)) for k, v in data.items()}
     A, Ad, B, C, D = g["A"], g["Ad"], g["B"], g["C"], g["D"]
@@ -137,27 +140,40 @@ def reference(data: dict, params: dict, *, pareto: bool, solver: str = "CLARABEL
         [nw, n, n, n, n],
     )
     cons = [
-        P1 >> MARGIN * In,
-        P2 >> MARGIN * In,
-        big << -MARGIN * np.eye(sum(sizes)),
-        psi3 << -MARGIN * np.eye(nw + 4 * n),
-        e1 >= MARGIN,
-        a >= MARGIN,
+        P1 >> margin * In,
+        P2 >> margin * In,
+        big << -margin * np.eye(sum(sizes)),
+        psi3 << -margin * np.eye(nw + 4 * n),
+        e1 >= margin,
+        a >= margin,
     ]
     if pareto:
         lam = float(params["lambda"])
-        cons.append(rho >= MARGIN)
+        cons.append(rho >= margin)
         objective = lam * (a + e1) + (1 - lam) * rho
     else:
         objective = a + e1
     prob = cp.Problem(cp.Minimize(objective), cons)
-    prob.solve(solver=solver)
-    out = {"status": prob.status, "value": prob.value}
+    prob.solve(solver=solver, **(settings or {}))
+    out = {"status": prob.status, "value": prob.value, "problem": prob}
     if prob.status == "optimal":
         out["gamma_star"] = 1 / np.sqrt(a.value * (1 + e1.value))
         out["eta_star"] = np.sqrt(rho.value) if pareto else np.sqrt(rho)
         out["L"] = np.linalg.solve(P1.value, Ups.value)
     return out
+
+
+def closed_reference(data: dict, params: dict, *, pareto: bool, settings: dict):
+    """The closed problem's optimum (margin 0): ``(status, value, tol)``, ``tol`` its accuracy
+    (1e-7 relative, :data:`optimisation_instances.REF_TOL`)."""
+    try:
+        out = reference(data, params, pareto=pareto, margin=0.0, settings=settings)
+    except cp.error.SolverError:
+        return "error", None, float("inf")
+    if out["status"] not in ("optimal", "optimal_inaccurate") or out["value"] is None:
+        return out["status"], None, float("inf")
+    value = float(out["value"])
+    return out["status"], value, 1e-7 * max(1.0, abs(value))
 
 
 def _assemble(upper: dict, sizes: list[int]):
