@@ -48,6 +48,7 @@ __all__ = [
     "decide",
     "screen",
     "reuse",
+    "reach",
     "setup",
     "domain",
     "in_domain",
@@ -221,14 +222,37 @@ def reuse(problem: Problem, x: np.ndarray, *, value: float = math.nan, source: f
     return res
 
 
+#: the relative margin a screen imposes (``SolveOptions.relative_margin`` for scale-free
+#: problems, floored by the strict reduction at ten times the solver's tolerance): near a
+#: supremum the best relative margin is about ``rtol`` (``qib.thm1``, n = 10: ``6e-7`` at
+#: ``0.9999 sup``), so the default ``1e-4`` would call feasible values "not certified"
+SCREEN_RELATIVE_MARGIN = 1e-7
+#: iterations a first-order screen may take before the interior-point backend of the route
+#: decides the value instead (near a supremum SCS needs seconds where Clarabel needs 0.1 s)
+SCREEN_FIRST_ORDER_ITERS = 600
+#: the interior-point backend a screen falls back to when the route has it
+SCREEN_INTERIOR_POINT = "clarabel"
+#: the tolerance of a first-order screen (its imposed margin is ten times this)
+SCREEN_FIRST_ORDER_TOL = 1e-5
+
+
 def screen(
-    problem: Problem, backend: Any = None, options: Any = None, *, value: float = math.nan
+    problem: Problem,
+    backend: Any = None,
+    options: Any = None,
+    *,
+    value: float = math.nan,
+    first_order: bool = True,
 ) -> PointResult | None:
     """One solve, certified: the cheap decision of a bisection's interior value.
 
     The first backend of the route (:func:`lmic.policy.route`) solves the feasibility problem
     once, with the fixed-margin reduction alone on problems that are not small (no max-margin
-    retry, no other backend). Returns
+    retry, no other backend) and a small imposed margin (:data:`SCREEN_RELATIVE_MARGIN`: near
+    a supremum the margins are small). On the escalating route a first-order first backend
+    gets at most :data:`SCREEN_FIRST_ORDER_ITERS` iterations; when it does not decide in them
+    (or ``first_order`` is ``False``) the first interior-point backend of the route decides
+    the value (``PointResult.fallback``). Returns
 
     * ``feasible`` when the certifier certifies the point (the same evidence as
       :func:`decide`);
@@ -251,27 +275,63 @@ def screen(
     True
     """
     from lmic.backends.registry import get_backend
-    from lmic.certify import certify
     from lmic.options import SolveOptions
-    from lmic.outcome import verdict_of
-    from lmic.policy import is_auto, route, step_options
-    from lmic.reductions.pipeline import solve
+    from lmic.policy import is_auto, route
     from lmic.reductions.strict import is_small
 
     judge = feasibility_problem(problem)
     options = options or SolveOptions()
+    auto = is_auto(backend)
     try:
-        first = route(judge, backend)[0]
-        be = first if not isinstance(first, str) else get_backend(first)
-        if not be.supports(judge):
-            return None
+        names = route(judge, backend)
+        backends = [b if not isinstance(b, str) else get_backend(b) for b in names]
     except LmicError:
         return None
-    if is_small(judge) and be.interior_point:
+    first = backends[0]
+    if not first.supports(judge):
+        return None
+    tried: list[str] = []
+    if auto and not first.interior_point:
+        if first_order:
+            res = _screen_on(first, judge, options, auto, value, max_iter=SCREEN_FIRST_ORDER_ITERS)
+            if res.outcome in ("feasible", "infeasible") or res.status == "infeasible":
+                return res
+            tried = res.attempts
+        # Clarabel first where the route has it: near a supremum its screens take a tenth of
+        # a second at n = 10 where CVXOPT's take seconds (and a minute on infeasible values at
+        # n = 20: CVXOPT ends 'inaccurate' after its iteration limit)
+        ips = [b for b in backends[1:] if b.interior_point and b.supports(judge)]
+        ip = next((b for b in ips if b.name == SCREEN_INTERIOR_POINT), ips[0] if ips else None)
+        if ip is None:
+            return None if not first_order else res
+        first = ip
+    if is_small(judge) and first.interior_point:
         return None  # solves of milliseconds: the full policy decides (max-margin first)
-    opts = step_options(be, options) if is_auto(backend) else options
+    res = _screen_on(first, judge, options, auto, value)
+    res.attempts = tried + res.attempts
+    res.fallback = bool(tried) or (auto and not first_order)
+    return res
+
+
+def _screen_on(
+    be: Any, judge: Problem, options: Any, auto: bool, value: float, max_iter: int | None = None
+) -> PointResult:
+    """One fixed-margin solve of ``judge`` on ``be``, certified (:func:`screen`)."""
+    from lmic.certify import certify
+    from lmic.outcome import verdict_of
+    from lmic.policy import step_options
+    from lmic.reductions.pipeline import solve
+
+    opts = step_options(be, options) if auto else options
     if options.strict == "auto":
         opts = replace(opts, strict="fixed-margin")
+    opts = replace(opts, relative_margin=min(opts.relative_margin, SCREEN_RELATIVE_MARGIN))
+    if max_iter is not None:
+        opts = replace(opts, max_iter=max_iter if opts.max_iter is None else min(opts.max_iter, max_iter))
+    if not be.interior_point:
+        # SCS's margin is floored at ten times its tolerance: at 1e-3 a relative margin of 1e-2
+        # would call values within a few per cent of the supremum infeasible
+        opts = replace(opts, tol=min(opts.tol, SCREEN_FIRST_ORDER_TOL))
     t0 = time.perf_counter()
     sol = solve(be, judge, opts)
     t1 = time.perf_counter()
@@ -282,6 +342,7 @@ def screen(
         res.proof = f"not certified by one solve ({sol.status}); moves the bisection's bracket only"
         res.solve_s, res.screened, res.solution = float(sol.solve_s or (t1 - t0)), True, sol
         res.attempts = [f"{be.label} / screen/{sol.strategy}: {sol.status} -> not certified (screen, unproven)"]
+        res.first_order = not be.interior_point
         return res
     cert = certify(judge, sol)
     verdict = verdict_of(judge, sol, cert)
@@ -296,16 +357,96 @@ def screen(
     elif verdict == "infeasible-certified":
         res.outcome = "infeasible"
         res.proof = "infeasible-certified: " + str(getattr(cert, "reason", "") or "verified Farkas ray")
-    elif sol.status in ("infeasible", "error", "inaccurate") or verdict == "rejected":
+    else:
         # not certified here, nothing proven: the bisection's upper end may move to it (the
         # final end is decided by the full policy, which escalates)
         res.proof = f"not certified by one solve ({sol.status}, {verdict}); moves the bisection's bracket only"
         res.screened = True
         verdict = "not certified (screen, unproven)"
-    else:
-        return None
     res.attempts = [line.format(verdict)]
+    res.first_order = not be.interior_point
     return res
+
+
+#: how far along the modelled reach of a certified point :meth:`Evaluator.stretch` tries it
+STRETCH_FRACTION = 0.95
+
+
+def reach(pa: Problem, pb: Problem, x: np.ndarray) -> float | None:
+    """The largest ``s`` keeping ``x`` strictly feasible on the segment from ``pa`` to ``pb``.
+
+    Every LMI and row at ``x`` is modelled as affine along the segment, ``M(s) = M_a + s (M_b -
+    M_a)``; ``M(s)`` stays positive definite for ``s < -1 / lambda_min(L^-1 (M_b - M_a) L^-T)``
+    (``M_a = L L^T``), ``inf`` when nothing decreases. ``None`` when ``x`` is not strictly
+    feasible at ``pa`` or the problems differ in structure. Only a guess of where to look: the
+    caller certifies ``x`` at the value it picks.
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> P = lambda v: Problem([Variable("p", "scalar", (1, 1))],
+    ...     [LMI("v - p > 0", 1, sp.csc_matrix([[v, -1.0]]))], LinearConstraints.empty(1),
+    ...     Objective("feasibility", [0.0, 0.0]))
+    >>> reach(P(2.0), P(0.0), np.array([1.0]))   # 2 - 2 s - 1 > 0 for s < 1/2
+    0.5
+    """
+    if pa.n != pb.n or len(pa.lmis) != len(pb.lmis) or len(pa.linear) != len(pb.linear) or len(x) != pa.n:
+        return None
+    s = math.inf
+    for la, lb in zip(pa.lmis, pb.lmis, strict=True):
+        if la.dim != lb.dim:
+            return None
+        Ma, Mb = la.matrix(x), lb.matrix(x)
+        try:
+            L = np.linalg.cholesky(Ma)
+        except np.linalg.LinAlgError:
+            return None
+        Li = np.linalg.inv(L)
+        D = Li @ (Mb - Ma) @ Li.T
+        lam = float(np.linalg.eigvalsh(0.5 * (D + D.T))[0])
+        if lam < 0:
+            s = min(s, -1.0 / lam)
+    if len(pa.linear):
+        ra, rb = pa.linear.residuals(x), pb.linear.residuals(x)
+        for k, kind in enumerate(pa.linear.kinds):
+            if kind == "eq":
+                if rb[k] != ra[k]:
+                    return None
+            elif ra[k] <= 0:
+                return None
+            elif rb[k] < ra[k]:
+                s = min(s, ra[k] / (ra[k] - rb[k]))
+    return s
+
+
+def _prove(problem: Problem, backend: Any, options: Any, value: float, exact: bool) -> PointResult | None:
+    """A value expected infeasible: the max-margin reduction alone on one interior-point backend.
+
+    Near a supremum the fixed-margin reduction ends in a numerical error there (Clarabel's
+    ``NumericalError`` on ``qib.thm1``) and the policy then runs max-margin anyway: this starts
+    with it, on the first interior-point backend of the route (the given backend when it is one).
+    Returns the point when it decided (certified, or a GLOBAL infeasibility proof), else ``None``
+    (the caller runs the full policy).
+    """
+    from lmic.options import SolveOptions
+    from lmic.policy import _instance, is_auto, route
+    from lmic.reductions.strict import has_strict
+
+    options = options or SolveOptions()
+    judge = feasibility_problem(problem)
+    if options.strict != "auto" or not has_strict(judge):
+        return None
+    try:
+        names = route(judge, backend)
+        ip = next((n for n in names if _instance(n).interior_point), None)
+    except LmicError:
+        return None
+    if ip is None or (not is_auto(backend) and ip is not names[0]):
+        return None
+    try:
+        res = decide(problem, ip, replace(options, strict="max-margin"), exact=exact, value=value)
+    except LmicError:
+        return None
+    return res if res.outcome in ("feasible", "infeasible") else None
 
 
 def setup(theorem: str, system: Any, param: str, params: Mapping[str, Any] | None) -> tuple[Any, Any, dict, Any]:
@@ -425,18 +566,74 @@ class Evaluator:
         #: decide by one certified solve first (:func:`screen`; bisections), the policy only
         #: when that does not decide
         self.screen = screen
+        #: screens may start with the route's first-order backend (off once it failed to
+        #: decide: the bracket only narrows towards the supremum, where it is slow)
+        self.first_order = True
         self.last_value = math.nan
+        #: the problems bound at the last few values (``stretch`` needs two of them)
+        self._bound: dict[float, Problem] = {}
 
-    def __call__(self, value: float, phase: str, *, full: bool = False, **info: Any) -> PointResult:
+    def bound(self, value: float) -> Problem:
+        """The plan bound at ``value`` (the parameter's own value, not ``sign * value``)."""
+        from lmic.compile import bind
+
+        got = self._bound.get(value)
+        if got is None:
+            got = bind(self.plan, self.sysobj, {**self.overrides, self.param: float(value)})
+            if len(self._bound) >= 4:
+                self._bound.pop(next(iter(self._bound)))
+            self._bound[value] = got
+        return got
+
+    def stretch(self, lower: float, upper: float, phase: str = "stretch") -> PointResult | None:
+        """The last certified point, certified again as far towards ``upper`` as it reaches.
+
+        ``lower`` (where :attr:`reference` was certified) and ``upper`` are in the
+        evaluator's terms (``sign * value``). The LMIs at the point are modelled as affine in
+        the parameter from the problems bound at both ends; the largest step ``s`` keeping
+        every strict LMI positive definite and every row positive (:func:`reach`) gives the
+        candidate ``lower + STRETCH_FRACTION * s * (upper - lower)`` (below ``upper``), where the
+        point is certified again (:func:`reuse`: the certifier alone decides, the model only
+        picks the value). Returns the recorded point, or ``None`` (nothing concluded).
+        """
+        if self.reference is None or self.keep_objective or not upper > lower:
+            return None
+        va, vb = self.sign * lower, self.sign * upper
+        pa, pb = self.bound(va), self.bound(vb)
+        s = reach(pa, pb, self.reference)
+        if s is None or s <= 0.0:
+            return None
+        cand = lower + min(STRETCH_FRACTION * s, STRETCH_FRACTION) * (upper - lower)
+        if not lower < cand < upper:
+            return None
+        value = self.sign * cand
+        t0 = time.perf_counter()
+        problem = self.bound(value)
+        bind_s = time.perf_counter() - t0
+        res = reuse(problem, self.reference, value=value, source=self.last_value)
+        if res is None:
+            return None
+        res.attempts = [f"stretch: the certified point of {self.last_value:.6g}, certified again -> certified"]
+        res.bind_s, res.stretched, res.problem = bind_s, True, problem
+        self.last_value = value
+        self.points.append(res)
+        if self.progress is not None:
+            self.progress({"phase": phase, "value": value, "point": res})
+        return res
+
+    def __call__(
+        self, value: float, phase: str, *, full: bool = False, prove: bool = False, **info: Any
+    ) -> PointResult:
         """Decide ``sign * value``: reuse, screen (as configured), else the full policy.
 
         ``full``: the full policy only (a bracket's final end, whose evidence is reported).
+        ``prove`` (with ``full``): a value expected infeasible, decided by the max-margin
+        reduction on the route's first interior-point backend first (:func:`_prove`), the full
+        policy where that does not decide.
         """
-        from lmic.compile import bind
-
         value = self.sign * value
         t0 = time.perf_counter()
-        problem = bind(self.plan, self.sysobj, {**self.overrides, self.param: float(value)})
+        problem = self.bound(float(value))
         bind_s = time.perf_counter() - t0
         self.sense = problem.objective.sense
         res: PointResult | None = None
@@ -444,7 +641,17 @@ class Evaluator:
         if not full and self.reuse and feasibility_question and self.reference is not None:
             res = reuse(problem, self.reference, value=float(value), source=self.last_value)
         if res is None and not full and self.screen and not self.precondition:
-            res = screen(problem, self.backend, warm_options(self.options, self.warm), value=float(value))
+            res = screen(
+                problem,
+                self.backend,
+                warm_options(self.options, self.warm),
+                value=float(value),
+                first_order=self.first_order,
+            )
+            if res is not None and res.fallback:
+                self.first_order = False
+        if res is None and full and prove:
+            res = _prove(problem, self.backend, self.options, float(value), self.exact)
         if res is None:
             res = decide(
                 problem,
