@@ -49,12 +49,21 @@ from lmic.ir.problem import LinearConstraints, Objective, Problem, Variable
 from lmic.solution import Solution
 from lmic.studies.sweep.ends import certified_end
 from lmic.studies.sweep.points import Evaluator, domain, in_domain, setup
-from lmic.studies.sweep.results import PointResult, SupResult
+from lmic.studies.sweep.results import PointResult, SupResult, kind_of
 
 __all__ = ["affine_parameter", "lift", "enclose"]
 
 #: relative tolerance of the numeric affinity check of the bound data
 AFFINE_RTOL = 1e-10
+#: the other end is first proven infeasible this fraction of the tolerance beyond the certified
+#: value (one max-margin solve, :func:`lmic.studies.sweep.points._prove`)
+PROOF_FRACTION = 0.9
+#: where that proof does not decide, the dual bound's search may take this multiple of the
+#: convex solve's time (at least :data:`DUAL_BUDGET_MIN_S` seconds)
+DUAL_BUDGET_FACTOR = 2.0
+DUAL_BUDGET_MIN_S = 1.0
+#: ... and the last attempt, one max-margin solve beyond the certified value, this multiple
+PROOF_BUDGET_FACTOR = 4.0
 
 
 def _coef_affine(coef: Any, p: sympy.Symbol) -> bool:
@@ -180,6 +189,8 @@ def _moving_column(probs: list[Problem], values: list[float]) -> tuple[int | Non
     for q in probs[1:]:
         for M0, M1 in zip(_columns(p0), _columns(q), strict=True):
             D = (M1 - M0).tocsc()
+            if not D.shape[0]:
+                continue
             scale = max(abs(M0).max() if M0.nnz else 0.0, abs(M1).max() if M1.nnz else 0.0, 1.0)
             big = np.abs(D).max(axis=0).toarray().ravel() > AFFINE_RTOL * scale
             moving.update(int(j) - 1 for j in np.flatnonzero(big))
@@ -404,8 +415,9 @@ def enclose(
     >>> r.method, r.upper_kind, r.lower <= r.upper                         # doctest: +SKIP
     ('enclosure', 'dual-bound', True)
     """
-    from lmic.api import solve
     from lmic.certify.enclosure import summary
+    from lmic.policy import decide as policy_decide
+    from lmic.routes import enclosure_of
 
     t_start = time.perf_counter()
     t0 = time.perf_counter()
@@ -420,18 +432,14 @@ def enclose(
     is_max = sign > 0
     lifted = lift(probs, values, param, "max" if is_max else "min", dom)
     try:
-        res = solve(lifted, backend=backend, options=options, backoff=0.0)
+        out = policy_decide(lifted, backend, options)
     except LmicError as err:
         return None, f"the convex problem in '{param}' was not solved: {err}"
-    enc = res.enclosure
-    x = None
-    if res.verdict == "certified" and res.solution is not None and res.solution.x is not None:
-        x = np.asarray(res.solution.x, dtype=float)
-    elif enc is not None and enc.get("restored_x") is not None:
-        x = np.asarray(enc["restored_x"], dtype=float)
-    if x is None or enc is None:
-        why = getattr(res.outcome, "reason", "") or res.status
-        return None, f"no certified point of the convex problem in '{param}' ({res.verdict}: {why})"
+    solve_s = float(sum(a.time_s for a in out.attempts))
+    sol, cert = out.solution, out.certificate
+    if out.verdict != "certified" or sol is None or sol.x is None:
+        return None, f"no certified point of the convex problem in '{param}' ({out.verdict}: {out.reason})"
+    x = np.asarray(sol.x, dtype=float)
     value = float(x[-1])
     # the point at the end, certified on the theorem's own problem bound at that value
     ev = Evaluator(plan, sysobj, overrides, param, backend, options, False, exact, None)
@@ -440,41 +448,67 @@ def enclose(
     pt = _certify_at(ev, value, xt) if in_domain(value, dom) else None
     if pt is None:
         return None, f"the convex problem's point at {param} = {value:g} is not certified on the theorem"
-    pt.solve_s += float(res.timings.get("solve_s", 0.0))  # the convex problem's solve
-    pt.certify_s += float(res.timings.get("certify_s", 0.0)) + float(res.timings.get("enclosure_s", 0.0))
-    dual = enc.get("upper") if is_max else enc.get("lower")
-    end = certified_end(pt, backend, options, backoff)
-    other = None if dual is None else float(dual)
-    if other is not None and ((is_max and other < value) or (not is_max and other > value)):
-        return None, f"inconsistent enclosure ({other:g} against the certified {value:g})"
-    proven = other is not None
-    tol = max(xtol, rtol * max(abs(value), abs(other) if other is not None else 0.0))
-    gap = abs(other - value) if other is not None else math.inf
-    converged = gap <= tol
+    pt.solve_s += solve_s  # the convex problem's solve
     what = "supremum" if is_max else "infimum"
+    tol = max(xtol, rtol * abs(value))
+    # the other end: for a scale-free theorem (its Farkas rays are global proofs) one
+    # infeasibility proof just beyond the certified value, within the tolerance; the proven
+    # dual bound of the convex problem (first for other theorems: their rays are bounded and
+    # the exact upgrade costs seconds); last the full policy there
+    other, kind, enc = None, "none", None
+    beyond = value + sign * PROOF_FRACTION * tol
+    proof = None
+    if k is not None and in_domain(beyond, dom):
+        proof = ev(beyond, "prove", full=True, prove=True, escalate=False)
+        if proof.outcome == "feasible":
+            return None, f"'{param}' = {beyond:g} beyond the convex problem's optimum {value:g} is certified"
+        if proof.outcome == "infeasible":
+            other, kind = beyond, "infeasible-certified"
+    if other is None:
+        budget = max(DUAL_BUDGET_MIN_S, DUAL_BUDGET_FACTOR * solve_s)
+        enc, _ = enclosure_of(lifted, sol, cert, exact, out.backend, options, budget_s=budget)
+        dual = None if enc is None else (enc.get("upper") if is_max else enc.get("lower"))
+        if dual is not None:
+            other, kind = float(dual), "dual-bound"
+            if (is_max and other < value) or (not is_max and other > value):
+                return None, f"inconsistent enclosure ({other:g} against the certified {value:g})"
+    if other is None and in_domain(beyond, dom):
+        # one max-margin solve, budgeted, no exact upgrade of a bounded ray (it costs seconds
+        # and rarely holds on these inhomogeneous problems): a bounded ray is labelled as such
+        budget = max(DUAL_BUDGET_MIN_S, PROOF_BUDGET_FACTOR * solve_s)
+        proof = ev(beyond, "prove", full=True, prove=True, escalate=False, exact=False, budget_s=budget)
+        if proof.outcome == "feasible":
+            return None, f"'{param}' = {beyond:g} beyond the convex problem's optimum {value:g} is certified"
+        if proof.outcome == "infeasible":
+            other, kind = beyond, "infeasible-certified"
+        else:
+            kind = kind_of(proof)
+    end = certified_end(pt, backend, options, backoff)
+    gap = abs(other - value) if other is not None else math.inf
+    converged = gap <= max(tol, max(xtol, rtol * abs(other)) if other is not None else 0.0)
     message = ""
-    if not proven:
-        message = f"no proven dual bound: the {what} is {'>=' if is_max else '<='} {value:g} ({enc.get('reason')})"
+    if other is None:
+        bounded = f" (at {beyond:g}: {proof.proof})" if proof is not None else ""
+        rel = ">=" if is_max else "<="
+        message = f"no proven {'upper' if is_max else 'lower'} end{bounded}: the {what} is {rel} {value:g}"
     elif not converged:
-        message = (
-            f"the enclosure's gap {gap:.3g} is above the tolerance {tol:.3g} "
-            "(an interior-point backend gives a tighter one)"
-        )
-    lower, upper = (value, other) if is_max else (other, value)
+        message = f"the enclosure's gap {gap:.3g} is above the tolerance {tol:.3g}"
+    shown = other if other is not None else (beyond if proof is not None else None)
+    lower, upper = (value, shown) if is_max else (shown, value)
     return (
         SupResult(
             theorem=plan.id,
             param=param,
             lower=lower,
             upper=upper,
-            upper_kind="dual-bound" if proven else "none",
+            upper_kind=kind,
             upper_proven=other,
             converged=bool(converged),
             xtol=xtol,
             rtol=rtol,
             iterations=0,
             points=ev.points,
-            backend=str(res.backend),
+            backend=str(out.backend),
             plan_s=plan_s,
             total_s=time.perf_counter() - t_start,
             message=message,
@@ -483,7 +517,7 @@ def enclose(
             sense="max" if is_max else "min",
             system=sysobj,
             method="enclosure",
-            enclosure=summary(enc),
+            enclosure=summary(enc) if enc is not None else None,
             method_note=fixed_note,
         ),
         "",
