@@ -466,7 +466,8 @@ def enclose(
             other, kind = beyond, "infeasible-certified"
     if other is None:
         budget = max(DUAL_BUDGET_MIN_S, DUAL_BUDGET_FACTOR * solve_s)
-        enc, _ = enclosure_of(lifted, sol, cert, exact, out.backend, options, budget_s=budget)
+        # a float proof with rigorous error bounds is a proof: no rational re-proof on top
+        enc, _ = enclosure_of(lifted, sol, cert, False, out.backend, options, budget_s=budget)
         dual = None if enc is None else (enc.get("upper") if is_max else enc.get("lower"))
         if dual is not None:
             other, kind = float(dual), "dual-bound"
