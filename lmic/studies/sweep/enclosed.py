@@ -48,13 +48,12 @@ from lmic.errors import LmicError
 from lmic.ir.problem import LinearConstraints, Objective, Problem, Variable
 from lmic.solution import Solution
 from lmic.studies.sweep.ends import certified_end
+from lmic.studies.sweep.homogeneous import AFFINE_RTOL, _columns, _same_structure, fix_scalar, homogeneous_scalar, unfix
 from lmic.studies.sweep.points import Evaluator, domain, in_domain, setup
 from lmic.studies.sweep.results import PointResult, SupResult, kind_of
 
-__all__ = ["affine_parameter", "lift", "enclose"]
+__all__ = ["affine_parameter", "lift", "enclose", "fix_scalar", "unfix"]
 
-#: relative tolerance of the numeric affinity check of the bound data
-AFFINE_RTOL = 1e-10
 #: the other end is first proven infeasible this fraction of the tolerance beyond the certified
 #: value (one max-margin solve, :func:`lmic.studies.sweep.points._prove`)
 PROOF_FRACTION = 0.9
@@ -106,18 +105,6 @@ def _template_affine(plan: Any, p: sympy.Symbol) -> str:
     return ""
 
 
-def _columns(problem: Problem) -> list[sp.csc_matrix]:
-    return [sp.csc_matrix(lmi.coeffs) for lmi in problem.lmis] + [sp.csc_matrix(problem.linear.A)]
-
-
-def _same_structure(a: Problem, b: Problem) -> bool:
-    if a.n != b.n or len(a.lmis) != len(b.lmis) or len(a.linear) != len(b.linear):
-        return False
-    if a.linear.kinds != b.linear.kinds or a.linear.strict != b.linear.strict:
-        return False
-    return all(x.dim == y.dim and x.strict == y.strict for x, y in zip(a.lmis, b.lmis, strict=True))
-
-
 def _data_affine(probs: list[Problem], values: list[float]) -> str:
     """``""`` when the bound problems differ only in the constant column, affinely in the value."""
     p0, p1, p2 = probs
@@ -159,138 +146,6 @@ def _sample_values(dom: tuple[float, float, bool, bool], start: float | None) ->
     return None
 
 
-def _scale_free(p: Problem) -> bool:
-    """Every LMI has ``F0 = 0`` and every row ``a0 = 0`` (exactly): the feasible set is a cone."""
-    return all(lmi.homogeneous for lmi in p.lmis) and not (
-        len(p.linear) and np.any(sp.csc_matrix(p.linear.A)[:, 0].toarray())
-    )
-
-
-def _positive_scalar(p: Problem, k: int) -> bool:
-    """A strict row ``c x_k > 0`` (``c > 0``, nothing else) holds in ``p``: every feasible ``x`` has ``x_k > 0``."""
-    if not len(p.linear):
-        return False
-    A = sp.csr_matrix(p.linear.A)
-    for r in range(A.shape[0]):
-        if p.linear.kinds[r] != "ge" or not p.linear.strict[r]:
-            continue
-        row = A.getrow(r)
-        if row.nnz == 1 and row.indices[0] == 1 + k and row.data[0] > 0:
-            return True
-    return False
-
-
-def _moving_column(probs: list[Problem], values: list[float]) -> tuple[int | None, str]:
-    """The one decision variable whose coefficients change (affinely) with the value, if exactly one does."""
-    p0 = probs[0]
-    if not all(_same_structure(p0, q) for q in probs[1:]):
-        return None, "the bound problems differ in structure"
-    moving: set[int] = set()
-    for q in probs[1:]:
-        for M0, M1 in zip(_columns(p0), _columns(q), strict=True):
-            D = (M1 - M0).tocsc()
-            if not D.shape[0]:
-                continue
-            scale = max(abs(M0).max() if M0.nnz else 0.0, abs(M1).max() if M1.nnz else 0.0, 1.0)
-            big = np.abs(D).max(axis=0).toarray().ravel() > AFFINE_RTOL * scale
-            moving.update(int(j) - 1 for j in np.flatnonzero(big))
-    if len(moving) != 1 or -1 in moving:
-        return None, f"the parameter changes the coefficients of {len(moving - {-1})} decision variables"
-    k = moving.pop()
-    v0 = values[0]
-    for M0, M1, M2 in zip(*(_columns(q) for q in probs[:3]), strict=True):
-        scale = max(abs(M0).max() if M0.nnz else 0.0, 1.0)
-        g1 = (M1[:, 1 + k] - M0[:, 1 + k]).toarray().ravel() / (values[1] - v0)
-        g2 = (M2[:, 1 + k] - M0[:, 1 + k]).toarray().ravel() / (values[2] - v0)
-        if np.max(np.abs(g1 - g2), initial=0.0) > AFFINE_RTOL * scale * max(1.0, *map(abs, values)):
-            return None, "the coefficients of the decision variable are not affine in the parameter"
-    return k, ""
-
-
-def fix_scalar(p: Problem, k: int) -> Problem:
-    """``p`` with the scalar decision variable at index ``k`` fixed to 1 (its column made the constant).
-
-    For a scale-free problem with a strict row ``x_k > 0`` this loses nothing: any solution
-    ``x`` gives the solution ``x / x_k`` with ``x_k = 1``, and conversely. The row ``x_k > 0``
-    (now ``1 > 0``) is dropped; the objective, derived quantities and checks too (the point is
-    certified on the theorem's own problem with ``x_k = 1`` put back, :func:`unfix`).
-
-    >>> from lmic.ir.problem import LMI
-    >>> P = Problem([Variable("a", "scalar", (1, 1)), Variable("w", "scalar", (1, 1), offset=1)],
-    ...     [LMI("w - a > 0", 1, sp.csc_matrix([[0.0, -1.0, 1.0]]))],
-    ...     LinearConstraints(sp.csr_matrix([[0.0, 0.0, 1.0]]), ["ge"], [True], ["w > 0"]),
-    ...     Objective("feasibility", [0.0, 0.0, 0.0]))
-    >>> F = fix_scalar(P, 1)
-    >>> F.n, F.lmis[0].coeffs.toarray().tolist(), len(F.linear)
-    (1, [[1.0, -1.0]], 0)
-    """
-    keep = [j for j in range(1 + p.n) if j != 1 + k]
-
-    def fixed(M: Any) -> sp.csc_matrix:
-        M = sp.csc_matrix(M)
-        out = M[:, keep].tolil()
-        out[:, 0] = M[:, [0]] + M[:, [1 + k]]
-        return sp.csc_matrix(out)
-
-    variables: list[Variable] = []
-    offset = 0
-    for v in p.variables:
-        if v.offset == k and v.size == 1:
-            continue
-        variables.append(replace(v, offset=offset))
-        offset += v.size
-    A = sp.csr_matrix(p.linear.A)
-    # ``c x_k >= 0`` / ``> 0`` with ``c > 0`` holds at ``x_k = 1``: dropped (any other row stays)
-    rows = [
-        r
-        for r in range(A.shape[0])
-        if not (
-            p.linear.kinds[r] == "ge"
-            and A.getrow(r).nnz == 1
-            and A.getrow(r).indices[0] == 1 + k
-            and A.getrow(r).data[0] > 0
-        )
-    ]
-    linear = LinearConstraints(
-        sp.csr_matrix(fixed(A[rows, :])) if rows else sp.csr_matrix((0, offset + 1)),
-        [p.linear.kinds[r] for r in rows],
-        [p.linear.strict[r] for r in rows],
-        [p.linear.names[r] for r in rows],
-    )
-    return Problem(
-        variables=variables,
-        lmis=[replace(lmi, coeffs=fixed(lmi.coeffs)) for lmi in p.lmis],
-        linear=linear,
-        objective=Objective("feasibility", np.zeros(offset + 1)),
-        data=p.data,
-        meta=dict(p.meta),
-    )
-
-
-def unfix(x: np.ndarray, k: int | None) -> np.ndarray:
-    """The theorem's point from a point of :func:`fix_scalar` (``x_k = 1`` put back).
-
-    >>> unfix(np.array([2.0, 3.0]), 1).tolist(), unfix(np.array([2.0]), None).tolist()
-    ([2.0, 1.0, 3.0], [2.0])
-    """
-    return np.asarray(x, dtype=float) if k is None else np.insert(np.asarray(x, dtype=float), k, 1.0)
-
-
-def _homogeneous(probs: list[Problem], values: list[float]) -> tuple[int | None, str]:
-    """The scalar ``x_k > 0`` the parameter multiplies in a scale-free problem (``None``, why, if none)."""
-    if not all(_scale_free(q) for q in probs):
-        return None, "the problem is not scale-free"
-    k, why = _moving_column(probs, values)
-    if k is None:
-        return None, why
-    var = next((v for v in probs[0].variables if v.offset <= k < v.offset + v.size), None)
-    if var is None or var.size != 1:
-        return None, "the parameter multiplies a matrix variable"
-    if not all(_positive_scalar(q, k) for q in probs):
-        return None, f"the parameter multiplies {var.name}, which is not constrained positive"
-    return k, var.name
-
-
 def affine_parameter(plan: Any, sysobj: Any, overrides: Mapping[str, Any], decl: Any) -> tuple[bool, str, Any]:
     """Whether the parameter ``decl`` enters the theorem affinely (the enclosure replaces bisection).
 
@@ -329,7 +184,7 @@ def affine_parameter(plan: Any, sysobj: Any, overrides: Mapping[str, Any], decl:
         why = _data_affine(probs, values)
         if not why:
             return True, "", (probs, values, None)
-    k, name = _homogeneous(probs, values)
+    k, name = homogeneous_scalar(probs, values)
     if k is None:
         return False, f"{why}; {name}", None
     return True, name, ([fix_scalar(q, k) for q in probs], values, k)
@@ -417,7 +272,6 @@ def enclose(
     """
     from lmic.certify.enclosure import summary
     from lmic.policy import decide as policy_decide
-    from lmic.routes import enclosure_of
 
     t_start = time.perf_counter()
     t0 = time.perf_counter()
@@ -436,7 +290,7 @@ def enclose(
     except LmicError as err:
         return None, f"the convex problem in '{param}' was not solved: {err}"
     solve_s = float(sum(a.time_s for a in out.attempts))
-    sol, cert = out.solution, out.certificate
+    sol = out.solution
     if out.verdict != "certified" or sol is None or sol.x is None:
         return None, f"no certified point of the convex problem in '{param}' ({out.verdict}: {out.reason})"
     x = np.asarray(sol.x, dtype=float)
@@ -466,8 +320,7 @@ def enclose(
             other, kind = beyond, "infeasible-certified"
     if other is None:
         budget = max(DUAL_BUDGET_MIN_S, DUAL_BUDGET_FACTOR * solve_s)
-        # a float proof with rigorous error bounds is a proof: no rational re-proof on top
-        enc, _ = enclosure_of(lifted, sol, cert, False, out.backend, options, budget_s=budget)
+        enc = _dual_end(lifted, sol, out.backend, options, solve_s, budget)
         dual = None if enc is None else (enc.get("upper") if is_max else enc.get("lower"))
         if dual is not None:
             other, kind = float(dual), "dual-bound"
@@ -523,6 +376,62 @@ def enclose(
         ),
         "",
     )
+
+
+def _dual_end(
+    lifted: Problem, sol: Solution, backend: Any, options: Any, solve_s: float, budget: float
+) -> dict[str, Any] | None:
+    """The enclosure of the convex problem's optimum from its certified point and its dual.
+
+    :func:`lmic.certify.enclosure.enclosure` within ``budget`` seconds, its re-solves (perturbed
+    problem, centred dual point) on ``backend``; a float proof with rigorous error bounds (no
+    rational re-proof on top) and no re-solve at tighter tolerances (the study's tolerance is
+    met by the other end's proof, or reported as not met).
+    """
+    from lmic.backends.registry import get_backend
+    from lmic.certify.enclosure import enclosure
+    from lmic.options import SolveOptions
+    from lmic.reductions.pipeline import solve
+
+    if sol.duals is None:
+        return None
+    deadline = time.perf_counter() + budget
+    try:
+        be = get_backend(str(backend))
+    except LmicError:
+        return None
+    opts = options or SolveOptions()
+
+    def again(problem: Problem) -> Solution | None:
+        if time.perf_counter() + solve_s > deadline:
+            return None  # the re-solve would not fit in the budget
+        try:
+            other = solve(be, problem, opts) if be.supports(problem) else None
+        except LmicError:
+            return None
+        return other if other is not None and other.status in ("optimal", "inaccurate") else None
+
+    def resolve(problem: Problem) -> dict[str, Any] | None:
+        other = again(problem)
+        return None if other is None else other.duals
+
+    def solve_point(problem: Problem) -> np.ndarray | None:
+        other = again(problem)
+        return None if other is None else other.x
+
+    try:
+        return enclosure(
+            lifted,
+            sol.duals,
+            sol.x,
+            exact=False,
+            resolve=resolve,
+            solve_point=solve_point,
+            solve_s=solve_s,
+            budget_s=budget,
+        )
+    except LmicError:
+        return None
 
 
 def _certify_at(ev: Evaluator, value: float, x: np.ndarray) -> PointResult | None:
