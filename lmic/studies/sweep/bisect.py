@@ -6,9 +6,14 @@ analysed once, each point costs one bind, one solve (warm-started from the neigh
 and one certification (:mod:`lmic.studies.sweep.points`).
 
 Where the parameter enters the theorem's constraints affinely and multiplies no decision
-variable (``gamma`` in ``[..., -gamma I]``), the supremum is itself the optimal value of a
-convex problem: it is solved once and enclosed (:mod:`lmic.studies.sweep.enclosed`) instead of
-bisected, unless ``method="bisection"``.
+variable (``gamma`` in ``[..., -gamma I]``), or multiplies only a positive scalar of a
+scale-free theorem (``beta omega`` in ``qib.thm1``, :mod:`lmic.studies.sweep.homogeneous`), the
+supremum is itself the optimal value of a convex problem: it is solved once and its other end
+proven (:mod:`lmic.studies.sweep.enclosed`) instead of bisected, unless ``method="bisection"``.
+
+Interior values are cheap where they can be: a certified point is certified again further up
+where its LMIs, modelled as affine in the parameter, stay definite (``stretch``, no solve), and
+screens impose a small margin (near a supremum the best margin is about the tolerance).
 
 For the supremum the parameter only has to be feasible, so the theorem's objective is dropped:
 each point is a feasibility problem, routed and reduced as one by the solve policy. Once a point
