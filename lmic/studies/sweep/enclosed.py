@@ -311,6 +311,8 @@ def enclose(
     # the exact upgrade costs seconds); last the full policy there
     other, kind, enc = None, "none", None
     beyond = value + sign * PROOF_FRACTION * tol
+    if beyond == value:  # a tolerance below the float spacing: the next float beyond
+        beyond = math.nextafter(value, sign * math.inf)
     proof = None
     if k is not None and in_domain(beyond, dom):
         proof = ev(beyond, "prove", full=True, prove=True, escalate=False)
