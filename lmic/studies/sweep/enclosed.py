@@ -59,8 +59,8 @@ __all__ = ["affine_parameter", "lift", "enclose", "fix_scalar", "unfix"]
 PROOF_FRACTION = 0.9
 #: where that proof does not decide, the dual bound's search may take this multiple of the
 #: convex solve's time (at least :data:`DUAL_BUDGET_MIN_S` seconds)
-DUAL_BUDGET_FACTOR = 2.0
-DUAL_BUDGET_MIN_S = 1.0
+DUAL_BUDGET_FACTOR = 1.0
+DUAL_BUDGET_MIN_S = 0.5
 #: ... and the last attempt, one max-margin solve beyond the certified value, this multiple
 PROOF_BUDGET_FACTOR = 4.0
 
