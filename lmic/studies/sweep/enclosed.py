@@ -4,9 +4,14 @@ When a theorem's parameter ``p`` enters its constraints affinely and multiplies 
 variable (``gamma`` in ``[A'P + PA, PB; *, -gamma I]``), the set of ``(x, p)`` that satisfy them
 is convex, and ``sup {p : the theorem holds}`` is the optimal value of one convex problem: ``p``
 becomes a decision variable and the objective ``max p`` (``min p`` for an infimum). That
-problem is solved once and its optimal value enclosed (:func:`lmic.certify.enclosure.enclosure`,
-through :func:`lmic.api.solve`): the certified point gives the certified end, the proven dual
-bound the other end (weak duality: no feasible value lies beyond it), instead of a bisection.
+problem is solved once by the solve policy: its certified point gives the certified end. The
+other end, instead of a bisection, in this order: for a scale-free theorem (a positive scalar
+fixed to 1, :mod:`lmic.studies.sweep.homogeneous`) one max-margin solve just beyond the
+certified value, within the tolerance, whose Farkas ray is a global proof there; else the
+proven dual bound of the convex problem (:func:`lmic.certify.enclosure.enclosure`, weak
+duality: no feasible value lies beyond it), within a budget of a multiple of the solve; else
+one budgeted max-margin solve beyond the certified value, whose bounded ray is labelled
+``infeasible-bounded`` (never a bound).
 
 Whether ``p`` enters affinely is decided from the template and the IR, never from a theorem's
 name (:func:`affine_parameter`):
@@ -16,7 +21,9 @@ name (:func:`affine_parameter`):
    matrix factor;
 2. the problems bound at three values of ``p`` have the same structure and differ only in the
    constant column, affinely (this also catches constants computed from ``p`` by a theorem's
-   ``const`` function, which the template cannot show).
+   ``const`` function, which the template cannot show);
+3. or, where ``p`` multiplies a decision variable: the bound problems are scale-free and ``p``
+   changes (affinely) only the coefficients of one scalar ``w`` with a strict row ``w > 0``.
 
 The point at the certified end is certified again on the theorem's own problem bound at that
 value (:func:`lmic.studies.sweep.ends.certified_end`, gains and certificate as after a
