@@ -6,11 +6,21 @@ Three studies, each at a few sizes, on random systems:
   analysis, a re-bind, a warm-started solve and a certification a point) against a CVXPY loop
   over a ``cp.Parameter`` (DPP: the problem is built and canonicalised once, each point
   re-solved), every CVXPY point certified by lmic's certifier;
-- ``maximize``: the supremum of ``beta`` on ``qib.thm1`` (``beta`` multiplies ``omega``: a
-  bisection, warm-started) against a CVXPY DPP bisection with the same bracket and tolerance,
-  a value counting as feasible only when lmic's certifier certifies CVXPY's point;
+- ``maximize``: the supremum of ``beta`` on ``qib.thm1`` against a CVXPY DPP bisection with the
+  same bracket and tolerance, a value counting as feasible only when lmic's certifier certifies
+  CVXPY's point. ``beta`` multiplies only ``omega > 0`` in a scale-free problem: lmic fixes
+  ``omega = 1``, solves ``max beta`` once and proves the upper end by one infeasibility proof
+  within the tolerance (:mod:`lmic.studies.sweep.enclosed`);
+- ``maxbisect``: the same supremum by lmic's bisection (``method="bisection"``: screens, stretch
+  of certified points, the final end proven);
 - ``minimize``: the infimum of ``gamma`` in the bounded-real lemma with ``gamma`` a parameter
-  (affine: lmic solves once and encloses) against the same CVXPY DPP bisection.
+  (affine: lmic solves once, then the proven dual bound, else a labelled bounded ray) against
+  the same CVXPY DPP bisection.
+
+Evidence is not the same: lmic's certified end is certified and its other end carries a global
+proof (``infeasible-certified`` or ``dual-bound``) or is labelled (``infeasible-bounded``);
+CVXPY's loop certifies its feasible end only, its other end is "the solver did not return a
+point the certifier accepts" and proves nothing.
 
 lmic's sweep certifies the last certified point again at the next value before solving (a
 feasibility theorem: a certified point is the whole answer), and its bisection decides interior
@@ -25,6 +35,7 @@ Usage::
 
     python benchmarks/sweeps.py                        # sizes 10,20, 3 rounds
     python benchmarks/sweeps.py --sizes 10,20,30 --repeat 5 --solver SCS
+    python benchmarks/sweeps.py --studies maximize,maxbisect,minimize --lmic-backend auto
 
 Examples
 --------
@@ -183,12 +194,15 @@ def run(study: str, method: str, n: int, solver: str, rtol: float, lmic_backend:
             pt = _CvxpyPoint("qib.thm1", system, "beta", _qib_cvxpy, solver)
             found = sum(pt(v) for v in values)
         return {"time_s": time.perf_counter() - t0, "value": found, "evals": 20}
-    if study == "maximize":
+    if study in ("maximize", "maxbisect"):
         system = random_qib_system(n)
         lo, hi = 1e-4, 0.5
         if method == "lmic":
-            r = maximize("qib.thm1", system, "beta", lo=lo, hi=hi, rtol=rtol, xtol=0.0, backend=backend, backoff=0.0)
-            how = f"{r.method}, {sum(p.reused for p in r.points)} reused, {sum(p.screened for p in r.points)} screened"
+            how_m = "auto" if study == "maximize" else "bisection"
+            kw = {"rtol": rtol, "xtol": 0.0, "backend": backend, "backoff": 0.0, "method": how_m}
+            r = maximize("qib.thm1", system, "beta", lo=lo, hi=hi, **kw)
+            how = f"{r.method}, upper {r.upper_kind}, {sum(p.reused for p in r.points)} reused"
+            how += f" ({sum(p.stretched for p in r.points)} stretched), {sum(p.screened for p in r.points)} screened"
             return {"time_s": time.perf_counter() - t0, "value": r.lower, "evals": len(r.points), "how": how}
         pt = _CvxpyPoint("qib.thm1", system, "beta", _qib_cvxpy, solver)
         v, k = _cvxpy_bisect(pt, lo, hi, rtol)
@@ -197,7 +211,8 @@ def run(study: str, method: str, n: int, solver: str, rtol: float, lmic_backend:
     lo, hi = 1e-2, 1e3
     if method == "lmic":
         r = minimize(BRL, system, "gamma", lo=lo, hi=hi, rtol=rtol, xtol=0.0, backend=backend, backoff=0.0)
-        return {"time_s": time.perf_counter() - t0, "value": r.upper, "evals": len(r.points), "how": r.method}
+        how = f"{r.method}, lower {r.upper_kind}"
+        return {"time_s": time.perf_counter() - t0, "value": r.upper, "evals": len(r.points), "how": how}
     pt = _CvxpyPoint(BRL, system, "gamma", _brl_cvxpy, solver)
     v, k = _cvxpy_bisect(pt, hi, lo, rtol)
     return {"time_s": time.perf_counter() - t0, "value": v, "evals": k, "how": "bisection"}

@@ -186,6 +186,8 @@ def _print_sup(r: SupResult, written: str | None = None) -> None:
     out.print(f"theorem    {r.theorem}   {op} {r.param} ({how_found}, backend {r.backend})")
     if r.method_note and r.method != "enclosure" and r.method_note != "bisection asked for":
         out.print(f"  method   bisection ({r.method_note})")
+    elif r.method_note and r.method == "enclosure":
+        out.print(f"  method   enclosure ({r.method_note})")
     tol = f"xtol {r.xtol:g}, rtol {r.rtol:g}"
     c, o = r.certified, r.other
     if c is None:
@@ -217,7 +219,7 @@ def _print_sup(r: SupResult, written: str | None = None) -> None:
                 "infeasible-certified": "infeasible-certified (global proof)",
                 "dual-bound": "proven dual bound (dual point proved feasible: no value beyond it)",
             }.get(r.upper_kind, r.upper_kind)
-            label = "dual" if r.method == "enclosure" else "bisection"
+            label = "dual" if r.upper_kind == "dual-bound" else "bisection" if r.method != "enclosure" else "proof"
             out.print(f"  {label} {other_side} {value_text(o, 10)}  {kind}")
         if r.upper_proven is not None and r.upper_proven != o:
             out.print(f"  proven infeasible (global) from {value_text(r.upper_proven, 10)}")

@@ -9,10 +9,15 @@
   point is first certified again at the new value (``reuse``: no solve where it holds), and a
   bisection's interior values are decided by one certified solve (``screen``), the full policy
   deciding the bracket's final ends;
+- :mod:`~lmic.studies.sweep.screens`: a bisection's cheap steps (one certified solve with a small
+  margin, SCS first on the default route; the reach of a certified point, certified again
+  further up without a solve);
 - :mod:`~lmic.studies.sweep.ends`: the certified end of a bracket, its gains and certificate;
 - :mod:`~lmic.studies.sweep.bisect`: suprema and infima by bisection;
 - :mod:`~lmic.studies.sweep.enclosed`: suprema and infima of a parameter that enters affinely,
   solved once as a convex problem and enclosed (instead of bisected);
+- :mod:`~lmic.studies.sweep.homogeneous`: a parameter multiplying one positive scalar of a
+  scale-free theorem (fixed to 1, it enters affinely);
 - :mod:`~lmic.studies.sweep.grid`: grids.
 
 Examples

@@ -6,9 +6,14 @@ analysed once, each point costs one bind, one solve (warm-started from the neigh
 and one certification (:mod:`lmic.studies.sweep.points`).
 
 Where the parameter enters the theorem's constraints affinely and multiplies no decision
-variable (``gamma`` in ``[..., -gamma I]``), the supremum is itself the optimal value of a
-convex problem: it is solved once and enclosed (:mod:`lmic.studies.sweep.enclosed`) instead of
-bisected, unless ``method="bisection"``.
+variable (``gamma`` in ``[..., -gamma I]``), or multiplies only a positive scalar of a
+scale-free theorem (``beta omega`` in ``qib.thm1``, :mod:`lmic.studies.sweep.homogeneous`), the
+supremum is itself the optimal value of a convex problem: it is solved once and its other end
+proven (:mod:`lmic.studies.sweep.enclosed`) instead of bisected, unless ``method="bisection"``.
+
+Interior values are cheap where they can be: a certified point is certified again further up
+where its LMIs, modelled as affine in the parameter, stay definite (``stretch``, no solve), and
+screens impose a small margin (near a supremum the best margin is about the tolerance).
 
 For the supremum the parameter only has to be feasible, so the theorem's objective is dropped:
 each point is a feasibility problem, routed and reduced as one by the solve policy. Once a point
@@ -242,7 +247,8 @@ def _sup(
             backoff=backoff,
         )
         if res is not None:
-            res.method_note = f"'{param}' enters affinely: one convex solve, enclosed"
+            fixed = f" with {res.method_note}" if res.method_note else ""
+            res.method_note = f"'{param}' enters affinely{fixed}: one convex solve, enclosed"
             return res
         note = f"no enclosure: {why}"
     res = _bisect(
@@ -332,6 +338,11 @@ def _bisect(
         if pt.outcome == "feasible":
             if lower is None or v > lower:
                 lower = v
+            if upper is not None and not pt.reused and lower == v:
+                # the point may hold further up: certified again there, no solve
+                st = ev.stretch(v, upper)
+                if st is not None:
+                    lower = sign * st.value
         elif upper is None or v < upper:
             upper, upper_pt = v, pt
         state["lower"], state["upper"] = bracket_v(lower, upper)
@@ -428,13 +439,18 @@ def _bisect(
             break
         # the final non-certified end was only screened (the solver said infeasible): its
         # evidence comes from the full policy (a proof, or an honest label)
-        pt = ev(upper, "prove", full=True)
+        pt = ev(upper, "prove", full=True, prove=True)
         if pt.outcome != "feasible":
             upper_pt = pt
             break
-        # the screen was wrong: the bracket moves up to the next value not certified, and the
-        # rest of the bisection uses the full policy (screens disagree with it near this end)
-        ev.screen = False
+        # the screen was wrong: the bracket moves up to the next value not certified; a wrong
+        # first-order screen ends first-order screens, a wrong interior-point screen ends
+        # screening (the rest of the bisection uses the full policy: screens disagree with it
+        # near this end)
+        if upper_pt.first_order:
+            ev.first_order = False
+        else:
+            ev.screen = False
         lower = upper
         # the next upper end: the nearest value not certified (if it was only screened, the
         # full policy decides it when it is the final end again)

@@ -4,9 +4,14 @@ When a theorem's parameter ``p`` enters its constraints affinely and multiplies 
 variable (``gamma`` in ``[A'P + PA, PB; *, -gamma I]``), the set of ``(x, p)`` that satisfy them
 is convex, and ``sup {p : the theorem holds}`` is the optimal value of one convex problem: ``p``
 becomes a decision variable and the objective ``max p`` (``min p`` for an infimum). That
-problem is solved once and its optimal value enclosed (:func:`lmic.certify.enclosure.enclosure`,
-through :func:`lmic.api.solve`): the certified point gives the certified end, the proven dual
-bound the other end (weak duality: no feasible value lies beyond it), instead of a bisection.
+problem is solved once by the solve policy: its certified point gives the certified end. The
+other end, instead of a bisection, in this order: for a scale-free theorem (a positive scalar
+fixed to 1, :mod:`lmic.studies.sweep.homogeneous`) one max-margin solve just beyond the
+certified value, within the tolerance, whose Farkas ray is a global proof there; else the
+proven dual bound of the convex problem (:func:`lmic.certify.enclosure.enclosure`, weak
+duality: no feasible value lies beyond it), within a budget of a multiple of the solve; else
+one budgeted max-margin solve beyond the certified value, whose bounded ray is labelled
+``infeasible-bounded`` (never a bound).
 
 Whether ``p`` enters affinely is decided from the template and the IR, never from a theorem's
 name (:func:`affine_parameter`):
@@ -16,7 +21,9 @@ name (:func:`affine_parameter`):
    matrix factor;
 2. the problems bound at three values of ``p`` have the same structure and differ only in the
    constant column, affinely (this also catches constants computed from ``p`` by a theorem's
-   ``const`` function, which the template cannot show).
+   ``const`` function, which the template cannot show);
+3. or, where ``p`` multiplies a decision variable: the bound problems are scale-free and ``p``
+   changes (affinely) only the coefficients of one scalar ``w`` with a strict row ``w > 0``.
 
 The point at the certified end is certified again on the theorem's own problem bound at that
 value (:func:`lmic.studies.sweep.ends.certified_end`, gains and certificate as after a
@@ -48,13 +55,21 @@ from lmic.errors import LmicError
 from lmic.ir.problem import LinearConstraints, Objective, Problem, Variable
 from lmic.solution import Solution
 from lmic.studies.sweep.ends import certified_end
+from lmic.studies.sweep.homogeneous import AFFINE_RTOL, _columns, _same_structure, fix_scalar, homogeneous_scalar, unfix
 from lmic.studies.sweep.points import Evaluator, domain, in_domain, setup
-from lmic.studies.sweep.results import PointResult, SupResult
+from lmic.studies.sweep.results import PointResult, SupResult, kind_of
 
-__all__ = ["affine_parameter", "lift", "enclose"]
+__all__ = ["affine_parameter", "lift", "enclose", "fix_scalar", "unfix"]
 
-#: relative tolerance of the numeric affinity check of the bound data
-AFFINE_RTOL = 1e-10
+#: the other end is first proven infeasible this fraction of the tolerance beyond the certified
+#: value (one max-margin solve, :func:`lmic.studies.sweep.points._prove`)
+PROOF_FRACTION = 0.9
+#: where that proof does not decide, the dual bound's search may take this multiple of the
+#: convex solve's time (at least :data:`DUAL_BUDGET_MIN_S` seconds)
+DUAL_BUDGET_FACTOR = 1.0
+DUAL_BUDGET_MIN_S = 0.5
+#: ... and the last attempt, one max-margin solve beyond the certified value, this multiple
+PROOF_BUDGET_FACTOR = 4.0
 
 
 def _coef_affine(coef: Any, p: sympy.Symbol) -> bool:
@@ -95,18 +110,6 @@ def _template_affine(plan: Any, p: sympy.Symbol) -> str:
         if not _coef_affine(coef, p):
             return f"'{p}' enters non-affinely ({coef})"
     return ""
-
-
-def _columns(problem: Problem) -> list[sp.csc_matrix]:
-    return [sp.csc_matrix(lmi.coeffs) for lmi in problem.lmis] + [sp.csc_matrix(problem.linear.A)]
-
-
-def _same_structure(a: Problem, b: Problem) -> bool:
-    if a.n != b.n or len(a.lmis) != len(b.lmis) or len(a.linear) != len(b.linear):
-        return False
-    if a.linear.kinds != b.linear.kinds or a.linear.strict != b.linear.strict:
-        return False
-    return all(x.dim == y.dim and x.strict == y.strict for x, y in zip(a.lmis, b.lmis, strict=True))
 
 
 def _data_affine(probs: list[Problem], values: list[float]) -> str:
@@ -153,8 +156,15 @@ def _sample_values(dom: tuple[float, float, bool, bool], start: float | None) ->
 def affine_parameter(plan: Any, sysobj: Any, overrides: Mapping[str, Any], decl: Any) -> tuple[bool, str, Any]:
     """Whether the parameter ``decl`` enters the theorem affinely (the enclosure replaces bisection).
 
-    Returns ``(affine, reason, bound)``: ``bound`` is ``(problems, values)`` at three values of
-    the parameter (what :func:`lift` needs) when ``affine``.
+    Two cases: the parameter enters only the constant terms, affinely (``gamma`` in ``-gamma
+    I``); or the problem is scale-free, the parameter multiplies only one scalar decision
+    variable ``w`` (affinely) and a strict row ``w > 0`` holds (``beta omega`` in
+    ``qib.thm1``): then ``w = 1`` loses nothing (:func:`fix_scalar`) and the parameter enters
+    the constant terms of the fixed problem.
+
+    Returns ``(affine, reason, bound)``: ``bound`` is ``(problems, values, k)`` at three values
+    of the parameter (what :func:`lift` needs; ``k`` the index of the variable fixed to 1, or
+    ``None``) when ``affine``; ``reason`` then names the fixed variable (``""`` if none).
 
     Examples
     --------
@@ -166,7 +176,7 @@ def affine_parameter(plan: Any, sysobj: Any, overrides: Mapping[str, Any], decl:
     from lmic.compile import bind
 
     why = _template_affine(plan, decl.symbol)
-    if why:
+    if why and "multiplies the decision variable" not in why:
         return False, why, None
     dom = domain(decl)
     start = sysobj.params.get(decl.name, decl.default)
@@ -177,10 +187,14 @@ def affine_parameter(plan: Any, sysobj: Any, overrides: Mapping[str, Any], decl:
         probs = [bind(plan, sysobj, {**overrides, decl.name: v}) for v in values]
     except LmicError as err:
         return False, f"binding at a sample value failed: {err}", None
-    why = _data_affine(probs, values)
-    if why:
-        return False, why, None
-    return True, "", (probs, values)
+    if not why:
+        why = _data_affine(probs, values)
+        if not why:
+            return True, "", (probs, values, None)
+    k, name = homogeneous_scalar(probs, values)
+    if k is None:
+        return False, f"{why}; {name}", None
+    return True, name, ([fix_scalar(q, k) for q in probs], values, k)
 
 
 def lift(
@@ -263,8 +277,8 @@ def enclose(
     >>> r.method, r.upper_kind, r.lower <= r.upper                         # doctest: +SKIP
     ('enclosure', 'dual-bound', True)
     """
-    from lmic.api import solve
     from lmic.certify.enclosure import summary
+    from lmic.policy import decide as policy_decide
 
     t_start = time.perf_counter()
     t0 = time.perf_counter()
@@ -273,65 +287,91 @@ def enclose(
     affine, why, bound = affine_parameter(plan, sysobj, overrides, decl)
     if not affine:
         return None, why
-    probs, values = bound
+    probs, values, k = bound
+    fixed_note = f"{why} = 1 (scale-free, {why} > 0)" if k is not None else ""
     dom = domain(decl)
     is_max = sign > 0
     lifted = lift(probs, values, param, "max" if is_max else "min", dom)
     try:
-        res = solve(lifted, backend=backend, options=options, backoff=0.0)
+        out = policy_decide(lifted, backend, options)
     except LmicError as err:
         return None, f"the convex problem in '{param}' was not solved: {err}"
-    enc = res.enclosure
-    x = None
-    if res.verdict == "certified" and res.solution is not None and res.solution.x is not None:
-        x = np.asarray(res.solution.x, dtype=float)
-    elif enc is not None and enc.get("restored_x") is not None:
-        x = np.asarray(enc["restored_x"], dtype=float)
-    if x is None or enc is None:
-        why = getattr(res.outcome, "reason", "") or res.status
-        return None, f"no certified point of the convex problem in '{param}' ({res.verdict}: {why})"
+    solve_s = float(sum(a.time_s for a in out.attempts))
+    sol = out.solution
+    if out.verdict != "certified" or sol is None or sol.x is None:
+        return None, f"no certified point of the convex problem in '{param}' ({out.verdict}: {out.reason})"
+    x = np.asarray(sol.x, dtype=float)
     value = float(x[-1])
     # the point at the end, certified on the theorem's own problem bound at that value
     ev = Evaluator(plan, sysobj, overrides, param, backend, options, False, exact, None)
-    ev.reference = x[:-1]
-    pt = _certify_at(ev, value, x[:-1]) if in_domain(value, dom) else None
+    xt = unfix(x[:-1], k)
+    ev.reference = xt
+    pt = _certify_at(ev, value, xt) if in_domain(value, dom) else None
     if pt is None:
         return None, f"the convex problem's point at {param} = {value:g} is not certified on the theorem"
-    pt.solve_s += float(res.timings.get("solve_s", 0.0))  # the convex problem's solve
-    pt.certify_s += float(res.timings.get("certify_s", 0.0)) + float(res.timings.get("enclosure_s", 0.0))
-    dual = enc.get("upper") if is_max else enc.get("lower")
-    end = certified_end(pt, backend, options, backoff)
-    other = None if dual is None else float(dual)
-    if other is not None and ((is_max and other < value) or (not is_max and other > value)):
-        return None, f"inconsistent enclosure ({other:g} against the certified {value:g})"
-    proven = other is not None
-    tol = max(xtol, rtol * max(abs(value), abs(other) if other is not None else 0.0))
-    gap = abs(other - value) if other is not None else math.inf
-    converged = gap <= tol
+    pt.solve_s += solve_s  # the convex problem's solve
     what = "supremum" if is_max else "infimum"
+    tol = max(xtol, rtol * abs(value))
+    # the other end: for a scale-free theorem (its Farkas rays are global proofs) one
+    # infeasibility proof just beyond the certified value, within the tolerance; the proven
+    # dual bound of the convex problem (first for other theorems: their rays are bounded and
+    # the exact upgrade costs seconds); last the full policy there
+    other, kind, enc = None, "none", None
+    beyond = value + sign * PROOF_FRACTION * tol
+    if beyond == value:  # a tolerance below the float spacing: the next float beyond
+        beyond = math.nextafter(value, sign * math.inf)
+    proof = None
+    if k is not None and in_domain(beyond, dom):
+        proof = ev(beyond, "prove", full=True, prove=True, escalate=False)
+        if proof.outcome == "feasible":
+            return None, f"'{param}' = {beyond:g} beyond the convex problem's optimum {value:g} is certified"
+        if proof.outcome == "infeasible":
+            other, kind = beyond, "infeasible-certified"
+    if other is None:
+        budget = max(DUAL_BUDGET_MIN_S, DUAL_BUDGET_FACTOR * solve_s)
+        enc = _dual_end(lifted, sol, out.backend, options, solve_s, budget)
+        dual = None if enc is None else (enc.get("upper") if is_max else enc.get("lower"))
+        if dual is not None:
+            other, kind = float(dual), "dual-bound"
+            if (is_max and other < value) or (not is_max and other > value):
+                return None, f"inconsistent enclosure ({other:g} against the certified {value:g})"
+    if other is None and in_domain(beyond, dom):
+        # one max-margin solve, budgeted, no exact upgrade of a bounded ray (it costs seconds
+        # and rarely holds on these inhomogeneous problems): a bounded ray is labelled as such
+        budget = max(DUAL_BUDGET_MIN_S, PROOF_BUDGET_FACTOR * solve_s)
+        proof = ev(beyond, "prove", full=True, prove=True, escalate=False, exact=False, budget_s=budget)
+        if proof.outcome == "feasible":
+            return None, f"'{param}' = {beyond:g} beyond the convex problem's optimum {value:g} is certified"
+        if proof.outcome == "infeasible":
+            other, kind = beyond, "infeasible-certified"
+        else:
+            kind = kind_of(proof)
+    end = certified_end(pt, backend, options, backoff)
+    gap = abs(other - value) if other is not None else math.inf
+    converged = gap <= max(tol, max(xtol, rtol * abs(other)) if other is not None else 0.0)
     message = ""
-    if not proven:
-        message = f"no proven dual bound: the {what} is {'>=' if is_max else '<='} {value:g} ({enc.get('reason')})"
+    if other is None:
+        bounded = f" (at {beyond:g}: {proof.proof})" if proof is not None else ""
+        rel = ">=" if is_max else "<="
+        message = f"no proven {'upper' if is_max else 'lower'} end{bounded}: the {what} is {rel} {value:g}"
     elif not converged:
-        message = (
-            f"the enclosure's gap {gap:.3g} is above the tolerance {tol:.3g} "
-            "(an interior-point backend gives a tighter one)"
-        )
-    lower, upper = (value, other) if is_max else (other, value)
+        message = f"the enclosure's gap {gap:.3g} is above the tolerance {tol:.3g}"
+    shown = other if other is not None else (beyond if proof is not None else None)
+    lower, upper = (value, shown) if is_max else (shown, value)
     return (
         SupResult(
             theorem=plan.id,
             param=param,
             lower=lower,
             upper=upper,
-            upper_kind="dual-bound" if proven else "none",
+            upper_kind=kind,
             upper_proven=other,
             converged=bool(converged),
             xtol=xtol,
             rtol=rtol,
             iterations=0,
             points=ev.points,
-            backend=str(res.backend),
+            backend=str(out.backend),
             plan_s=plan_s,
             total_s=time.perf_counter() - t_start,
             message=message,
@@ -340,10 +380,67 @@ def enclose(
             sense="max" if is_max else "min",
             system=sysobj,
             method="enclosure",
-            enclosure=summary(enc),
+            enclosure=summary(enc) if enc is not None else None,
+            method_note=fixed_note,
         ),
         "",
     )
+
+
+def _dual_end(
+    lifted: Problem, sol: Solution, backend: Any, options: Any, solve_s: float, budget: float
+) -> dict[str, Any] | None:
+    """The enclosure of the convex problem's optimum from its certified point and its dual.
+
+    :func:`lmic.certify.enclosure.enclosure` within ``budget`` seconds, its re-solves (perturbed
+    problem, centred dual point) on ``backend``; a float proof with rigorous error bounds (no
+    rational re-proof on top) and no re-solve at tighter tolerances (the study's tolerance is
+    met by the other end's proof, or reported as not met).
+    """
+    from lmic.backends.registry import get_backend
+    from lmic.certify.enclosure import enclosure
+    from lmic.options import SolveOptions
+    from lmic.reductions.pipeline import solve
+
+    if sol.duals is None:
+        return None
+    deadline = time.perf_counter() + budget
+    try:
+        be = get_backend(str(backend))
+    except LmicError:
+        return None
+    opts = options or SolveOptions()
+
+    def again(problem: Problem) -> Solution | None:
+        if time.perf_counter() + solve_s > deadline:
+            return None  # the re-solve would not fit in the budget
+        try:
+            other = solve(be, problem, opts) if be.supports(problem) else None
+        except LmicError:
+            return None
+        return other if other is not None and other.status in ("optimal", "inaccurate") else None
+
+    def resolve(problem: Problem) -> dict[str, Any] | None:
+        other = again(problem)
+        return None if other is None else other.duals
+
+    def solve_point(problem: Problem) -> np.ndarray | None:
+        other = again(problem)
+        return None if other is None else other.x
+
+    try:
+        return enclosure(
+            lifted,
+            sol.duals,
+            sol.x,
+            exact=False,
+            resolve=resolve,
+            solve_point=solve_point,
+            solve_s=solve_s,
+            budget_s=budget,
+        )
+    except LmicError:
+        return None
 
 
 def _certify_at(ev: Evaluator, value: float, x: np.ndarray) -> PointResult | None:

@@ -43,11 +43,13 @@ from lmic.ir.problem import Problem
 from lmic.policy import feasibility_problem, min_rel_margin
 from lmic.solution import Solution
 from lmic.studies.sweep.results import PointResult, Progress
+from lmic.studies.sweep.screens import STRETCH_FRACTION, reach, scalar_derived, screen
 
 __all__ = [
     "decide",
     "screen",
     "reuse",
+    "reach",
     "setup",
     "domain",
     "in_domain",
@@ -55,20 +57,6 @@ __all__ = [
     "scalar_derived",
     "warm_options",
 ]
-
-
-def scalar_derived(cert: Any) -> dict[str, float]:
-    """The finite scalar derived values of a certificate.
-
-    >>> scalar_derived(None)
-    {}
-    """
-    out: dict[str, float] = {}
-    for item in getattr(cert, "derived", None) or []:
-        v = item.get("value")
-        if isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(float(v)):
-            out[item["name"]] = float(v)
-    return out
 
 
 def decide(
@@ -81,6 +69,7 @@ def decide(
     exact: bool = True,
     value: float = math.nan,
     scale: float | None = None,
+    budget_s: float | None = None,
 ) -> PointResult:
     """Decide one compiled problem: feasible (certified), infeasible, or undecided.
 
@@ -110,6 +99,8 @@ def decide(
     scale : float, optional
         ``||x||_inf`` of the certified points seen so far (reported next to a bounded ray's
         radius).
+    budget_s : float, optional
+        Seconds each backend may take (:func:`lmic.policy.decide`).
 
     Returns
     -------
@@ -138,6 +129,7 @@ def decide(
         solve_as=judge,
         reference=reference,
         rescue=exact,
+        budget_s=budget_s,
     )
     total = time.perf_counter() - t0
     cert = out.certificate
@@ -221,91 +213,44 @@ def reuse(problem: Problem, x: np.ndarray, *, value: float = math.nan, source: f
     return res
 
 
-def screen(
-    problem: Problem, backend: Any = None, options: Any = None, *, value: float = math.nan
+def _prove(
+    problem: Problem,
+    backend: Any,
+    options: Any,
+    value: float,
+    exact: bool,
+    budget_s: float | None = None,
+    escalate: bool = True,
 ) -> PointResult | None:
-    """One solve, certified: the cheap decision of a bisection's interior value.
+    """A value expected infeasible: the max-margin reduction alone on one interior-point backend.
 
-    The first backend of the route (:func:`lmic.policy.route`) solves the feasibility problem
-    once, with the fixed-margin reduction alone on problems that are not small (no max-margin
-    retry, no other backend). Returns
-
-    * ``feasible`` when the certifier certifies the point (the same evidence as
-      :func:`decide`);
-    * ``infeasible`` when the point's certificate is a verified infeasibility proof;
-    * ``undecided`` with ``screened = True`` otherwise (the solver says infeasible, fails, or
-      returns a point the certifier rejects; a ray is not verified here, its verification can
-      cost seconds): enough to move a bisection's
-      upper end, never reported as evidence (the bracket's final end is decided by
-      :func:`decide`, which escalates; if it is certified there, the bisection moves up);
-    * ``None`` when the backend cannot take the problem, or the problem is small for an
-      interior-point backend (solves of milliseconds): the caller runs :func:`decide`.
-
-    Examples
-    --------
-    >>> import scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
-    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
-    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
-    >>> screen(p, "clarabel") is None   # small: the full policy decides
-    True
+    Near a supremum the fixed-margin reduction ends in a numerical error there (Clarabel's
+    ``NumericalError`` on ``qib.thm1``) and the policy then runs max-margin anyway: this starts
+    with it, on the first interior-point backend of the route (the given backend when it is one).
+    Returns the point when it decided (certified, or a GLOBAL infeasibility proof), else ``None``
+    (the caller runs the full policy). ``exact``: exact rescue of points and bounded rays (a
+    failing exact ray proof costs seconds); ``budget_s``: the backend's time budget.
     """
-    from lmic.backends.registry import get_backend
-    from lmic.certify import certify
     from lmic.options import SolveOptions
-    from lmic.outcome import verdict_of
-    from lmic.policy import is_auto, route, step_options
-    from lmic.reductions.pipeline import solve
-    from lmic.reductions.strict import is_small
+    from lmic.policy import _instance, is_auto, route
+    from lmic.reductions.strict import has_strict
 
-    judge = feasibility_problem(problem)
     options = options or SolveOptions()
+    judge = feasibility_problem(problem)
+    if options.strict != "auto" or not has_strict(judge):
+        return None
     try:
-        first = route(judge, backend)[0]
-        be = first if not isinstance(first, str) else get_backend(first)
-        if not be.supports(judge):
-            return None
+        names = route(judge, backend)
+        ip = next((n for n in names if _instance(n).interior_point), None)
     except LmicError:
         return None
-    if is_small(judge) and be.interior_point:
-        return None  # solves of milliseconds: the full policy decides (max-margin first)
-    opts = step_options(be, options) if is_auto(backend) else options
-    if options.strict == "auto":
-        opts = replace(opts, strict="fixed-margin")
-    t0 = time.perf_counter()
-    sol = solve(be, judge, opts)
-    t1 = time.perf_counter()
-    if sol.status != "feasible" and sol.status != "optimal":
-        # no point to certify; a ray's verification can cost seconds, and only the final end's
-        # evidence is reported (proven there by the full policy)
-        res = PointResult(value=value, outcome="undecided", proof="", status=sol.status, verdict="undecided")
-        res.proof = f"not certified by one solve ({sol.status}); moves the bisection's bracket only"
-        res.solve_s, res.screened, res.solution = float(sol.solve_s or (t1 - t0)), True, sol
-        res.attempts = [f"{be.label} / screen/{sol.strategy}: {sol.status} -> not certified (screen, unproven)"]
-        return res
-    cert = certify(judge, sol)
-    verdict = verdict_of(judge, sol, cert)
-    res = PointResult(value=value, outcome="undecided", proof=verdict, status=sol.status, verdict=verdict)
-    res.solve_s, res.certify_s = float(sol.solve_s or (t1 - t0)), time.perf_counter() - t1
-    res.certificate, res.solution = cert, sol
-    res.rel_margin = min_rel_margin(cert)
-    line = f"{be.label} / screen/{sol.strategy}: {sol.status} -> {{}} ({t1 - t0:.2f} s)"
-    if verdict == "certified":
-        res.outcome, res.proof, res.x = "feasible", "certified", sol.x
-        res.derived = scalar_derived(cert)
-    elif verdict == "infeasible-certified":
-        res.outcome = "infeasible"
-        res.proof = "infeasible-certified: " + str(getattr(cert, "reason", "") or "verified Farkas ray")
-    elif sol.status in ("infeasible", "error", "inaccurate") or verdict == "rejected":
-        # not certified here, nothing proven: the bisection's upper end may move to it (the
-        # final end is decided by the full policy, which escalates)
-        res.proof = f"not certified by one solve ({sol.status}, {verdict}); moves the bisection's bracket only"
-        res.screened = True
-        verdict = "not certified (screen, unproven)"
-    else:
+    if ip is None or (not is_auto(backend) and ip is not names[0]):
         return None
-    res.attempts = [line.format(verdict)]
-    return res
+    try:
+        res = decide(problem, ip, replace(options, strict="max-margin"), exact=exact, value=value, budget_s=budget_s)
+    except LmicError:
+        return None
+    return res if res.outcome in ("feasible", "infeasible") or not escalate else None
 
 
 def setup(theorem: str, system: Any, param: str, params: Mapping[str, Any] | None) -> tuple[Any, Any, dict, Any]:
@@ -425,18 +370,84 @@ class Evaluator:
         #: decide by one certified solve first (:func:`screen`; bisections), the policy only
         #: when that does not decide
         self.screen = screen
+        #: screens may start with the route's first-order backend (off once it failed to
+        #: decide: the bracket only narrows towards the supremum, where it is slow)
+        self.first_order = True
         self.last_value = math.nan
+        #: the problems bound at the last few values (``stretch`` needs two of them)
+        self._bound: dict[float, Problem] = {}
 
-    def __call__(self, value: float, phase: str, *, full: bool = False, **info: Any) -> PointResult:
+    def bound(self, value: float) -> Problem:
+        """The plan bound at ``value`` (the parameter's own value, not ``sign * value``)."""
+        from lmic.compile import bind
+
+        got = self._bound.get(value)
+        if got is None:
+            got = bind(self.plan, self.sysobj, {**self.overrides, self.param: float(value)})
+            if len(self._bound) >= 8:
+                self._bound.pop(next(iter(self._bound)))
+            self._bound[value] = got
+        return got
+
+    def stretch(self, lower: float, upper: float, phase: str = "stretch") -> PointResult | None:
+        """The last certified point, certified again as far towards ``upper`` as it reaches.
+
+        ``lower`` (where :attr:`reference` was certified) and ``upper`` are in the
+        evaluator's terms (``sign * value``). The LMIs at the point are modelled as affine in
+        the parameter from the problems bound at both ends; the largest step ``s`` keeping
+        every strict LMI positive definite and every row positive (:func:`reach`) gives the
+        candidate ``lower + STRETCH_FRACTION * s * (upper - lower)`` (below ``upper``), where the
+        point is certified again (:func:`reuse`: the certifier alone decides, the model only
+        picks the value). Returns the recorded point, or ``None`` (nothing concluded).
+        """
+        if self.reference is None or self.keep_objective or not upper > lower:
+            return None
+        va, vb = self.sign * lower, self.sign * upper
+        pa, pb = self.bound(va), self.bound(vb)
+        s = reach(pa, pb, self.reference)
+        if s is None or s <= 0.0:
+            return None
+        cand = lower + min(STRETCH_FRACTION * s, STRETCH_FRACTION) * (upper - lower)
+        if not lower < cand < upper:
+            return None
+        value = self.sign * cand
+        t0 = time.perf_counter()
+        problem = self.bound(value)
+        bind_s = time.perf_counter() - t0
+        res = reuse(problem, self.reference, value=value, source=self.last_value)
+        if res is None:
+            return None
+        res.attempts = [f"stretch: the certified point of {self.last_value:.6g}, certified again -> certified"]
+        res.bind_s, res.stretched, res.problem = bind_s, True, problem
+        self.last_value = value
+        self.points.append(res)
+        if self.progress is not None:
+            self.progress({"phase": phase, "value": value, "point": res})
+        return res
+
+    def __call__(
+        self,
+        value: float,
+        phase: str,
+        *,
+        full: bool = False,
+        prove: bool = False,
+        escalate: bool = True,
+        exact: bool | None = None,
+        budget_s: float | None = None,
+        **info: Any,
+    ) -> PointResult:
         """Decide ``sign * value``: reuse, screen (as configured), else the full policy.
 
         ``full``: the full policy only (a bracket's final end, whose evidence is reported).
+        ``prove`` (with ``full``): a value expected infeasible, decided by the max-margin
+        reduction on the route's first interior-point backend first (:func:`_prove`), the full
+        policy where that does not decide (``escalate=False``: not then, the point is what the
+        one solve gave). ``exact`` (default: the evaluator's) and ``budget_s`` apply to that solve.
         """
-        from lmic.compile import bind
-
         value = self.sign * value
         t0 = time.perf_counter()
-        problem = bind(self.plan, self.sysobj, {**self.overrides, self.param: float(value)})
+        problem = self.bound(float(value))
         bind_s = time.perf_counter() - t0
         self.sense = problem.objective.sense
         res: PointResult | None = None
@@ -444,7 +455,28 @@ class Evaluator:
         if not full and self.reuse and feasibility_question and self.reference is not None:
             res = reuse(problem, self.reference, value=float(value), source=self.last_value)
         if res is None and not full and self.screen and not self.precondition:
-            res = screen(problem, self.backend, warm_options(self.options, self.warm), value=float(value))
+            res = screen(
+                problem,
+                self.backend,
+                warm_options(self.options, self.warm),
+                value=float(value),
+                first_order=self.first_order,
+            )
+            if res is not None and res.fallback:
+                self.first_order = False
+        if res is None and full and prove:
+            res = _prove(
+                problem,
+                self.backend,
+                self.options,
+                float(value),
+                self.exact if exact is None else exact,
+                budget_s=budget_s,
+                escalate=escalate,
+            )
+            if res is None and not escalate:
+                res = PointResult(value=float(value), outcome="undecided", proof="not decided by one max-margin solve")
+                res.attempts = ["max-margin on an interior-point backend: no decision"]
         if res is None:
             res = decide(
                 problem,

@@ -85,6 +85,13 @@ class PointResult:
     #: decided for a bisection only: the solver said infeasible, nothing is proven (a bracket's
     #: final end is proven separately, never reported on this evidence)
     screened: bool = False
+    #: a screen whose first-order backend did not decide: the interior-point backend did
+    fallback: bool = False
+    #: decided by a first-order screen (its "not certified" is the least reliable)
+    first_order: bool = False
+    #: certified at a value the bisection did not ask for: the point certified at a lower value
+    #: still holds here (:meth:`lmic.studies.sweep.points.Evaluator.stretch`)
+    stretched: bool = False
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form (without the point ``x``)."""
@@ -101,6 +108,7 @@ class PointResult:
             "attempts": self.attempts,
             "reused": self.reused,
             "screened": self.screened,
+            "stretched": self.stretched,
             "bind_s": self.bind_s,
             "solve_s": self.solve_s,
             "certify_s": self.certify_s,

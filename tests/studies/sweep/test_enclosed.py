@@ -113,7 +113,8 @@ def test_an_unbounded_supremum_falls_back_to_the_bisection():
 @pytest.mark.parametrize(
     ("theorem_id", "system", "param", "affine", "why"),
     [
-        ("qib.thm1", "examples/qib.thm1.flexible-joint.yaml", "beta", False, "multiplies the decision variable"),
+        # beta multiplies only omega > 0 in a scale-free problem: omega = 1 makes it affine
+        ("qib.thm1", "examples/qib.thm1.flexible-joint.yaml", "beta", True, "omega"),
         ("uncertain_dt.lemma3", "examples/uncertain_dt.lemma3.example-plant.yaml", "mu", False, "non-affinely"),
         ("nonuniform.thm1", "examples/nonuniform.thm1.chua.yaml", "delta_bar", False, "multiplies"),
         ("delay_b.thm4_1", "examples/delay_b.thm4_1.ex1_lambda0_2.yaml", "lambda", True, ""),

@@ -128,7 +128,10 @@ def test_maximize_toy_finds_the_decay_rate_and_rebinds_without_reanalysis(monkey
     monkeypatch.setattr(lmic.compile, "analyse", lambda *a, **k: analyses.append(1) or real_analyse(*a, **k))
     monkeypatch.setattr(lmic.compile, "bind", lambda *a, **k: binds.append(1) or real_bind(*a, **k))
     res = maximize(toy_decay, TOY, "a", rtol=1e-4)
-    assert analyses == [] and len(binds) == len(res.points)
+    # one bind per point, plus the three sample values of the affinity check (the enclosure
+    # route) and the bracket's upper end for a stretch when it left the evaluator's cache
+    assert analyses == []
+    assert len(res.points) <= len(binds) <= len(res.points) + 3 + sum(p.stretched for p in res.points)
     assert res.converged and res.lower < 1.0 <= res.upper
     assert res.upper - res.lower <= 1e-4 * res.upper + 1e-12
     assert res.lower == pytest.approx(1.0, abs=2e-4)

@@ -108,13 +108,13 @@ def test_a_wrong_screen_is_caught_by_the_end_proof_and_the_bracket_moves_up(monk
     real = points.screen
     fooled: list[float] = []
 
-    def faulty(problem, backend=None, options=None, *, value=float("nan")):
+    def faulty(problem, backend=None, options=None, *, value=float("nan"), **kw):
         if 0.6 * truth < value < truth:  # feasible values, screened as "solver: infeasible"
             fooled.append(value)
             pt = PointResult(value=value, outcome="undecided", proof="solver: infeasible (test)", verdict="undecided")
             pt.screened = True
             return pt
-        return real(problem, backend, options, value=value)
+        return real(problem, backend, options, value=value, **kw)
 
     monkeypatch.setattr(points, "screen", faulty)
     res = maximize(decay, system, "a", lo=0.0, hi=2.0 * truth, rtol=1e-3, xtol=0.0, backoff=0.0)
@@ -135,12 +135,12 @@ def test_a_screen_that_never_decides_leaves_the_end_honestly_labelled(monkeypatc
     monkeypatch.setattr(pts, "decide", _undecided_above(pts.decide, truth))
     real_screen = pts.screen
 
-    def screen(problem, backend=None, options=None, *, value=float("nan")):
+    def screen(problem, backend=None, options=None, *, value=float("nan"), **kw):
         if value >= truth:
             pt = PointResult(value=value, outcome="undecided", proof="not certified (test)", verdict="undecided")
             pt.screened = True
             return pt
-        return real_screen(problem, backend, options, value=value)
+        return real_screen(problem, backend, options, value=value, **kw)
 
     monkeypatch.setattr(pts, "screen", screen)
     res = maximize(decay, system, "a", lo=0.0, hi=2.0 * truth, rtol=1e-3, xtol=0.0, backoff=0.0)
