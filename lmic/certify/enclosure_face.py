@@ -64,12 +64,21 @@ import numpy as np
 import scipy.sparse as sp
 
 from lmic.certify.enclosure_float import down
+from lmic.compile.exact import ExactProblem, ExactUnavailable, exact_of, from_ir
 from lmic.certify.enclosure_repair import jacobian
 from lmic.errors import CertificateError
 from lmic.ir.problem import Problem
-from lmic.ir.svec import tril_rows_cols, tril_unvec
+from lmic.ir.svec import tril_index, tril_rows_cols, tril_unvec
 
-__all__ = ["MAX_RANK", "pivot_blocks", "lyapunov_structure", "face_bound", "prove_face", "verify_face"]
+__all__ = [
+    "MAX_RANK",
+    "pivot_blocks",
+    "lyapunov_structure",
+    "structure_for",
+    "face_bound",
+    "prove_face",
+    "verify_face",
+]
 
 #: largest rank ``r`` of the factored multiplier tried
 MAX_RANK = 4
@@ -109,24 +118,9 @@ def pivot_blocks(problem: Problem, J: sp.spmatrix, ranges: list[tuple[int, int]]
     return out
 
 
-def lyapunov_structure(problem: Problem) -> dict[str, Any] | None:
-    """The Lyapunov (KYP) structure of the module docstring, or ``None``.
-
-    Returns ``pivot`` (the block of ``P > 0``), ``block`` (the main LMI, the only other block
-    the pivot rows touch), ``state`` (the state row of each index of ``P``: ``E``), ``Abar``
-    (``n_P x d``, from the coefficients of ``P``'s diagonal entries) and ``rows`` (the pivot
-    row of each tril entry of ``P``'s block), after checking that every pivot row's
-    coefficients are those of ``E^T P Abar + Abar^T P E`` exactly (a coefficient that is a
-    sum, ``A_aa + A_bb`` in ``A^T P + P A``, must be exact in floating point: with random
-    diagonal entries it is not, and the face ``W = 0`` of the IR's problem is not this one).
-
-    >>> import scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
-    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0.0, 1.0]]))],
-    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
-    >>> lyapunov_structure(p) is None
-    True
-    """
+def _float_structure(problem: Problem) -> dict[str, Any] | None:
+    """The structure of :func:`lyapunov_structure` found in floating point, up to rounding
+    (``exact_ir``: whether the IR's own coefficients have it exactly)."""
     J, ranges = jacobian(problem)
     pivots = pivot_blocks(problem, J, ranges)
     Jr = sp.csr_matrix(J)
@@ -157,7 +151,8 @@ def lyapunov_structure(problem: Problem) -> dict[str, Any] | None:
                 Abar[ri[t], r] = h[r, r] / 2.0
         if np.unique(state).size != npv:
             continue
-        ok = True
+        ok, exact_ir = True, True
+        scale = float(np.max(np.abs(Abar), initial=0.0)) or 1.0
         for t in range(ri.size):
             a, b = ri[t], ci[t]
             G = np.zeros((d, d))
@@ -165,18 +160,112 @@ def lyapunov_structure(problem: Problem) -> dict[str, Any] | None:
             if a != b:
                 G[state[b]] += Abar[a]
             Gs = G + G.T
-            both = np.argwhere((G != 0) & (G.T != 0))
-            # a coefficient that is the rounded sum of two entries of Abar (A_aa + A_bb) breaks
-            # the structure unless the sum is exact
-            exact = all(
-                Fraction(float(Gs[i, j])) == Fraction(float(G[i, j])) + Fraction(float(G[j, i])) for i, j in both
-            )
-            if not exact or np.any(Gs != H(t)):
+            Ht = H(t)
+            if np.any(np.abs(Gs - Ht) > 1e-12 * scale):
                 ok = False
                 break
+            if exact_ir:
+                # a coefficient that is the rounded sum of two entries of Abar (A_aa + A_bb) is
+                # not exact in floating point: the IR's own face W = 0 is then not this one
+                both = np.argwhere((G != 0) & (G.T != 0))
+                exact_ir = bool(np.all(Gs == Ht)) and all(
+                    Fraction(float(Gs[i, j])) == Fraction(float(G[i, j])) + Fraction(float(G[j, i])) for i, j in both
+                )
         if ok:
-            return {"pivot": pi, "block": xi, "state": state, "Abar": Abar, "rows": rows}
+            return {"pivot": pi, "block": xi, "state": state, "Abar": Abar, "rows": rows, "exact_ir": exact_ir}
     return None
+
+
+def _exact_structure(problem: Problem, cand: dict[str, Any], ex: ExactProblem) -> dict[str, Any] | None:
+    """``cand`` (:func:`_float_structure`) checked on the exact coefficients ``ex``: every pivot
+    row's coefficients are those of ``E^T P Abar + Abar^T P E`` exactly, ``Abar`` exact
+    (``AbarN / Abar_den``, python ints)."""
+    pi, xi, state, rows = cand["pivot"], cand["block"], cand["state"], cand["rows"]
+    Lp, Lx = ex.lmis[pi], ex.lmis[xi]
+    npv, d = Lp.dim, Lx.dim
+    ri, ci = tril_rows_cols(npv)
+    for t, k in enumerate(rows.tolist()):  # the pivot block: one entry per column, in its own row
+        pr, pn = Lp.column(int(k))
+        if pr.size != 1 or int(pr[0]) != t or pn[0] == 0:
+            return None
+        if any(int(L.indptr[k + 1]) > int(L.indptr[k]) for i, L in enumerate(ex.lmis) if i not in (pi, xi)):
+            return None
+
+    def col(t: int) -> dict[int, int]:
+        r, v = Lx.column(int(rows[t]))
+        return {int(a): 2 * int(b) for a, b in zip(r.tolist(), v.tolist(), strict=True)}
+
+    def slot(i: int, j: int) -> int:
+        return int(tril_index(max(i, j), min(i, j), d))
+
+    AN = np.zeros((npv, d), dtype=object)  # Abar = AN / (2 den)
+    for t in range(ri.size):
+        if ri[t] == ci[t]:
+            h, r = col(t), int(state[ri[t]])
+            for c in range(d):
+                AN[ri[t], c] = h.get(slot(r, c), 0) // (2 if c == r else 1)
+    for t in range(ri.size):
+        a, b = int(ri[t]), int(ci[t])
+        want: dict[int, int] = {}
+        for s_, row_ in ((int(state[a]), AN[b]), (int(state[b]), AN[a])) if a != b else ((int(state[a]), AN[a]),):
+            for c in range(d):
+                v = row_[c]
+                if v:
+                    k = slot(s_, c)
+                    want[k] = want.get(k, 0) + (2 * v if c == s_ else v)
+        if {k: v for k, v in want.items() if v} != {k: v for k, v in col(t).items() if v}:
+            return None
+    den = 2 * Lx.den
+    Abar = np.array([[int(v) / den for v in row_] for row_ in AN], dtype=float)
+    return dict(cand, Abar=Abar, AbarN=AN, Abar_den=den, exact=ex)
+
+
+def lyapunov_structure(problem: Problem, exact: ExactProblem | None = None) -> dict[str, Any] | None:
+    """The Lyapunov (KYP) structure of the module docstring, or ``None``.
+
+    Returns ``pivot`` (the block of ``P > 0``), ``block`` (the main LMI, the only other block
+    the pivot rows touch), ``state`` (the state row of each index of ``P``: ``E``), ``Abar``
+    (``n_P x d``, from the coefficients of ``P``'s diagonal entries; ``AbarN / Abar_den``
+    exactly), ``rows`` (the pivot row of each tril entry of ``P``'s block) and ``exact`` (the
+    coefficients checked), after checking that every pivot row's coefficients are those of
+    ``E^T P Abar + Abar^T P E`` exactly on ``exact`` (default: the IR's own floats,
+    :func:`lmic.compile.exact.from_ir`; a coefficient ``fl(A_aa + A_bb)`` of random data breaks
+    it there, and :func:`lmic.compile.exact.exact_of` gives the exact compilation).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0.0, 1.0]]))],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+    >>> lyapunov_structure(p) is None
+    True
+    """
+    cand = _float_structure(problem)
+    if cand is None:
+        return None
+    if exact is None and not cand["exact_ir"]:
+        return None
+    return _exact_structure(problem, cand, exact if exact is not None else from_ir(problem))
+
+
+def structure_for(problem: Problem) -> tuple[dict[str, Any] | None, str]:
+    """The structure on the IR's own coefficients, else on the problem's exact compilation
+    (:func:`lmic.compile.exact.exact_of`): ``(structure or None, reason)``; the structure's
+    ``problem`` is ``"ir"`` or ``"exact"`` (what a bound proved on it is about)."""
+    cand = _float_structure(problem)
+    if cand is None:
+        return None, "no Lyapunov structure for the face route"
+    if cand["exact_ir"]:
+        st = _exact_structure(problem, cand, from_ir(problem))
+        if st is not None:
+            return dict(st, problem="ir"), ""
+    try:
+        ex = exact_of(problem)
+    except ExactUnavailable as exc:
+        return None, f"the face route needs the exact coefficients: {exc}"
+    st = _exact_structure(problem, cand, ex)
+    if st is None:
+        return None, "the exact coefficients have no Lyapunov structure"
+    return dict(st, problem="exact" if ex.about == "theorem" else "ir"), ""
 
 
 def _fq(flint: Any, v: float) -> Any:
@@ -186,13 +275,16 @@ def _fq(flint: Any, v: float) -> Any:
 
 def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_rest: np.ndarray) -> dict[str, Any]:
     """The exact proof of the module docstring from ``K`` (``r x r``, skew) and ``S_rest``
-    (the non-state rows of ``S``, ``(d - n_P) x r``). Returns ``proven``, ``lower`` (rounded
+    (the non-state rows of ``S``, ``(d - n_P) x r``), on the exact coefficients of
+    ``structure`` (:func:`lyapunov_structure`). Returns ``proven``, ``lower`` (rounded
     down), ``lower_exact`` and ``reason``."""
     from lmic.certify.psd import load_flint, prove_psd
 
     flint = load_flint()
     P = problem
-    pi, xi, state, Abar = structure["pivot"], structure["block"], structure["state"], structure["Abar"]
+    ex: ExactProblem = structure["exact"]
+    pi, xi, state = structure["pivot"], structure["block"], structure["state"]
+    AN, Aden = structure["AbarN"], int(structure["Abar_den"])
     npv, d = P.lmis[pi].dim, P.lmis[xi].dim
     rest = np.setdiff1d(np.arange(d), state)
     K = np.asarray(K, dtype=float)
@@ -203,7 +295,7 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
     if not (np.all(np.isfinite(K)) and np.all(np.isfinite(S_rest))) or np.any(K != -K.T):
         return {"proven": False, "reason": "K is not a finite skew-symmetric matrix"}
     # A_E S_E - S_E K = -A_R S_R, as (I (x) A_E - K^T (x) I) vec(S_E) = vec(-A_R S_R)
-    AE, AR = Abar[:, state], Abar[:, rest]
+    AE, AR = AN[:, state], AN[:, rest]
     nr = npv * r
     M = flint.fmpq_mat(nr, nr)
     for c in range(r):
@@ -211,7 +303,7 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
             row = c * npv + i
             for j in range(npv):
                 if AE[i, j] != 0:
-                    M[row, c * npv + j] = _fq(flint, AE[i, j])
+                    M[row, c * npv + j] = flint.fmpq(int(AE[i, j]), Aden)
             for c2 in range(r):
                 if K[c2, c] != 0:
                     M[row, c2 * npv + i] = M[row, c2 * npv + i] - _fq(flint, K[c2, c])
@@ -222,7 +314,7 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
             s = flint.fmpq(0)
             for j in range(rest.size):
                 if AR[i, j] != 0:
-                    s -= _fq(flint, AR[i, j]) * SRq[j][c]
+                    s -= flint.fmpq(int(AR[i, j]), Aden) * SRq[j][c]
             rhs[c * npv + i, 0] = s
     try:
         sol = M.solve(rhs)
@@ -242,27 +334,18 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
             D = D * f.denominator // math.gcd(D, f.denominator)
     N = flint.fmpz_mat([[int(f * D) for f in row_] for row_ in Sq])
     XN = N * N.transpose()  # X = XN / D^2, exactly
-    J, ranges = jacobian(P)
-    Jr = sp.csr_matrix(J)
-    q = _target(P)
-    a, b = ranges[xi]
+    sgn = -1 if P.objective.sense == "max" else 1
+    q = [sgn * v for v in ex.objective]
+    Lx, Lp = ex.lmis[xi], ex.lmis[pi]
     ti, tj = tril_rows_cols(d)
-    xn = [int(XN[int(ti[k]), int(tj[k])]) for k in range(b - a)]
-    pa, pb = ranges[pi]
+    # <F_k, X> over the main block: the weight 2 of an off-diagonal tril entry folded into xn
+    xn = [int(XN[int(ti[k]), int(tj[k])]) * (1 if ti[k] == tj[k] else 2) for k in range(ti.size)]
     D2 = D * D
 
     def g(k: int) -> Fraction:
-        """``g_k(X)`` over the main block, exactly (``J``'s floats are dyadic rationals)."""
-        lo, hi = Jr.indptr[k], Jr.indptr[k + 1]
-        num, den = 0, 1
-        for j, v in zip(Jr.indices[lo:hi], Jr.data[lo:hi], strict=True):
-            if a <= j < b and xn[j - a]:
-                vn, vd = float(v).as_integer_ratio()  # vd a power of 2
-                if vd > den:
-                    num *= vd // den
-                    den = vd
-                num += vn * (den // vd) * xn[j - a]
-        return Fraction(num, den * D2)
+        """``g_k(X)`` over the main block, exactly."""
+        rr, vv = Lx.column(k)
+        return Fraction(sum(int(v) * xn[int(j)] for j, v in zip(rr.tolist(), vv.tolist(), strict=True)), Lx.den * D2)
 
     prow = {int(k): t for t, k in enumerate(structure["rows"])}
     others = [k for k in range(1, 1 + P.n) if k not in prow]
@@ -271,34 +354,34 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
     t = None
     for k in others:
         if q[k] != 0:
-            t = gv[k] / Fraction(float(q[k]))
+            t = gv[k] / q[k]
             break
     if t is None or not t > 0:
         return {"proven": False, "reason": "no positive scale meets the equality rows without a pivot"}
     for k in others:
-        if gv[k] != t * Fraction(float(q[k])):
+        if gv[k] != t * q[k]:
             return {"proven": False, "reason": f"equality row {k} does not hold on the face"}
     # the pivot block from its rows: W_j = (q_k - g_k(X) / t) / J_kj, exactly
-    w = [Fraction(0)] * (pb - pa)
+    pr, pc = tril_rows_cols(npv)
+    pw = np.where(pr == pc, 1, 2)
+    w = [Fraction(0)] * pr.size
     for k, tt in prow.items():
         gk = g(k)
         if gk or q[k]:
-            w[tt] = (Fraction(float(q[k])) - gk / t) / Fraction(float(Jr[k, pa + tt]))
+            w[tt] = (q[k] - gk / t) / (int(pw[tt]) * Lp.value(tt, k))
     if any(w):
         den = 1
         for f in w:
             den = den * f.denominator // math.gcd(den, f.denominator)
         Wm = [[0] * npv for _ in range(npv)]
-        pr, pc = tril_rows_cols(npv)
         for f, r_, c_ in zip(w, pr, pc, strict=True):
             Wm[r_][c_] = Wm[c_][r_] = int(f * den)
         if not prove_psd(Wm)["proven"]:
             return {"proven": False, "reason": f"the pivot multiplier of '{P.lmis[pi].name}' is not PSD on the face"}
-    Lf = Fraction(float(q[0])) - g(0) / t
-    lo0, hi0 = Jr.indptr[0], Jr.indptr[1]
-    for j, v in zip(Jr.indices[lo0:hi0], Jr.data[lo0:hi0], strict=True):
-        if pa <= j < pb:
-            Lf -= Fraction(float(v)) * w[int(j) - pa]
+    Lf = q[0] - g(0) / t
+    r0, v0 = Lp.column(0)
+    for j, v in zip(r0.tolist(), v0.tolist(), strict=True):
+        Lf -= int(pw[j]) * Fraction(int(v), Lp.den) * w[int(j)]
     lower = float(Lf)
     if Fraction(lower) > Lf:
         lower = down(lower)
@@ -349,24 +432,27 @@ def face_bound(problem: Problem, duals: dict[str, Any], *, tries: int = 2) -> di
     -------
     dict
         As :func:`lmic.certify.enclosure_dual.dual_bound`: ``proven``, ``lower``,
-        ``lower_exact``, ``method`` (``"exact"``), ``route`` (``"face"``), ``reason``, ``dual``
-        (``{"form": "face", "block", "pivot", "K", "S_rest"}``).
+        ``lower_exact``, ``method`` (``"exact"``), ``route`` (``"face"``), ``reason``,
+        ``problem`` (``"ir"``: the bound holds for the IR's own coefficients; ``"exact"``: for
+        the theorem compiled exactly from the system's numbers, :mod:`lmic.compile.exact`),
+        ``dual`` (``{"form": "face", "problem", "block", "pivot", "K", "S_rest"}``).
     """
     from lmic.certify.multipliers import parse_multipliers
 
     if problem.objective.sense == "feasibility":
         raise CertificateError("a feasibility problem has no optimal value to bound")
-    st = lyapunov_structure(problem)
+    st, why = structure_for(problem)
     if st is None:
-        return {"proven": False, "route": "face", "reason": "no Lyapunov structure for the face route"}
+        return {"proven": False, "route": "face", "reason": why}
     mats, _ = parse_multipliers(problem, duals, "dual point", missing_is_zero=False)
     best: dict[str, Any] = {"proven": False, "route": "face", "reason": "no face candidate"}
     for _, K, SR in _candidates(st, mats[st["block"]])[:tries]:
         res = prove_face(problem, st, K, SR)
-        res.update(route="face", method="exact", shift=0.0)
+        res.update(route="face", method="exact", shift=0.0, problem=st["problem"])
         if res["proven"]:
             res["dual"] = {
                 "form": "face",
+                "problem": st["problem"],
                 "block": int(st["block"]),
                 "pivot": int(st["pivot"]),
                 "K": K.tolist(),
@@ -384,7 +470,15 @@ def verify_face(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
     d = record.get("dual")
     if not isinstance(d, dict) or d.get("form") != "face" or record.get("lower") is None:
         return {"ok": False, "lower": None, "reason": "no face dual point recorded"}
-    st = lyapunov_structure(problem)
+    about = d.get("problem", "ir")
+    if about not in ("ir", "exact"):
+        return {"ok": False, "lower": None, "reason": f"unknown problem {about!r} of the face point"}
+    try:
+        st = lyapunov_structure(problem, exact_of(problem) if about == "exact" else None)
+    except ExactUnavailable as exc:
+        return {"ok": False, "lower": None, "reason": f"the exact problem cannot be recompiled: {exc}"}
+    if about == "exact" and st is not None and st["exact"].about != "theorem":
+        return {"ok": False, "lower": None, "reason": "the face point is about the exact compilation of a theorem"}
     if st is None or d.get("block") != st["block"] or d.get("pivot") != st["pivot"]:
         return {"ok": False, "lower": None, "reason": "the recorded face does not match the problem's structure"}
     try:
@@ -405,4 +499,5 @@ def verify_face(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
             "lower": res["lower"],
             "reason": f"recorded lower bound {rec:.17g} exceeds the bound the dual point proves ({res['lower']:.17g})",
         }
-    return {"ok": True, "lower": res["lower"], "reason": "lower bound re-proved exactly on the face"}
+    where = "the theorem's exact compilation" if about == "exact" else "the IR"
+    return {"ok": True, "lower": res["lower"], "reason": f"lower bound re-proved exactly on the face ({where})"}
