@@ -115,6 +115,7 @@ from lmic.certify.enclosure_centre import centred_bound, centring_problem
 from lmic.certify.enclosure_conditional import RADIUS_FACTOR, best_box_bound, box_bound, verify_box_bound
 from lmic.certify.enclosure_dual import dual_bound, verify_dual_bound
 from lmic.certify.enclosure_exact import EXACT_MAX_N
+from lmic.certify.enclosure_face import about_of, exact_counterpart, one_problem
 from lmic.certify.enclosure_float import lambda_min_lower, polish_primal, primal_end
 from lmic.certify.enclosure_repair import PERTURBATIONS, SHIFTS, perturbed_problem
 from lmic.errors import CertificateError
@@ -262,6 +263,10 @@ def enclosure(
     bound = None
     if dual.get("proven"):
         bound = dual["lower"] if sense == "min" else -dual["lower"]
+    out["problem"] = about_of(dual, pe if x is not None else None)
+    if out["problem"] is None:  # never an enclosure of two different problems
+        dual = out["dual"] = {"proven": False, "reason": "the face bound is about the exact problem; the point not"}
+        bound, out["problem"] = None, "ir"
     if sense == "min":
         out["lower"], out["upper"] = bound, upper_value
     else:
@@ -366,7 +371,16 @@ def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dic
     pkey, dkey = ("upper", "lower") if sense == "min" else ("lower", "upper")
     better = (lambda a, b: a < b) if sense == "min" else (lambda a, b: a > b)
     pv, pv2 = first.get(pkey), second.get(pkey)
-    if pv2 is not None and (pv is None or better(pv2, pv)):
+    dv, dv2 = first.get(dkey), second.get(dkey)
+    take_p = pv2 is not None and (pv is None or better(pv2, pv))
+    take_d = dv2 is not None and (dv is None or better(dv, dv2))
+
+    take_p, take_d = next(
+        (c for c in ((take_p, take_d), (False, take_d), (take_p, False)) if one_problem(first, second, *c, pkey, dkey)),
+        (False, False),
+    )
+    out["problem"] = (second if take_d else first).get("problem", "ir")
+    if take_p:
         out[pkey] = pv2
         if second.get("primal") == "restored point":
             out["primal"], out["restored_x"] = "restored point", second.get("restored_x")
@@ -375,8 +389,7 @@ def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dic
         out.pop("polish", None)
         if "polish" in second:
             out["polish"] = second["polish"]
-    dv, dv2 = first.get(dkey), second.get(dkey)
-    if dv2 is not None and (dv is None or better(dv, dv2)):
+    if take_d:
         out[dkey] = dv2
         out["dual"] = second["dual"]
         out.pop("conditional", None)
@@ -521,6 +534,9 @@ def audit_enclosure(
     sense = problem.objective.sense
     if record.get("sense") != sense:
         return {"ok": False, "field": "enclosure.sense", "message": "enclosure.sense differs from the IR's objective"}
+    why = exact_counterpart(problem, record)  # record["problem"] "exact": both ends re-proved for it too
+    if why is not None:
+        return {"ok": False, "field": "enclosure.problem", "message": f"enclosure.problem: {why}"}
     primal_key, dual_key = ("upper", "lower") if sense == "min" else ("lower", "upper")
     pv = record.get(primal_key)
     if pv is not None:

@@ -59,7 +59,7 @@ from lmic.compile.frozen import Coef, Factor
 from lmic.compile.inputs import resolve_inputs
 from lmic.errors import LmicError
 from lmic.ir.problem import Problem
-from lmic.ir.svec import tril_size
+from lmic.ir.svec import tril_rows_cols, tril_size
 from lmic.system import load_system
 
 __all__ = ["ExactUnavailable", "ExactLMI", "ExactProblem", "exact_bind", "exact_of", "from_ir", "cached_exact"]
@@ -113,7 +113,7 @@ class ExactProblem:
     objective: list[Fraction]
     about: str
     source: str
-    _diff: list[Any] = field(default_factory=list, repr=False)
+    _diff: tuple[Any, ...] = field(default=(), repr=False)
 
     def perturbation(self, problem: Problem, x: np.ndarray) -> tuple[list[float], list[float], float]:
         """Rigorous upper bounds of ``||F_i^exact(x) - F_i(x)||_F`` per LMI, of ``|l_r^exact(x)
@@ -130,8 +130,6 @@ class ExactProblem:
         out = []
         for D, lmi in zip(lmi_d, problem.lmis, strict=True):
             e = np.asarray(D @ xx).ravel() * _grow(D.shape[1])
-            from lmic.ir.svec import tril_rows_cols
-
             i, j = tril_rows_cols(lmi.dim)
             w = np.where(i == j, 1.0, 2.0)
             out.append(_up(math.sqrt(_up(float(np.sum(w * e * e)) * _grow(e.size)))))
@@ -142,24 +140,28 @@ class ExactProblem:
     def _differences(self, problem: Problem) -> tuple[list[sp.csr_matrix], sp.csr_matrix | None, np.ndarray]:
         if len(self.lmis) != len(problem.lmis) or len(self.linear) != len(problem.linear):
             raise ExactUnavailable("the exact problem does not match the IR's constraints")
-        mats = []
-        for ex, lmi in zip(self.lmis, problem.lmis, strict=True):
-            R = ex.rounded()
-            mats.append(sp.csr_matrix(_bound(R, lmi.coeffs.tocsc())))
+        mats = [sp.csr_matrix(_bound(ex, lmi.coeffs.tocsc())) for ex, lmi in zip(self.lmis, problem.lmis, strict=True)]
         lin_d = None
         if len(problem.linear):
+            A = problem.linear.A.tocsr()
             rows, cols, vals = [], [], []
             for r, row in enumerate(self.linear):
-                for k, v in row.items():
-                    rows.append(r)
-                    cols.append(k)
-                    vals.append(float(v))
-            R = sp.csc_matrix((vals, (rows, cols)), shape=problem.linear.A.shape)
-            lin_d = sp.csr_matrix(_bound(R, problem.linear.A.tocsc()))
+                have = dict(
+                    zip(
+                        A.indices[A.indptr[r] : A.indptr[r + 1]].tolist(),
+                        A.data[A.indptr[r] : A.indptr[r + 1]].tolist(),
+                        strict=True,
+                    )
+                )
+                for k in set(row) | set(have):
+                    dv = abs(row.get(k, Fraction(0)) - Fraction(have.get(k, 0.0)))
+                    if dv:
+                        rows.append(r)
+                        cols.append(k)
+                        vals.append(_up(float(dv)))
+            lin_d = sp.csr_matrix((vals, (rows, cols)), shape=A.shape)
         c = np.asarray(problem.objective.c, dtype=float)
-        r = np.array([float(v) for v in self.objective])
-        obj_d = np.abs(r - c) * (1 + _U) + _U * np.abs(r) + 2.0**-1074
-        obj_d[np.array([Fraction(float(a)) == b for a, b in zip(c, self.objective, strict=True)])] = 0.0
+        obj_d = np.array([_up(float(abs(b - Fraction(float(a))))) for a, b in zip(c, self.objective, strict=True)])
         return mats, lin_d, obj_d
 
 
@@ -171,12 +173,24 @@ def _up(v: float) -> float:
     return float(np.nextafter(v, np.inf))
 
 
-def _bound(R: sp.csc_matrix, F: sp.csc_matrix) -> sp.csc_matrix:
-    """Entrywise ``|exact - F|`` bounds from ``R`` (the exact values rounded to nearest)."""
+def _bound(ex: ExactLMI, F: sp.csc_matrix) -> sp.csc_matrix:
+    """Entrywise bounds of ``|exact - F|``: ``|fl(r - f)| (1 + u) + 2^-1074`` where ``r`` (the
+    exact value rounded to nearest, python's correctly rounded ``int / int``) differs from
+    ``f``, plus ``u |r| + 2^-1074`` where ``r`` is not the exact value itself."""
+    r = np.array([int(v) / ex.den for v in ex.num], dtype=float)
+    inexact = np.array(
+        [
+            p * ex.den != int(v) * q
+            for v, (p, q) in zip(ex.num, (x.as_integer_ratio() for x in r.tolist()), strict=True)
+        ],
+        dtype=bool,
+    )
+    shape = F.shape
+    R = sp.csc_matrix((r, ex.indices, ex.indptr), shape=shape)
     Dm = abs(R - F).tocsc()
+    Dm.eliminate_zeros()
     Dm.data = Dm.data * (1 + _U) + 2.0**-1074
-    Ra = abs(R).tocsc()
-    Ra.data = Ra.data * _U + 2.0**-1074
+    Ra = sp.csc_matrix((np.where(inexact, np.abs(r) * _U + 2.0**-1074, 0.0), ex.indices, ex.indptr), shape=shape)
     return (Dm + Ra).tocsc()
 
 
@@ -200,16 +214,22 @@ def _dyadic(arr: Any) -> tuple[np.ndarray, int]:
     return N, e
 
 
+class _RoundedNumber(ExactUnavailable):
+    """A frozen plan's non-integer number (the freeze may have rounded a rational)."""
+
+
 def _fraction_of_number(v: float, strict_dyadic: bool) -> Fraction:
     f = Fraction(float(v))
     if strict_dyadic and f.denominator != 1:
-        raise ExactUnavailable(f"the frozen plan's number {v!r} may be a rounded rational")
+        raise _RoundedNumber(f"the frozen plan's number {v!r} may be a rounded rational")
     return f
 
 
 def _tree_value(tree: Any, env: Mapping[str, Fraction]) -> Fraction:
     """A frozen coefficient tree evaluated exactly (rational operations only)."""
     if "name" in tree:
+        if tree["name"] not in env:
+            raise ExactUnavailable(f"'{tree['name']}' is a constant computed from the data in floating point")
         return env[tree["name"]]
     if "num" in tree:
         return _fraction_of_number(tree["num"], True)
@@ -241,6 +261,8 @@ def _sympy_value(expr: Any, env: Mapping[str, Fraction]) -> Fraction:
             raise ExactUnavailable(f"the number {expr} has more than double precision")
         return Fraction(float(expr))
     if isinstance(expr, sympy.Symbol):
+        if expr.name not in env:
+            raise ExactUnavailable(f"'{expr.name}' is a constant computed from the data in floating point")
         return env[expr.name]
     if isinstance(expr, sympy.Add):
         return sum((_sympy_value(a, env) for a in expr.args), Fraction(0))
@@ -508,10 +530,8 @@ def from_ir(problem: Problem) -> ExactProblem:
         N, e = _dyadic(C.data[None, :]) if C.nnz else (np.zeros((1, 0), dtype=object), 0)
         lmis.append(ExactLMI(lmi.name, lmi.dim, C.indptr.astype(np.int64), C.indices.astype(np.int64), N[0], 1 << e))
     A = problem.linear.A.tocsr()
-    linear = [
-        {int(k): Fraction(float(v)) for k, v in zip(A.indices[A.indptr[r] : A.indptr[r + 1]], A.data[A.indptr[r] : A.indptr[r + 1]], strict=True)}
-        for r in range(A.shape[0])
-    ]
+    rows = [A.getrow(r).tocoo() for r in range(A.shape[0])]
+    linear = [{int(k): Fraction(float(v)) for k, v in zip(R.col, R.data, strict=True)} for R in rows]
     objective = [Fraction(float(v)) for v in problem.objective.c]
     return ExactProblem(lmis, linear, objective, "ir", "the IR's own coefficients")
 
@@ -553,28 +573,24 @@ def _recompile(problem: Problem) -> ExactProblem:
         return from_ir(problem)
     from lmic.compile import plan_for
     from lmic.compile.bind import template_identity
+    from lmic.compile.warm import FrozenPlan, warm_plan
 
-    params = {k: v for k, v in (meta.get("params") or {}).items()}
+    params = dict(meta.get("params") or {})
     try:
-        from lmic.compile.warm import warm_plan
-
-        plan = warm_plan(tid, params)
-        attempts = [plan] if plan is not None else []
-        attempts.append(None)  # the analysed plan (sympy): exact numbers a frozen plan rounded
-        last: ExactUnavailable | None = None
-        for cand in attempts:
-            p = cand if cand is not None else plan_for(tid, params)
-            names = {d.name for d in p.template.data_decls}
-            data = {k: np.asarray(v).tolist() for k, v in problem.data.items() if k in names}
+        plan: Any = warm_plan(tid, params) or plan_for(tid, params)
+        for attempt in range(2):
             want = (meta.get("template") or {}).get("sha256")
-            if want is not None and template_identity(p)["template"]["sha256"] != want:
+            if want is not None and template_identity(plan)["template"]["sha256"] != want:
                 raise ExactUnavailable(f"theorem {tid}'s template changed since the problem was compiled")
+            names = {d.name for d in plan.template.data_decls}
+            data = {k: np.asarray(v).tolist() for k, v in problem.data.items() if k in names}
             try:
-                return _exact(p, load_system({"data": data}), params, problem)
-            except ExactUnavailable as exc:
-                last = exc
-        assert last is not None
-        raise last
+                return _exact(plan, load_system({"data": data}), params, problem)
+            except _RoundedNumber:
+                if attempt or not isinstance(plan, FrozenPlan):
+                    raise
+                plan = plan_for(tid, params)  # the analysed plan (sympy) has the exact numbers
+        raise AssertionError("unreachable")  # pragma: no cover
     except ExactUnavailable:
         raise
     except LmicError as exc:
