@@ -161,7 +161,8 @@ class ExactProblem:
                         vals.append(_up(float(dv)))
             lin_d = sp.csr_matrix((vals, (rows, cols)), shape=A.shape)
         c = np.asarray(problem.objective.c, dtype=float)
-        obj_d = np.array([_up(float(abs(b - Fraction(float(a))))) for a, b in zip(c, self.objective, strict=True)])
+        dq = [abs(b - Fraction(float(a))) for a, b in zip(c, self.objective, strict=True)]
+        obj_d = np.array([_up(float(v)) if v else 0.0 for v in dq])
         return mats, lin_d, obj_d
 
 
