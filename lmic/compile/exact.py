@@ -132,7 +132,8 @@ class ExactProblem:
             e = np.asarray(D @ xx).ravel() * _grow(D.shape[1])
             i, j = tril_rows_cols(lmi.dim)
             w = np.where(i == j, 1.0, 2.0)
-            out.append(_up(math.sqrt(_up(float(np.sum(w * e * e)) * _grow(e.size)))))
+            ss = float(np.sum(w * e * e))
+            out.append(_up(math.sqrt(_up(ss * _grow(e.size)))) if ss > 0 or np.any(e) else 0.0)
         lin = [float(v) for v in (np.asarray(lin_d @ xx).ravel() * _grow(xx.size))] if lin_d is not None else []
         obj = float(obj_d @ xx) * _grow(xx.size)
         return out, lin, obj
