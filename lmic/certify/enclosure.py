@@ -462,7 +462,9 @@ def describe(record: dict[str, Any] | None) -> list[str]:
     if dual.get("proven"):
         how = "exact rational arithmetic" if dual.get("method") == "exact" else "rigorous floating-point error bounds"
         if dual.get("route") == "face":
-            where = f"the optimal face W = 0 of a Lyapunov-type LMI, rank {dual.get('rank')}"
+            where = f"the optimal face W = 0 of a Lyapunov-type LMI, rank {dual.get('rank')}" + (
+                "; for the theorem compiled exactly from the system's numbers" if dual.get("problem") == "exact" else ""
+            )
         elif dual.get("route") == "centred":
             where = f"centred dual point, weight {dual.get('theta'):g} at loss {dual.get('centring_loss'):g}"
         else:

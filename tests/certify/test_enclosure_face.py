@@ -18,7 +18,9 @@ from certify_helpers import hinf_norm
 import lmic.api
 from lmic.certify import audit_certificate, write_certificate
 from lmic.certify.enclosure_dual import verify_dual_bound
-from lmic.certify.enclosure_face import face_bound, lyapunov_structure, prove_face
+from lmic.certify.enclosure_face import lyapunov_structure, prove_face
+from lmic.certify.enclosure_float import primal_end
+from lmic.compile.exact import cached_exact, exact_of, from_ir
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 
 
@@ -100,18 +102,70 @@ def test_bounded_real_lower_end_is_proved_exactly_on_the_face(n, seed, tmp_path)
         assert bad.field in ("enclosure.dual", "enclosure.lower"), (tamper, bad.field, bad.message)
 
 
-def test_random_diagonal_has_no_exact_structure_and_keeps_the_honest_report():
-    """With a random diagonal the IR's coefficients fl(A_aa + A_bb) are rounded sums: the face
-    W = 0 of the problem lmic certifies is not the Lyapunov one, so the route declines (no
-    false claim) and the enclosure reports what it proves."""
-    (A, B, C), r = _brl(20, 0, dyadic=False)
-    assert lyapunov_structure(r.problem) is None
-    res = face_bound(r.problem, r.solution.duals)
-    assert not res["proven"] and "no Lyapunov structure" in res["reason"]
+@pytest.mark.parametrize("n, seed", [(5, 1), (12, 2), (20, 0)])
+def test_random_diagonal_is_proved_on_the_exact_compilation(n, seed, tmp_path):
+    """With a random diagonal the IR's coefficients fl(A_aa + A_bb) are rounded sums: the IR's
+    own face W = 0 is not the Lyapunov one, but the theorem compiled exactly from the system's
+    numbers (lmic.compile.exact) has it. The lower end is proved there, the certified point is
+    proved for that problem too (its margin covers the rounding), and the enclosure says so."""
+    (A, B, C), r = _brl(n, seed, dyadic=False)
+    assert r.verdict == "certified"
+    assert lyapunov_structure(r.problem) is None  # the IR's own floats
+    assert lyapunov_structure(r.problem, exact_of(r.problem)) is not None
     e = r.enclosure
+    d = e["dual"]
+    assert d["proven"] and d["route"] == "face" and d["problem"] == "exact", e["reason"]
+    assert e["problem"] == "exact" and d["dual"]["problem"] == "exact"
     lo, hi = hinf_norm(A, B, C)
-    assert hi <= e["upper"]
-    assert e["lower"] is None or e["lower"] <= lo
+    assert e["lower"] <= lo and hi <= e["upper"]
+    assert e["rel_gap"] <= 1e-6
+    # python-control's norm (another algorithm) is inside as well
+    control = pytest.importorskip("control")
+    norm = float(control.norm(control.ss(A, B, C, np.zeros((2, 2))), "inf", tol=1e-10, method="scipy"))
+    assert e["lower"] <= norm * (1 + 1e-9) and norm * (1 - 1e-9) <= e["upper"]
+    # the audit recompiles the exact problem from the theorem and the system, re-proves both
+    # ends for it, and rejects tampering (the bound, K, S_R, or the problem it is about)
+    path = tmp_path / "brl.json"
+    write_certificate(path, r.problem, r.solution, r.certificate, enclosure=r.enclosure)
+    assert audit_certificate(path).ok
+    good = json.loads(path.read_text())
+    for tamper in ("lower", "S_rest", "K", "problem", "point problem"):
+        doc = json.loads(json.dumps(good))
+        enc = doc["enclosure"]
+        if tamper == "lower":
+            enc["lower"] = enc["dual"]["lower"] = enc["lower"] + 1e-7 * abs(enc["lower"])
+        elif tamper == "S_rest":
+            enc["dual"]["dual"]["S_rest"][0][0] *= 1.5
+        elif tamper == "K":
+            enc["dual"]["dual"]["K"] = (np.asarray(enc["dual"]["dual"]["K"]) + 1e-3).tolist()
+        elif tamper == "problem":
+            enc["problem"] = "ir"
+        else:
+            enc["dual"]["dual"]["problem"] = "ir"
+        path.write_text(json.dumps(doc))
+        bad = audit_certificate(path)
+        assert not bad.ok, tamper
+        assert bad.field in ("enclosure.dual", "enclosure.lower", "enclosure.problem"), (tamper, bad.field)
+
+
+def test_primal_end_covers_the_exact_counterpart_once_it_exists():
+    """A point proved for the IR whose margin is below |G_exact(x) - G(x)| gives no primal end
+    once the problem has an exact counterpart (a counterpart built by hand here, with one
+    coefficient 1e-3 away from the IR's)."""
+    p = _first_order(-2.0, 1.0, 3.0)
+    x = np.array([3.0, 1.5 + 1e-4])  # G = 3/(s+2): p = 3, t just above the norm 3/2
+    assert primal_end(p, x)["proven"] and primal_end(p, x)["problem"] == "ir"
+    ex = from_ir(p)
+    brl = ex.lmis[1]
+    k = int(brl.indptr[2])  # the coefficient of t at entry (1, 1)
+    brl.num[k] -= brl.den // 1000 + 1  # the exact problem: t's coefficient just below 1 - 1e-3
+    ex.about = "theorem"
+    p._lmic_exact = ex  # what lmic.compile.exact.exact_of caches
+    assert cached_exact(p) is ex
+    res = primal_end(p, x)
+    assert not res["proven"], res
+    assert primal_end(p, np.array([3.0, 1.6]))["proven"]  # a margin 0.1 covers it
+    assert primal_end(p, np.array([3.0, 1.6]))["problem"] == "exact"
 
 
 def _first_order(a: float, b: float, c: float) -> Problem:
