@@ -76,7 +76,7 @@ def test_bounded_real_lower_end_is_proved_exactly_on_the_face(n, seed, tmp_path)
     e = r.enclosure
     d = e["dual"]
     assert d["proven"] and d["route"] == "face" and d["method"] == "exact", e["reason"]
-    assert e["lower"] <= lo and hi <= e["upper"]
+    assert e["lower"] <= hi and hi <= e["upper"]  # the norm is in [lo, hi] (bisection to 1e-12)
     assert _sweep_lower(A, B, C) <= e["upper"]
     assert e["rel_gap"] <= 1e-6
     # the exact value is a rational no larger than the reported (rounded-down) end
@@ -116,8 +116,8 @@ def test_random_diagonal_is_proved_on_the_exact_compilation(n, seed, tmp_path):
     d = e["dual"]
     assert d["proven"] and d["route"] == "face" and d["problem"] == "exact", e["reason"]
     assert e["problem"] == "exact" and d["dual"]["problem"] == "exact"
-    lo, hi = hinf_norm(A, B, C)
-    assert e["lower"] <= lo and hi <= e["upper"]
+    lo, hi = hinf_norm(A, B, C)  # the norm is in [lo, hi] (bisection to 1e-12)
+    assert e["lower"] <= hi and hi <= e["upper"]
     assert e["rel_gap"] <= 1e-6
     # python-control's norm (another algorithm) is inside as well
     control = pytest.importorskip("control")
