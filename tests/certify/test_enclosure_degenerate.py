@@ -195,7 +195,7 @@ def test_strict_examples_gap_within_1e6_and_backends_bracket_each_other(theorem,
     assert a_lo <= b_hi and b_lo <= a_hi
 
 
-def test_dual_search_stops_at_its_budget():
+def test_dual_search_stops_at_its_budget(no_face):
     """With no time left after the first attempt, the search starts no re-solve and says so;
     with the default budget the same dual point proves (the centred route, test above)."""
     from lmic.certify.enclosure_dual import dual_bound
