@@ -138,7 +138,10 @@ def _float_structure(problem: Problem) -> dict[str, Any] | None:
             continue
 
         def H(t: int, Fx: sp.csc_matrix = Fx, rows: np.ndarray = rows, d: int = d) -> np.ndarray:
-            return tril_unvec(Fx[:, int(rows[t])].toarray().ravel(), d)
+            k = int(rows[t])
+            v = np.zeros(Fx.shape[0])
+            v[Fx.indices[Fx.indptr[k] : Fx.indptr[k + 1]]] = Fx.data[Fx.indptr[k] : Fx.indptr[k + 1]]
+            return tril_unvec(v, d)
 
         Abar = np.zeros((npv, d))
         state = np.zeros(npv, dtype=int)
@@ -195,8 +198,11 @@ def _exact_structure(problem: Problem, cand: dict[str, Any], ex: ExactProblem) -
         r, v = Lx.column(int(rows[t]))
         return {int(a): 2 * int(b) for a, b in zip(r.tolist(), v.tolist(), strict=True)}
 
+    ii, jj = np.meshgrid(np.arange(d), np.arange(d), indexing="ij")
+    slots = tril_index(np.maximum(ii, jj), np.minimum(ii, jj), d).tolist()  # slots[i][j]: (i, j)'s tril row
+
     def slot(i: int, j: int) -> int:
-        return int(tril_index(max(i, j), min(i, j), d))
+        return slots[i][j]
 
     AN = np.zeros((npv, d), dtype=object)  # Abar = AN / (2 den)
     for t in range(ri.size):
@@ -348,6 +354,16 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
         return Fraction(sum(int(v) * xn[int(j)] for j, v in zip(rr.tolist(), vv.tolist(), strict=True)), Lx.den * D2)
 
     prow = {int(k): t for t, k in enumerate(structure["rows"])}
+    # on a pivot row (P_ab) the coefficients are E^T E_ab Abar + Abar^T E_ab E (checked exactly
+    # by lyapunov_structure): g = <F, X> = 2 (Abar X)[b, s_a] + 2 (Abar X)[a, s_b] (once if a = b)
+    MN = flint.fmpz_mat([[int(v) for v in row_] for row_ in AN]) * XN  # Abar X = MN / (Aden D^2)
+    pa_, pb_ = tril_rows_cols(npv)
+
+    def g_pivot(t: int) -> Fraction:
+        a_, b_ = int(pa_[t]), int(pb_[t])
+        v = int(MN[b_, int(state[a_])]) + (int(MN[a_, int(state[b_])]) if a_ != b_ else 0)
+        return Fraction(2 * v, Aden * D2)
+
     others = [k for k in range(1, 1 + P.n) if k not in prow]
     gv = {k: g(k) for k in others}
     # X / t meets the rows without a pivot: one scale t > 0 for all of them
@@ -366,7 +382,7 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
     pw = np.where(pr == pc, 1, 2)
     w = [Fraction(0)] * pr.size
     for k, tt in prow.items():
-        gk = g(k)
+        gk = g_pivot(tt)
         if gk or q[k]:
             w[tt] = (q[k] - gk / t) / (int(pw[tt]) * Lp.value(tt, k))
     if any(w):
