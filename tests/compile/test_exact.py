@@ -119,3 +119,30 @@ def test_perturbation_bound_covers_the_exact_difference():
     assert obj_b == 0.0 and lin_b == []
     # the IR's own floats are exact: no difference at all
     assert from_ir(prob).perturbation(prob, x)[0][0] <= 1e-300
+
+
+def test_exact_of_recompiles_a_theorem_and_declines_an_unknown_one():
+    """A compiled problem's counterpart is its theorem compiled exactly (cached); an IR naming a
+    theorem that cannot be compiled declines with the reason (never a crash); an IR with no
+    theorem is its own exact data."""
+    from lmic.api import load_target
+    from lmic.compile.exact import cached_exact, exact_of
+
+    A = [[-0.3, 0.1], [0.2, -0.7]]
+    prob = load_target("tutorial.bounded_real", {"data": {"A": A, "B": [[1.0], [0.5]], "C": [[1.0, 0.1]]}})[0]
+    assert cached_exact(prob) is None
+    ex = exact_of(prob)
+    assert ex.about == "theorem" and cached_exact(prob) is ex and exact_of(prob) is ex
+    # the coefficient of P_01 at entry (0, 1) of -(A^T P + P A): -(A_00 + A_11), exactly
+    a = Fraction(-0.3) + Fraction(-0.7)
+    P01 = 1 + prob.variables[0].offset + 1
+    assert ex.lmis[1].value(1, P01) == -a and Fraction(float(prob.lmis[1].coeffs[1, P01])) != -a
+    bad = load_target("tutorial.bounded_real", {"data": {"A": A, "B": [[1.0], [0.5]], "C": [[1.0, 0.1]]}})[0]
+    bad.meta["theorem"] = "no.such_theorem"
+    with pytest.raises(ExactUnavailable, match="no.such_theorem"):
+        exact_of(bad)
+    with pytest.raises(ExactUnavailable):  # the failure is cached too
+        exact_of(bad)
+    bare = load_target("tutorial.bounded_real", {"data": {"A": A, "B": [[1.0], [0.5]], "C": [[1.0, 0.1]]}})[0]
+    bare.meta.pop("theorem")
+    assert exact_of(bare).about == "ir"
