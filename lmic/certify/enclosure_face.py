@@ -187,6 +187,8 @@ def _exact_structure(problem: Problem, cand: dict[str, Any], ex: ExactProblem) -
     Lp, Lx = ex.lmis[pi], ex.lmis[xi]
     npv, d = Lp.dim, Lx.dim
     ri, ci = tril_rows_cols(npv)
+    if int(Lp.indptr[-1] - Lp.indptr[1]) != rows.size:  # no entry outside the pivot rows (but q_0's)
+        return None
     for t, k in enumerate(rows.tolist()):  # the pivot block: one entry per column, in its own row
         pr, pn = Lp.column(int(k))
         if pr.size != 1 or int(pr[0]) != t or pn[0] == 0:
