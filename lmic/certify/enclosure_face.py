@@ -82,6 +82,9 @@ __all__ = [
 
 #: largest rank ``r`` of the factored multiplier tried
 MAX_RANK = 4
+#: the frequency grid is searched when the best candidate's float bound is below the solver's
+#: dual objective by more than this (relative)
+GRID_SLACK = 1e-6
 
 
 def _target(problem: Problem) -> np.ndarray:
@@ -441,6 +444,26 @@ def _candidates(structure: dict[str, Any], X0: np.ndarray) -> list[tuple[float, 
     return out
 
 
+def _ranked(problem: Problem, st: dict[str, Any], mats: list[np.ndarray], y: np.ndarray) -> list[Any]:
+    """Every candidate, best float bound first: the solver's (:func:`_candidates`) and the
+    frequency search's (:mod:`lmic.certify.enclosure_face_kyp`: near the solver's frequency,
+    and over a grid when the best is below the solver's dual objective by more than
+    :data:`GRID_SLACK`, as when the solver stopped inaccurate)."""
+    from lmic.certify.enclosure_face_kyp import estimate, kyp_candidates
+    from lmic.certify.enclosure_repair import _pack
+
+    own = _candidates(st, mats[st["block"]])
+    out = [(estimate(problem, st, K, SR), K, SR) for _, K, SR in own]
+    omega0 = next((float(K[1, 0]) for _, K, _ in own if K.shape[0] == 2 and K[1, 0] != 0), None)
+    out += kyp_candidates(problem, st, omega0, grid=False)
+    J, _ = jacobian(problem)
+    L0 = float(_target(problem)[0] - (J[0] @ _pack(problem, mats, y))[0])
+    top = max((c[0] for c in out if np.isfinite(c[0])), default=-np.inf)
+    if not top >= L0 - GRID_SLACK * max(1.0, abs(L0)):
+        out += kyp_candidates(problem, st, omega0, grid=True)
+    return sorted((c for c in out if np.isfinite(c[0])), key=lambda c: -c[0])
+
+
 def face_bound(problem: Problem, duals: dict[str, Any], *, tries: int = 2) -> dict[str, Any]:
     """Prove a lower bound of the minimisation form's optimum on the face ``W = 0`` (module
     docstring), from the solver's multiplier of the main LMI: the ranks are tried best first
@@ -462,9 +485,9 @@ def face_bound(problem: Problem, duals: dict[str, Any], *, tries: int = 2) -> di
     st, why = structure_for(problem)
     if st is None:
         return {"proven": False, "route": "face", "reason": why}
-    mats, _ = parse_multipliers(problem, duals, "dual point", missing_is_zero=False)
+    mats, y = parse_multipliers(problem, duals, "dual point", missing_is_zero=False)
     best: dict[str, Any] = {"proven": False, "route": "face", "reason": "no face candidate"}
-    for _, K, SR in _candidates(st, mats[st["block"]])[:tries]:
+    for _, K, SR in _ranked(problem, st, mats, y)[:tries]:
         res = prove_face(problem, st, K, SR)
         res.update(route="face", method="exact", shift=0.0, problem=st["problem"])
         if res["proven"]:
