@@ -115,7 +115,7 @@ from lmic.certify.enclosure_centre import centred_bound, centring_problem
 from lmic.certify.enclosure_conditional import RADIUS_FACTOR, best_box_bound, box_bound, verify_box_bound
 from lmic.certify.enclosure_dual import dual_bound, verify_dual_bound
 from lmic.certify.enclosure_exact import EXACT_MAX_N
-from lmic.certify.enclosure_face import about_of, exact_counterpart, one_problem
+from lmic.certify.enclosure_face import about_of, exact_counterpart, face_bound, one_problem
 from lmic.certify.enclosure_float import lambda_min_lower, polish_primal, primal_end
 from lmic.certify.enclosure_repair import PERTURBATIONS, SHIFTS, perturbed_problem
 from lmic.errors import CertificateError
@@ -218,8 +218,10 @@ def enclosure(
     kind = ("infimum" if sense == "min" else "supremum") if strict else ("minimum" if sense == "min" else "maximum")
     out: dict[str, Any] = {"sense": sense, "kind": kind, "lower": None, "upper": None, "gap": None, "rel_gap": None}
     dual: dict[str, Any]
-    if not duals or duals.get("lmis") is None:
-        dual = {"proven": False, "reason": "the solver returned no dual point"}
+    if not duals or duals.get("lmis") is None:  # the face route needs none (enclosure_face_kyp)
+        dual = face_bound(problem, None) if sense != "feasibility" else {}
+        if not dual.get("proven"):
+            dual = {"proven": False, "reason": "the solver returned no dual point"}
     else:
         try:
             search = search_budget(solve_s) if budget_s is None else min(search_budget(solve_s), float(budget_s))

@@ -235,13 +235,11 @@ def lyapunov_structure(problem: Problem, exact: ExactProblem | None = None) -> d
     """The Lyapunov (KYP) structure of the module docstring, or ``None``.
 
     Returns ``pivot`` (the block of ``P > 0``), ``block`` (the main LMI, the only other block
-    the pivot rows touch), ``state`` (the state row of each index of ``P``: ``E``), ``Abar``
-    (``n_P x d``, from the coefficients of ``P``'s diagonal entries; ``AbarN / Abar_den``
-    exactly), ``rows`` (the pivot row of each tril entry of ``P``'s block) and ``exact`` (the
-    coefficients checked), after checking that every pivot row's coefficients are those of
-    ``E^T P Abar + Abar^T P E`` exactly on ``exact`` (default: the IR's own floats,
-    :func:`lmic.compile.exact.from_ir`; a coefficient ``fl(A_aa + A_bb)`` of random data breaks
-    it there, and :func:`lmic.compile.exact.exact_of` gives the exact compilation).
+    the pivot rows touch), ``state`` (``E``: the state row of each index of ``P``), ``Abar``
+    (``n_P x d``; ``AbarN / Abar_den`` exactly), ``rows`` (the pivot row of each tril entry of
+    ``P``'s block) and ``exact``, after checking that every pivot row's coefficients are those
+    of ``E^T P Abar + Abar^T P E`` exactly on ``exact`` (default: the IR's own floats, where
+    ``fl(A_aa + A_bb)`` of random data breaks it; :func:`lmic.compile.exact.exact_of`).
 
     >>> import scipy.sparse as sp
     >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
@@ -464,10 +462,11 @@ def _ranked(problem: Problem, st: dict[str, Any], mats: list[np.ndarray], y: np.
     return sorted((c for c in out if np.isfinite(c[0])), key=lambda c: -c[0])
 
 
-def face_bound(problem: Problem, duals: dict[str, Any], *, tries: int = 2) -> dict[str, Any]:
+def face_bound(problem: Problem, duals: dict[str, Any] | None, *, tries: int = 2) -> dict[str, Any]:
     """Prove a lower bound of the minimisation form's optimum on the face ``W = 0`` (module
-    docstring), from the solver's multiplier of the main LMI: the ranks are tried best first
-    (at most ``tries``), the first proven bound kept.
+    docstring), from the solver's multiplier of the main LMI and the frequency search
+    (:func:`_ranked`; the search alone when ``duals`` has no multipliers): the candidates are
+    tried best first (at most ``tries``), the first proven bound kept.
 
     Returns
     -------
@@ -485,9 +484,15 @@ def face_bound(problem: Problem, duals: dict[str, Any], *, tries: int = 2) -> di
     st, why = structure_for(problem)
     if st is None:
         return {"proven": False, "route": "face", "reason": why}
-    mats, y = parse_multipliers(problem, duals, "dual point", missing_is_zero=False)
+    if duals and duals.get("lmis") is not None:
+        mats, y = parse_multipliers(problem, duals, "dual point", missing_is_zero=False)
+        cands = _ranked(problem, st, mats, y)
+    else:  # no dual point: the frequency search alone
+        from lmic.certify.enclosure_face_kyp import kyp_candidates
+
+        cands = kyp_candidates(problem, st)
     best: dict[str, Any] = {"proven": False, "route": "face", "reason": "no face candidate"}
-    for _, K, SR in _ranked(problem, st, mats, y)[:tries]:
+    for _, K, SR in cands[:tries]:
         res = prove_face(problem, st, K, SR)
         res.update(route="face", method="exact", shift=0.0, problem=st["problem"])
         if res["proven"]:

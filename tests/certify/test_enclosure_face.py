@@ -19,6 +19,7 @@ import lmic.api
 from lmic.certify import audit_certificate, write_certificate
 from lmic.certify.enclosure_dual import verify_dual_bound
 from lmic.certify.enclosure_face import face_bound, lyapunov_structure, prove_face
+from lmic.certify.enclosure import enclosure
 from lmic.certify.enclosure_float import primal_end
 from lmic.compile.exact import cached_exact, exact_of, from_ir
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
@@ -231,3 +232,7 @@ def test_frequency_search_gives_the_norm_even_from_a_useless_dual():
     assert res["lower"] <= hi and (hi - res["lower"]) / hi <= 1e-9
     e = r.enclosure
     assert e["dual"]["route"] == "face" and (hi - e["lower"]) / hi <= 1e-9
+    # with no dual point and no certified point at all (a solver that failed): the lower end alone
+    e0 = enclosure(r.problem, None, None)
+    assert e0["upper"] is None and e0["problem"] == "exact" and e0["lower"] <= hi
+    assert (hi - e0["lower"]) / hi <= 1e-9
