@@ -17,9 +17,9 @@ from certify_helpers import hinf_norm
 
 import lmic.api
 from lmic.certify import audit_certificate, write_certificate
+from lmic.certify.enclosure import enclosure
 from lmic.certify.enclosure_dual import verify_dual_bound
 from lmic.certify.enclosure_face import face_bound, lyapunov_structure, prove_face
-from lmic.certify.enclosure import enclosure
 from lmic.certify.enclosure_float import primal_end
 from lmic.compile.exact import cached_exact, exact_of, from_ir
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
