@@ -111,11 +111,12 @@ from typing import Any
 
 import numpy as np
 
+from lmic.certify.enclosure_about import about_of, exact_counterpart, one_problem
 from lmic.certify.enclosure_centre import centred_bound, centring_problem
 from lmic.certify.enclosure_conditional import RADIUS_FACTOR, best_box_bound, box_bound, verify_box_bound
 from lmic.certify.enclosure_dual import dual_bound, verify_dual_bound
 from lmic.certify.enclosure_exact import EXACT_MAX_N
-from lmic.certify.enclosure_face import about_of, exact_counterpart, face_bound, one_problem
+from lmic.certify.enclosure_face import face_bound
 from lmic.certify.enclosure_float import lambda_min_lower, polish_primal, primal_end
 from lmic.certify.enclosure_repair import PERTURBATIONS, SHIFTS, perturbed_problem
 from lmic.errors import CertificateError

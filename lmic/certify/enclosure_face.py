@@ -30,9 +30,14 @@ the solution is unique): an ``(n r) x (n r)`` rational solve (python-flint). ``X
 construction, every other multiplier is zero, and the proof (:func:`prove_face`) checks every
 dual equality *exactly*: the pivot block ``W`` is computed from its rows and must be PSD
 (here: exactly zero), every other row must hold. The bound ``L = q_0 - g_0(u)`` is exact
-(reported rounded down). ``K`` and ``S_R`` are read off the solver's multiplier (its rank-``r``
-part: ``S_0 = V_r Lambda_r^(1/2)``, ``K`` the skew part of ``lstsq(E S_0, Abar S_0)``); the
-solver's point is only a candidate: the exact checks decide.
+(reported rounded down). Candidates ``(K, S_R)`` come from the solver's multiplier (its
+rank-``r`` part: ``S_0 = V_r Lambda_r^(1/2)``, ``K`` the skew part of ``lstsq(E S_0, Abar
+S_0)``) and from a frequency search that needs no dual point
+(:mod:`lmic.certify.enclosure_face_kyp`: the best ``S_R`` for a given ``K`` is a generalised
+eigenvector); they are ranked by their float bound and only the best are proved. Every
+candidate is only a candidate: the exact checks decide. The coefficients checked are the
+IR's own when they have the structure exactly, else the theorem's exact compilation
+(:mod:`lmic.compile.exact`, :func:`structure_for`; the bound is then about that problem).
 
 The record (``dual`` of the result, ``form`` ``"face"``) holds ``K``, ``S_R``, the block and
 the pivot block; :func:`verify_face` re-runs the exact proof from it alone.
@@ -547,54 +552,3 @@ def verify_face(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
         }
     where = "the theorem's exact compilation" if about == "exact" else "the IR"
     return {"ok": True, "lower": res["lower"], "reason": f"lower bound re-proved exactly on the face ({where})"}
-
-
-# -- which problem an enclosure is about (lmic.certify.enclosure) ------------------------------
-
-
-def about_of(dual: dict[str, Any], pe: dict[str, Any] | None) -> str | None:
-    """The ``problem`` of an enclosure from its dual end and the primal end's
-    :func:`~lmic.certify.enclosure_float.primal_end` record: ``"exact"`` when the dual end is
-    proved on the exact compilation (the face route) and the primal end for it too, ``"ir"``
-    when the dual end is about the IR; ``None`` when the two ends are about different problems.
-
-    >>> about_of({"proven": True, "problem": "exact"}, {"proven": True, "problem": "ir"}) is None
-    True
-    """
-    if not (dual.get("proven") and dual.get("problem") == "exact"):
-        return "ir"
-    return "exact" if pe is None or not pe.get("proven") or pe.get("problem") == "exact" else None
-
-
-def one_problem(first: dict[str, Any], second: dict[str, Any], tp: bool, td: bool, pkey: str, dkey: str) -> bool:
-    """Whether the primal end of ``second`` (``tp``, else ``first``'s) and the dual end of
-    ``second`` (``td``) are about one problem: a dual end about the exact problem needs a
-    primal end proved for it (the record's ``problem``).
-
-    >>> a = {"upper": 2.0, "lower": 1.0, "problem": "ir", "dual": {"problem": "ir"}}
-    >>> b = {"upper": 2.0, "lower": 1.5, "problem": "exact", "dual": {"problem": "exact"}}
-    >>> one_problem(a, b, False, True, "upper", "lower"), one_problem(a, b, True, True, "upper", "lower")
-    (False, True)
-    """
-    p_src, d_src = (second if tp else first), (second if td else first)
-    exact_dual = (d_src.get("dual") or {}).get("problem") == "exact" and d_src.get(dkey) is not None
-    return not exact_dual or p_src.get(pkey) is None or p_src.get("problem") == "exact"
-
-
-def exact_counterpart(problem: Problem, record: dict[str, Any]) -> str | None:
-    """For a recorded enclosure about the exact problem (``problem`` ``"exact"``), build the
-    problem's exact counterpart (so that :func:`~lmic.certify.enclosure_float.primal_end`
-    re-proves the primal end for it too); the reason when it cannot be built, else ``None``."""
-    about = record.get("problem", "ir")
-    if about not in ("ir", "exact"):
-        return f"unknown problem {about!r}"
-    point = (record.get("dual") or {}).get("dual")
-    if about == "ir" and isinstance(point, dict) and point.get("problem") == "exact":
-        return "the dual end is proved for the exact compilation, the record says the IR"
-    if about == "ir":
-        return None
-    try:
-        ex = exact_of(problem)
-    except ExactUnavailable as exc:
-        return str(exc)
-    return None if ex.about == "theorem" else "the enclosure is about an exact compilation, the IR has no theorem"
