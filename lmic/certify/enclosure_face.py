@@ -334,22 +334,23 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
         sol = M.solve(rhs)
     except ZeroDivisionError:
         return {"proven": False, "reason": "the Sylvester equation of the face is singular"}
-    # S = N / D with integers N (python ints) and one common denominator D
-    Sq: list[list[Fraction]] = [[Fraction(0)] * r for _ in range(d)]
+    # S = N / D with integers N and one common denominator D: the solve's own (flint), times the
+    # power of two of the float S_R
+    solN, solD = sol.numer_denom()
+    solD = int(solD)
+    SRf = [[Fraction(float(S_rest[j, c])) for c in range(r)] for j in range(rest.size)]
+    two = max((f.denominator for row_ in SRf for f in row_), default=1)  # powers of two: the largest
+    D = solD * two // math.gcd(solD, two)
+    N = flint.fmpz_mat(d, r)
     for c in range(r):
         for i in range(npv):
-            v = sol[c * npv + i, 0]
-            Sq[int(state[i])][c] = Fraction(int(v.p), int(v.q))
+            N[int(state[i]), c] = solN[c * npv + i, 0] * (D // solD)
         for j in range(rest.size):
-            Sq[int(rest[j])][c] = Fraction(float(S_rest[j, c]))
-    D = 1
-    for row_ in Sq:
-        for f in row_:
-            D = D * f.denominator // math.gcd(D, f.denominator)
-    N = flint.fmpz_mat([[int(f * D) for f in row_] for row_ in Sq])
+            f = SRf[j][c]
+            N[int(rest[j]), c] = f.numerator * (D // f.denominator)
     XN = N * N.transpose()  # X = XN / D^2, exactly
     sgn = -1 if P.objective.sense == "max" else 1
-    q = [sgn * v for v in ex.objective]
+    q = list(ex.objective) if sgn == 1 else [-v for v in ex.objective]
     Lx, Lp = ex.lmis[xi], ex.lmis[pi]
     ti, tj = tril_rows_cols(d)
     # <F_k, X> over the main block: the weight 2 of an off-diagonal tril entry folded into xn
@@ -364,13 +365,14 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
     prow = {int(k): t for t, k in enumerate(structure["rows"])}
     # on a pivot row (P_ab) the coefficients are E^T E_ab Abar + Abar^T E_ab E (checked exactly
     # by lyapunov_structure): g = <F, X> = 2 (Abar X)[b, s_a] + 2 (Abar X)[a, s_b] (once if a = b)
-    MN = flint.fmpz_mat([[int(v) for v in row_] for row_ in AN]) * XN  # Abar X = MN / (Aden D^2)
+    # Abar X = MN / (Aden D^2), MN = (AN N) N^T: two thin products (AN XN costs seconds at 50 states)
+    MN = (flint.fmpz_mat([[int(v) for v in row_] for row_ in AN]) * N) * N.transpose()
     pa_, pb_ = tril_rows_cols(npv)
 
-    def g_pivot(t: int) -> Fraction:
+    def g_pivot(t: int) -> int:
+        """``g`` of the pivot row of tril entry ``t``, times ``Aden D^2 / 2`` (an integer)."""
         a_, b_ = int(pa_[t]), int(pb_[t])
-        v = int(MN[b_, int(state[a_])]) + (int(MN[a_, int(state[b_])]) if a_ != b_ else 0)
-        return Fraction(2 * v, Aden * D2)
+        return int(MN[b_, int(state[a_])]) + (int(MN[a_, int(state[b_])]) if a_ != b_ else 0)
 
     others = [k for k in range(1, 1 + P.n) if k not in prow]
     gv = {k: g(k) for k in others}
@@ -390,9 +392,9 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
     pw = np.where(pr == pc, 1, 2)
     w = [Fraction(0)] * pr.size
     for k, tt in prow.items():
-        gk = g_pivot(tt)
-        if gk or q[k]:
-            w[tt] = (q[k] - gk / t) / (int(pw[tt]) * Lp.value(tt, k))
+        gn = g_pivot(tt)
+        if gn or q[k]:  # on the face g = 0 (W = 0): no rational arithmetic unless needed
+            w[tt] = (q[k] - Fraction(2 * gn, Aden * D2) / t) / (int(pw[tt]) * Lp.value(tt, k))
     if any(w):
         den = 1
         for f in w:
