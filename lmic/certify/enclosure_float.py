@@ -239,7 +239,9 @@ def primal_end(problem: Problem, x: np.ndarray) -> dict[str, Any]:
         err = _gamma(k + 2) * np.asarray(abs(C) @ ax).ravel() * _SAFE
         F = tril_unvec(f, lmi.dim)
         E = tril_unvec(err, lmi.dim)
-        lb = lambda_min_lower(0.5 * (F + F.T)) - float(np.linalg.norm(E)) * _SAFE - (pl[i_lmi] if pl else 0.0)
+        lb = lambda_min_lower(0.5 * (F + F.T)) - float(np.linalg.norm(E)) * _SAFE
+        if pl:  # the exact counterpart's difference, subtracted rounding down
+            lb = _down(_down(lb) - pl[i_lmi])
         if not (lb > 0 if lmi.strict else lb >= 0):
             return {
                 "proven": False,
@@ -265,7 +267,7 @@ def primal_end(problem: Problem, x: np.ndarray) -> dict[str, Any]:
                 )
                 ok = exact == 0 and not (pr and pr[i] > 0)
             else:
-                m = r[i] - err[i] - (pr[i] if pr else 0.0)
+                m = _down(_down(r[i] - err[i]) - pr[i]) if pr else r[i] - err[i]
                 ok = (m > 0) if strict else (m >= 0)
             if not ok:
                 return {
