@@ -268,7 +268,10 @@ def enclosure(
         bound = dual["lower"] if sense == "min" else -dual["lower"]
     out["problem"] = about_of(dual, pe if x is not None else None)
     if out["problem"] is None:  # never an enclosure of two different problems
-        dual = out["dual"] = {"proven": False, "reason": "the face bound is about the exact problem; the point not"}
+        dual = out["dual"] = {
+            "proven": False,
+            "reason": "the face bound holds for the exact compilation; the point is not proved for it",
+        }
         bound, out["problem"] = None, "ir"
     if sense == "min":
         out["lower"], out["upper"] = bound, upper_value
@@ -377,8 +380,7 @@ def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dic
     dv, dv2 = first.get(dkey), second.get(dkey)
     take_p = pv2 is not None and (pv is None or better(pv2, pv))
     take_d = dv2 is not None and (dv is None or better(dv, dv2))
-
-    take_p, take_d = next(
+    take_p, take_d = next(  # never the ends of two different problems (enclosure_about)
         (c for c in ((take_p, take_d), (False, take_d), (take_p, False)) if one_problem(first, second, *c, pkey, dkey)),
         (False, False),
     )
