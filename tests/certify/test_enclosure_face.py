@@ -236,3 +236,26 @@ def test_frequency_search_gives_the_norm_even_from_a_useless_dual():
     e0 = enclosure(r.problem, None, None)
     assert e0["upper"] is None and e0["problem"] == "exact" and e0["lower"] <= hi
     assert (hi - e0["lower"]) / hi <= 1e-9
+
+
+def test_best_of_never_pairs_ends_of_two_problems():
+    """An exact-problem lower end (the face route) is not combined with a primal end proved for
+    the IR only; the better ends of one problem are kept instead."""
+    from lmic.certify.enclosure import best_of
+
+    ir = {"sense": "min", "kind": "infimum", "lower": 1.0, "upper": 2.0, "problem": "ir", "primal": "certified point"}
+    ir["dual"] = {"proven": True, "problem": "ir"}
+    ex = {
+        "sense": "min",
+        "kind": "infimum",
+        "lower": 1.5,
+        "upper": 3.0,
+        "problem": "exact",
+        "primal": "certified point",
+    }
+    ex["dual"] = {"proven": True, "problem": "exact"}
+    out = best_of(ir, ex, [3.0])  # mixing would give [1.5, 2.0]: the IR's own ends are kept
+    assert (out["lower"], out["upper"], out["problem"], out["dual"]["problem"]) == (1.0, 2.0, "ir", "ir")
+    both = dict(ex, upper=2.5)
+    out = best_of(both, dict(ex, lower=1.4, upper=2.2), [2.2])  # one problem: the better of each
+    assert (out["lower"], out["upper"], out["problem"]) == (1.5, 2.2, "exact")
