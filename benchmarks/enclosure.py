@@ -22,10 +22,16 @@ enclosure. Usage::
     python benchmarks/enclosure.py --brl-sizes 10,20,30,40   # the bounded-real lemma instead
 
 ``--brl-sizes`` runs the bounded-real lemma (``tutorial.bounded_real``) on random stable systems
-(seed 0) of those sizes, twice: with a random diagonal (the IR's coefficients ``A_aa + A_bb``
-are rounded sums) and with the diagonal rounded to eighths (the sums are exact, so the exact
-face route of :mod:`lmic.certify.enclosure_face` applies); ``inside`` says whether the
-enclosure contains the H-infinity norm from a Hamiltonian bisection.
+(``--brl-seed``, 0) of those sizes, for each of ``--brl-kinds``: ``random`` (a random diagonal:
+the IR's coefficients ``A_aa + A_bb`` are rounded sums, so the face route of
+:mod:`lmic.certify.enclosure_face` proves on the theorem compiled exactly,
+:mod:`lmic.compile.exact`: ``problem`` ``exact``), ``eighths`` (the diagonal in eighths: the
+sums are exact, the IR itself has the structure: ``problem`` ``ir``) and ``near`` (spectral
+abscissa -0.01: Clarabel alone stops at AlmostSolved or NumericalError on many seeds; the
+``solver alone`` column gives its status, ``--default-route`` adds one run of the default
+policy). ``inside`` says whether the enclosure is consistent with the H-infinity norm's
+bracket ``[a, b]`` from a Hamiltonian bisection (``lower <= b``, ``a <= upper``); ``lower err``
+and ``upper err`` are ``(a - lower) / a`` and ``(upper - b) / b``.
 
 On a shared machine run it with ``OPENBLAS_NUM_THREADS=1``: the proof does many small dense
 solves (``n x n``), which multi-threaded BLAS slows down ten-fold when the cores are busy
@@ -114,26 +120,35 @@ def hinf_bracket(A: Any, B: Any, C: Any, tol: float = 1e-12) -> tuple[float, flo
     return lo, hi
 
 
-def brl_problems(sizes: list[int]) -> list[tuple[str, Any, tuple[float, float]]]:
-    """``(label, Problem, H-infinity bracket)`` of the bounded-real lemma, random diagonal and
-    diagonal in eighths, for each size."""
+#: the kinds of ``--brl-sizes`` systems: the spectral abscissa and whether the diagonal is in eighths
+BRL_KINDS = {"random": (-0.5, False), "eighths": (-0.5, True), "near": (-0.01, False)}
+
+
+def brl_problems(
+    sizes: list[int], kinds: tuple[str, ...] = ("random", "eighths"), seed: int = 0
+) -> list[tuple[str, Any, tuple[float, float]]]:
+    """``(label, Problem, H-infinity bracket)`` of the bounded-real lemma for each size and kind
+    (:data:`BRL_KINDS`: a random diagonal, the diagonal in eighths, or a random system with
+    spectral abscissa -0.01, where Clarabel alone stops at AlmostSolved / NumericalError)."""
     import numpy as np
 
     from lmic.api import load_target
 
     out = []
     for n in sizes:
-        for kind in ("random", "eighths"):
-            rng = np.random.default_rng(0)
+        for kind in kinds:
+            abscissa, eighths = BRL_KINDS[kind]
+            rng = np.random.default_rng(seed)
             A = rng.standard_normal((n, n))
-            A -= (max(np.linalg.eigvals(A).real) + 0.5) * np.eye(n)
-            if kind == "eighths":
+            A -= (max(np.linalg.eigvals(A).real) - abscissa) * np.eye(n)
+            if eighths:
                 A[np.diag_indices(n)] = np.round(A[np.diag_indices(n)] * 8) / 8
                 while max(np.linalg.eigvals(A).real) >= -0.1:
                     A -= 0.125 * np.eye(n)
             B, C = rng.standard_normal((n, 2)), rng.standard_normal((2, n))
             system = {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}
-            out.append((f"brl n={n} {kind}", load_target("tutorial.bounded_real", system)[0], hinf_bracket(A, B, C)))
+            label = f"brl n={n} {kind}" + (f" seed {seed}" if seed else "")
+            out.append((label, load_target("tutorial.bounded_real", system)[0], hinf_bracket(A, B, C)))
     return out
 
 
@@ -169,7 +184,7 @@ def run_once(problem: Any, backend: str, method: str) -> dict[str, Any]:
     if method == "plain":
         sol = solve_problem(problem, backend)
         cert = certify(problem, sol)
-        return {"verdict": cert.verdict, "time_s": time.perf_counter() - t0}
+        return {"verdict": cert.verdict, "time_s": time.perf_counter() - t0, "status": sol.native_status}
     r = lmic.api.solve(problem, backend=backend, backoff=0)
     out: dict[str, Any] = {"verdict": r.verdict, "time_s": time.perf_counter() - t0}
     enc = r.enclosure or {}
@@ -179,6 +194,8 @@ def run_once(problem: Any, backend: str, method: str) -> dict[str, Any]:
         upper=enc.get("upper"),
         rel_gap=enc.get("rel_gap"),
         kind=enc.get("kind"),
+        about=enc.get("problem"),
+        backend=r.backend,
         route=dual.get("route") if dual.get("proven") else None,
         conditional=(enc.get("conditional") or {}).get("value"),
         dual=dual.get("reason", ""),
@@ -195,13 +212,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", default=None)
     ap.add_argument("--compare", default="scs", help="a second backend run once for its gap ('' for none)")
     ap.add_argument("--brl-sizes", default="", help="run the bounded-real lemma at these sizes instead")
+    ap.add_argument("--brl-kinds", default="random,eighths", help=f"of {', '.join(BRL_KINDS)}")
+    ap.add_argument("--brl-seed", type=int, default=0)
+    ap.add_argument("--default-route", action="store_true", help="also one run of the default policy (brl rows)")
     args = ap.parse_args(argv)
     only = {s for s in args.only.split(",") if s} or None
     published = _published()
     truth: dict[str, tuple[float, float]] = {}
     if args.brl_sizes:
         todo = []
-        for label, prob, bracket in brl_problems([int(k) for k in args.brl_sizes.split(",") if k]):
+        kinds = tuple(k for k in args.brl_kinds.split(",") if k)
+        for label, prob, bracket in brl_problems(
+            [int(k) for k in args.brl_sizes.split(",") if k], kinds, args.brl_seed
+        ):
             todo.append((label, prob))
             truth[label] = bracket
     else:
@@ -209,6 +232,7 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     for label, prob in todo:
         times: dict[str, list[float]] = {"plain": [], "enclosure": []}
+        alone = None
         last: dict[str, Any] = {}
         for r in range(args.repeat):
             order = ["plain", "enclosure"] if r % 2 == 0 else ["enclosure", "plain"]
@@ -220,6 +244,8 @@ def main(argv: list[str] | None = None) -> int:
                 times[m].append(res["time_s"])
                 if m == "enclosure":
                     last = res
+                elif "status" in res:
+                    alone = res["status"]
         plain, enc = statistics.median(times["plain"]), statistics.median(times["enclosure"])
         row = {
             "problem": label,
@@ -245,7 +271,21 @@ def main(argv: list[str] | None = None) -> int:
             a, b = truth[label]
             lo, hi = row["lower"], row["upper"]
             row["published"] = f"{0.5 * (a + b):.12g}"
-            row["inside"] = bool((lo is None or lo <= a) and (hi is None or b <= hi))
+            # the norm is in [a, b]: each end on the right side of the bracket (a face bound can
+            # be within 1e-12 of the norm, below b)
+            row["inside"] = bool((lo is None or lo <= b) and (hi is None or a <= hi))
+            row["clarabel_alone"] = alone
+            row["lower_err"] = None if lo is None else (a - lo) / a
+            row["upper_err"] = None if hi is None else (hi - b) / b
+            row["about"], row["backend"] = last.get("about"), last.get("backend")
+            if args.default_route:
+                try:
+                    d = run_once(prob, None, "enclosure")
+                    row["default_route"] = {
+                        k: d.get(k) for k in ("verdict", "backend", "lower", "upper", "rel_gap", "route", "time_s")
+                    }
+                except Exception as exc:  # a benchmark cell, not a crash
+                    row["default_route"] = f"{type(exc).__name__}: {exc}"
         if label in published and published[label][:1] in "+-0123456789.":
             a, b = rounding_interval(published[label])
             lo, hi = row["lower"], row["upper"]
@@ -273,13 +313,20 @@ def _print_row(row: dict[str, Any]) -> None:
         f"{_fmt(row['upper'], '.10g')} | {_fmt(row['rel_gap'], '.2g')} | {_fmt(row.get('route'))} | "
         f"{_fmt(row.get('conditional'), '.8g')} | {_fmt(row.get('compare_rel_gap'), '.2g')} | "
         f"{row.get('published', '-')} | {row.get('inside', '-')} |"
+        + (
+            f" {_fmt(row.get('clarabel_alone'))} | {_fmt(row.get('about'))} | {_fmt(row.get('lower_err'), '.2g')} | "
+            f"{_fmt(row.get('upper_err'), '.2g')} |"
+            if "clarabel_alone" in row
+            else ""
+        )
+        + (f" default route: {row['default_route']}" if "default_route" in row else "")
     )
 
 
 if __name__ == "__main__":
     print(
         "| problem | plain s | with enclosure s | extra s | enclosure s | ratio | lower | upper | rel gap | dual route "
-        "| box bound | SCS rel gap | published | inside |"
+        "| box bound | SCS rel gap | published | inside | (brl: solver alone | problem | lower err | upper err) |"
     )
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---|")
     sys.exit(main())

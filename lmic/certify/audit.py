@@ -437,7 +437,7 @@ def audit_certificate(
     # the sections that other modules re-verify (before the hashes: they name what is wrong)
     # -- optimal-value enclosure (lmic.certify.enclosure): both ends re-verified --
     if doc.get("enclosure") is not None:
-        from lmic.certify.enclosure import audit_enclosure
+        from lmic.certify.enclosure_audit import audit_enclosure
 
         try:
             enc = audit_enclosure(problem, doc["enclosure"], cert, doc.get("backoff"))

@@ -105,17 +105,18 @@ Examples
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
+from lmic.certify.enclosure_about import about_of, one_problem
 from lmic.certify.enclosure_centre import centred_bound, centring_problem
 from lmic.certify.enclosure_conditional import RADIUS_FACTOR, best_box_bound, box_bound, verify_box_bound
 from lmic.certify.enclosure_dual import dual_bound, verify_dual_bound
 from lmic.certify.enclosure_exact import EXACT_MAX_N
-from lmic.certify.enclosure_facial import facial_or, verify_any
+from lmic.certify.enclosure_face import face_bound
+from lmic.certify.enclosure_facial import facial_or
 from lmic.certify.enclosure_float import lambda_min_lower, polish_primal, primal_end
 from lmic.certify.enclosure_repair import PERTURBATIONS, SHIFTS, perturbed_problem
 from lmic.certify.snap import exact_primal_end
@@ -133,7 +134,6 @@ __all__ = [
     "PERTURBATIONS",
     "summary",
     "describe",
-    "audit_enclosure",
     "with_primal",
     "primal_end",
     "polish_primal",
@@ -219,8 +219,10 @@ def enclosure(
     kind = ("infimum" if sense == "min" else "supremum") if strict else ("minimum" if sense == "min" else "maximum")
     out: dict[str, Any] = {"sense": sense, "kind": kind, "lower": None, "upper": None, "gap": None, "rel_gap": None}
     dual: dict[str, Any]
-    if not duals or duals.get("lmis") is None:
-        dual = {"proven": False, "reason": "the solver returned no dual point"}
+    if not duals or duals.get("lmis") is None:  # the face route needs none (enclosure_face_kyp)
+        dual = face_bound(problem, None) if sense != "feasibility" else {}
+        if not dual.get("proven"):
+            dual = {"proven": False, "reason": "the solver returned no dual point"}
     else:
         try:
             search = search_budget(solve_s) if budget_s is None else min(search_budget(solve_s), float(budget_s))
@@ -266,6 +268,13 @@ def enclosure(
     bound = None
     if dual.get("proven"):
         bound = dual["lower"] if sense == "min" else -dual["lower"]
+    out["problem"] = about_of(dual, pe if x is not None else None)
+    if out["problem"] is None:  # never an enclosure of two different problems
+        dual = out["dual"] = {
+            "proven": False,
+            "reason": "the face bound holds for the exact compilation; the point is not proved for it",
+        }
+        bound, out["problem"] = None, "ir"
     if sense == "min":
         out["lower"], out["upper"] = bound, upper_value
     else:
@@ -355,7 +364,7 @@ def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dic
 
     ``second`` is the enclosure of another solve (e.g. at a tighter tolerance) whose point
     ``second_x`` gave its primal end; a primal end taken from it is recorded as a
-    ``"restored point"`` (its ``restored_x``), which :func:`audit_enclosure` re-proves.
+    ``"restored point"`` (its ``restored_x``), which :func:`lmic.certify.enclosure_audit.audit_enclosure` re-proves.
 
     >>> a = {"sense": "min", "kind": "minimum", "lower": 1.0, "upper": 3.0, "dual": {"proven": True},
     ...      "primal": "certified point"}
@@ -370,7 +379,15 @@ def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dic
     pkey, dkey = ("upper", "lower") if sense == "min" else ("lower", "upper")
     better = (lambda a, b: a < b) if sense == "min" else (lambda a, b: a > b)
     pv, pv2 = first.get(pkey), second.get(pkey)
-    if pv2 is not None and (pv is None or better(pv2, pv)):
+    dv, dv2 = first.get(dkey), second.get(dkey)
+    take_p = pv2 is not None and (pv is None or better(pv2, pv))
+    take_d = dv2 is not None and (dv is None or better(dv, dv2))
+    take_p, take_d = next(  # never the ends of two different problems (enclosure_about)
+        (c for c in ((take_p, take_d), (False, take_d), (take_p, False)) if one_problem(first, second, *c, pkey, dkey)),
+        (False, False),
+    )
+    out["problem"] = (second if take_d else first).get("problem", "ir")
+    if take_p:
         out[pkey] = pv2
         if second.get("primal") == "restored point":
             out["primal"], out["restored_x"] = "restored point", second.get("restored_x")
@@ -379,8 +396,7 @@ def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dic
         out.pop("polish", None)
         if "polish" in second:
             out["polish"] = second["polish"]
-    dv, dv2 = first.get(dkey), second.get(dkey)
-    if dv2 is not None and (dv is None or better(dv, dv2)):
+    if take_d:
         out[dkey] = dv2
         out["dual"] = second["dual"]
         out.pop("conditional", None)
@@ -453,7 +469,9 @@ def describe(record: dict[str, Any] | None) -> list[str]:
     if dual.get("proven"):
         how = "exact rational arithmetic" if dual.get("method") == "exact" else "rigorous floating-point error bounds"
         if dual.get("route") == "face":
-            where = f"the optimal face W = 0 of a Lyapunov-type LMI, rank {dual.get('rank')}"
+            where = f"the optimal face W = 0 of a Lyapunov-type LMI, rank {dual.get('rank')}" + (
+                "; for the theorem compiled exactly from the system's numbers" if dual.get("problem") == "exact" else ""
+            )
         elif dual.get("route") == "facial":
             where = f"on the face of {dual.get('steps')} exactly verified exposing step(s), facial reduction"
         elif dual.get("route") == "centred":
@@ -504,79 +522,10 @@ def with_primal(record: dict[str, Any], value: float, label: str) -> dict[str, A
     return out
 
 
-def audit_enclosure(
-    problem: Problem, record: dict[str, Any], certificate: Any, backoff: dict[str, Any] | None = None
-) -> dict[str, Any]:
-    """Re-verify both ends of a recorded enclosure (``lmic audit``).
+def __getattr__(name: str) -> Any:
+    """``audit_enclosure`` moved to :mod:`lmic.certify.enclosure_audit`; the old name still works."""
+    if name == "audit_enclosure":
+        from lmic.certify.enclosure_audit import audit_enclosure
 
-    The primal end must be the objective the certifier recomputes at the recorded point, and
-    only when that point is certified; the dual end must be re-proved from the recorded dual
-    point (:func:`verify_dual_bound`). A primal end taken from the backed-off point
-    (:func:`with_primal`) must be the objective at ``backoff["x"]``, re-certified here.
-    Returns ``ok``, ``field`` (the first failing one) and ``message``.
-
-    >>> import numpy as np, scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
-    >>> p = Problem([Variable("t", "scalar", (1, 1))],
-    ...             [LMI("t - 2 >= 0", 1, sp.csc_matrix([[-2.0, 1.0]]), strict=False)],
-    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
-    >>> e = enclosure(p, {"lmis": [np.eye(1)], "linear": []}, None)
-    >>> audit_enclosure(p, e, None)["ok"], audit_enclosure(p, dict(e, lower=2.1), None)["ok"]
-    (True, False)
-    """
-    sense = problem.objective.sense
-    if record.get("sense") != sense:
-        return {"ok": False, "field": "enclosure.sense", "message": "enclosure.sense differs from the IR's objective"}
-    primal_key, dual_key = ("upper", "lower") if sense == "min" else ("lower", "upper")
-    pv = record.get(primal_key)
-    if pv is not None:
-        if record.get("primal") == "certified backed-off point":
-            xs = None if not backoff else backoff.get("x")
-        elif record.get("primal") == "restored point":
-            xs = record.get("restored_x")
-        else:
-            xs = getattr(certificate, "x", None)
-        xa = np.asarray(xs, dtype=float) if xs is not None else None
-        pe = exact_primal_end(problem, xa, primal_end(problem, xa)) if xa is not None else {"proven": False}
-        if not pe["proven"] or float(pv) != pe["value"]:
-            return {
-                "ok": False,
-                "field": f"enclosure.{primal_key}",
-                "message": f"enclosure.{primal_key} {pv!r} is not the rigorous objective at the recorded point "
-                f"({pe.get('value')!r}; {pe.get('reason', 'no point recorded')})",
-            }
-    dv = record.get(dual_key)
-    dual = record.get("dual") or {}
-    if dv is not None:
-        if not dual.get("proven"):
-            return {
-                "ok": False,
-                "field": f"enclosure.{dual_key}",
-                "message": f"enclosure.{dual_key} has no proof recorded",
-            }
-        lower = -float(dv) if sense == "max" else float(dv)
-        if float(dual.get("lower", math.nan)) != lower:
-            return {
-                "ok": False,
-                "field": f"enclosure.{dual_key}",
-                "message": f"enclosure.{dual_key} differs from the recorded dual bound",
-            }
-        v = verify_any(problem, dual)
-        if not v["ok"]:
-            return {"ok": False, "field": "enclosure.dual", "message": "enclosure.dual: " + v["reason"]}
-    cond = record.get("conditional") or {}
-    if cond.get("value") is not None:
-        box = cond.get("bound") or {}
-        expect = -float(box.get("lower", math.nan)) if sense == "max" else float(box.get("lower", math.nan))
-        v = verify_box_bound(problem, box) if box else {"ok": False, "reason": "no dual point recorded"}
-        if float(cond["value"]) != expect or float(cond.get("radius", math.nan)) != float(box.get("radius", math.nan)):
-            v = {"ok": False, "reason": "the value or radius differs from the recorded box bound"}
-        if not v["ok"]:
-            return {"ok": False, "field": "enclosure.conditional", "message": "enclosure.conditional: " + v["reason"]}
-    lo, hi = record.get("lower"), record.get("upper")
-    if lo is not None and hi is not None:
-        if float(lo) > float(hi):
-            return {"ok": False, "field": "enclosure", "message": "enclosure: lower end above upper end"}
-        if record.get("gap") is not None and float(record["gap"]) != float(hi) - float(lo):
-            return {"ok": False, "field": "enclosure.gap", "message": "enclosure.gap differs from upper - lower"}
-    return {"ok": True, "field": None, "message": "enclosure re-verified (both recorded ends)"}
+        return audit_enclosure
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -30,9 +30,14 @@ the solution is unique): an ``(n r) x (n r)`` rational solve (python-flint). ``X
 construction, every other multiplier is zero, and the proof (:func:`prove_face`) checks every
 dual equality *exactly*: the pivot block ``W`` is computed from its rows and must be PSD
 (here: exactly zero), every other row must hold. The bound ``L = q_0 - g_0(u)`` is exact
-(reported rounded down). ``K`` and ``S_R`` are read off the solver's multiplier (its rank-``r``
-part: ``S_0 = V_r Lambda_r^(1/2)``, ``K`` the skew part of ``lstsq(E S_0, Abar S_0)``); the
-solver's point is only a candidate: the exact checks decide.
+(reported rounded down). Candidates ``(K, S_R)`` come from the solver's multiplier (its
+rank-``r`` part: ``S_0 = V_r Lambda_r^(1/2)``, ``K`` the skew part of ``lstsq(E S_0, Abar
+S_0)``) and from a frequency search that needs no dual point
+(:mod:`lmic.certify.enclosure_face_kyp`: the best ``S_R`` for a given ``K`` is a generalised
+eigenvector); they are ranked by their float bound and only the best are proved. Every
+candidate is only a candidate: the exact checks decide. The coefficients checked are the
+IR's own when they have the structure exactly, else the theorem's exact compilation
+(:mod:`lmic.compile.exact`, :func:`structure_for`; the bound is then about that problem).
 
 The record (``dual`` of the result, ``form`` ``"face"``) holds ``K``, ``S_R``, the block and
 the pivot block; :func:`verify_face` re-runs the exact proof from it alone.
@@ -65,14 +70,26 @@ import scipy.sparse as sp
 
 from lmic.certify.enclosure_float import down
 from lmic.certify.enclosure_repair import jacobian
+from lmic.compile.exact import ExactProblem, ExactUnavailable, exact_of, from_ir
 from lmic.errors import CertificateError
 from lmic.ir.problem import Problem
-from lmic.ir.svec import tril_rows_cols, tril_unvec
+from lmic.ir.svec import tril_index, tril_rows_cols, tril_unvec
 
-__all__ = ["MAX_RANK", "pivot_blocks", "lyapunov_structure", "face_bound", "prove_face", "verify_face"]
+__all__ = [
+    "MAX_RANK",
+    "pivot_blocks",
+    "lyapunov_structure",
+    "structure_for",
+    "face_bound",
+    "prove_face",
+    "verify_face",
+]
 
 #: largest rank ``r`` of the factored multiplier tried
 MAX_RANK = 4
+#: the frequency grid is searched when the best candidate's float bound is below the solver's
+#: dual objective by more than this (relative)
+GRID_SLACK = 1e-6
 
 
 def _target(problem: Problem) -> np.ndarray:
@@ -109,24 +126,9 @@ def pivot_blocks(problem: Problem, J: sp.spmatrix, ranges: list[tuple[int, int]]
     return out
 
 
-def lyapunov_structure(problem: Problem) -> dict[str, Any] | None:
-    """The Lyapunov (KYP) structure of the module docstring, or ``None``.
-
-    Returns ``pivot`` (the block of ``P > 0``), ``block`` (the main LMI, the only other block
-    the pivot rows touch), ``state`` (the state row of each index of ``P``: ``E``), ``Abar``
-    (``n_P x d``, from the coefficients of ``P``'s diagonal entries) and ``rows`` (the pivot
-    row of each tril entry of ``P``'s block), after checking that every pivot row's
-    coefficients are those of ``E^T P Abar + Abar^T P E`` exactly (a coefficient that is a
-    sum, ``A_aa + A_bb`` in ``A^T P + P A``, must be exact in floating point: with random
-    diagonal entries it is not, and the face ``W = 0`` of the IR's problem is not this one).
-
-    >>> import scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
-    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0.0, 1.0]]))],
-    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
-    >>> lyapunov_structure(p) is None
-    True
-    """
+def _float_structure(problem: Problem) -> dict[str, Any] | None:
+    """The structure of :func:`lyapunov_structure` found in floating point, up to rounding
+    (``exact_ir``: whether the IR's own coefficients have it exactly)."""
     J, ranges = jacobian(problem)
     pivots = pivot_blocks(problem, J, ranges)
     Jr = sp.csr_matrix(J)
@@ -144,7 +146,10 @@ def lyapunov_structure(problem: Problem) -> dict[str, Any] | None:
             continue
 
         def H(t: int, Fx: sp.csc_matrix = Fx, rows: np.ndarray = rows, d: int = d) -> np.ndarray:
-            return tril_unvec(Fx[:, int(rows[t])].toarray().ravel(), d)
+            k = int(rows[t])
+            v = np.zeros(Fx.shape[0])
+            v[Fx.indices[Fx.indptr[k] : Fx.indptr[k + 1]]] = Fx.data[Fx.indptr[k] : Fx.indptr[k + 1]]
+            return tril_unvec(v, d)
 
         Abar = np.zeros((npv, d))
         state = np.zeros(npv, dtype=int)
@@ -157,7 +162,8 @@ def lyapunov_structure(problem: Problem) -> dict[str, Any] | None:
                 Abar[ri[t], r] = h[r, r] / 2.0
         if np.unique(state).size != npv:
             continue
-        ok = True
+        ok, exact_ir = True, True
+        scale = float(np.max(np.abs(Abar), initial=0.0)) or 1.0
         for t in range(ri.size):
             a, b = ri[t], ci[t]
             G = np.zeros((d, d))
@@ -165,18 +171,115 @@ def lyapunov_structure(problem: Problem) -> dict[str, Any] | None:
             if a != b:
                 G[state[b]] += Abar[a]
             Gs = G + G.T
-            both = np.argwhere((G != 0) & (G.T != 0))
-            # a coefficient that is the rounded sum of two entries of Abar (A_aa + A_bb) breaks
-            # the structure unless the sum is exact
-            exact = all(
-                Fraction(float(Gs[i, j])) == Fraction(float(G[i, j])) + Fraction(float(G[j, i])) for i, j in both
-            )
-            if not exact or np.any(Gs != H(t)):
+            Ht = H(t)
+            if np.any(np.abs(Gs - Ht) > 1e-12 * scale):
                 ok = False
                 break
+            if exact_ir:
+                # a coefficient that is the rounded sum of two entries of Abar (A_aa + A_bb) is
+                # not exact in floating point: the IR's own face W = 0 is then not this one
+                both = np.argwhere((G != 0) & (G.T != 0))
+                exact_ir = bool(np.all(Gs == Ht)) and all(
+                    Fraction(float(Gs[i, j])) == Fraction(float(G[i, j])) + Fraction(float(G[j, i])) for i, j in both
+                )
         if ok:
-            return {"pivot": pi, "block": xi, "state": state, "Abar": Abar, "rows": rows}
+            return {"pivot": pi, "block": xi, "state": state, "Abar": Abar, "rows": rows, "exact_ir": exact_ir}
     return None
+
+
+def _exact_structure(problem: Problem, cand: dict[str, Any], ex: ExactProblem) -> dict[str, Any] | None:
+    """``cand`` (:func:`_float_structure`) checked on the exact coefficients ``ex``: every pivot
+    row's coefficients are those of ``E^T P Abar + Abar^T P E`` exactly, ``Abar`` exact
+    (``AbarN / Abar_den``, python ints)."""
+    pi, xi, state, rows = cand["pivot"], cand["block"], cand["state"], cand["rows"]
+    Lp, Lx = ex.lmis[pi], ex.lmis[xi]
+    npv, d = Lp.dim, Lx.dim
+    ri, ci = tril_rows_cols(npv)
+    if int(Lp.indptr[-1] - Lp.indptr[1]) != rows.size:  # no entry outside the pivot rows (but q_0's)
+        return None
+    for t, k in enumerate(rows.tolist()):  # the pivot block: one entry per column, in its own row
+        pr, pn = Lp.column(int(k))
+        if pr.size != 1 or int(pr[0]) != t or pn[0] == 0:
+            return None
+        if any(int(L.indptr[k + 1]) > int(L.indptr[k]) for i, L in enumerate(ex.lmis) if i not in (pi, xi)):
+            return None
+
+    def col(t: int) -> dict[int, int]:
+        r, v = Lx.column(int(rows[t]))
+        return {int(a): 2 * int(b) for a, b in zip(r.tolist(), v.tolist(), strict=True)}
+
+    ii, jj = np.meshgrid(np.arange(d), np.arange(d), indexing="ij")
+    slots = tril_index(np.maximum(ii, jj), np.minimum(ii, jj), d).tolist()  # slots[i][j]: (i, j)'s tril row
+
+    def slot(i: int, j: int) -> int:
+        return slots[i][j]
+
+    AN = np.zeros((npv, d), dtype=object)  # Abar = AN / (2 den)
+    for t in range(ri.size):
+        if ri[t] == ci[t]:
+            h, r = col(t), int(state[ri[t]])
+            for c in range(d):
+                AN[ri[t], c] = h.get(slot(r, c), 0) // (2 if c == r else 1)
+    for t in range(ri.size):
+        a, b = int(ri[t]), int(ci[t])
+        want: dict[int, int] = {}
+        for s_, row_ in ((int(state[a]), AN[b]), (int(state[b]), AN[a])) if a != b else ((int(state[a]), AN[a]),):
+            for c in range(d):
+                v = row_[c]
+                if v:
+                    k = slot(s_, c)
+                    want[k] = want.get(k, 0) + (2 * v if c == s_ else v)
+        if {k: v for k, v in want.items() if v} != {k: v for k, v in col(t).items() if v}:
+            return None
+    den = 2 * Lx.den
+    Abar = np.array([[int(v) / den for v in row_] for row_ in AN], dtype=float)
+    return dict(cand, Abar=Abar, AbarN=AN, Abar_den=den, exact=ex)
+
+
+def lyapunov_structure(problem: Problem, exact: ExactProblem | None = None) -> dict[str, Any] | None:
+    """The Lyapunov (KYP) structure of the module docstring, or ``None``.
+
+    Returns ``pivot`` (the block of ``P > 0``), ``block`` (the main LMI, the only other block
+    the pivot rows touch), ``state`` (``E``: the state row of each index of ``P``), ``Abar``
+    (``n_P x d``; ``AbarN / Abar_den`` exactly), ``rows`` (the pivot row of each tril entry of
+    ``P``'s block) and ``exact``, after checking that every pivot row's coefficients are those
+    of ``E^T P Abar + Abar^T P E`` exactly on ``exact`` (default: the IR's own floats, where
+    ``fl(A_aa + A_bb)`` of random data breaks it; :func:`lmic.compile.exact.exact_of`).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0.0, 1.0]]))],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+    >>> lyapunov_structure(p) is None
+    True
+    """
+    cand = _float_structure(problem)
+    if cand is None:
+        return None
+    if exact is None and not cand["exact_ir"]:
+        return None
+    return _exact_structure(problem, cand, exact if exact is not None else from_ir(problem))
+
+
+def structure_for(problem: Problem) -> tuple[dict[str, Any] | None, str]:
+    """The structure on the IR's own coefficients, else on the problem's exact compilation
+    (:func:`lmic.compile.exact.exact_of`): ``(structure or None, reason)``; the structure's
+    ``problem`` is ``"ir"`` or ``"exact"`` (what a bound proved on it is about)."""
+    cand = _float_structure(problem)
+    if cand is None:
+        return None, "no Lyapunov structure for the face route"
+    if cand["exact_ir"]:
+        st = _exact_structure(problem, cand, from_ir(problem))
+        if st is not None:
+            return dict(st, problem="ir"), ""
+    try:
+        ex = exact_of(problem)
+    except ExactUnavailable as exc:
+        return None, f"the face route needs the exact coefficients: {exc}"
+    st = _exact_structure(problem, cand, ex)
+    if st is None:
+        return None, "the exact coefficients have no Lyapunov structure"
+    return dict(st, problem="exact" if ex.about == "theorem" else "ir"), ""
 
 
 def _fq(flint: Any, v: float) -> Any:
@@ -186,13 +289,16 @@ def _fq(flint: Any, v: float) -> Any:
 
 def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_rest: np.ndarray) -> dict[str, Any]:
     """The exact proof of the module docstring from ``K`` (``r x r``, skew) and ``S_rest``
-    (the non-state rows of ``S``, ``(d - n_P) x r``). Returns ``proven``, ``lower`` (rounded
+    (the non-state rows of ``S``, ``(d - n_P) x r``), on the exact coefficients of
+    ``structure`` (:func:`lyapunov_structure`). Returns ``proven``, ``lower`` (rounded
     down), ``lower_exact`` and ``reason``."""
     from lmic.certify.psd import load_flint, prove_psd
 
     flint = load_flint()
     P = problem
-    pi, xi, state, Abar = structure["pivot"], structure["block"], structure["state"], structure["Abar"]
+    ex: ExactProblem = structure["exact"]
+    pi, xi, state = structure["pivot"], structure["block"], structure["state"]
+    AN, Aden = structure["AbarN"], int(structure["Abar_den"])
     npv, d = P.lmis[pi].dim, P.lmis[xi].dim
     rest = np.setdiff1d(np.arange(d), state)
     K = np.asarray(K, dtype=float)
@@ -203,7 +309,7 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
     if not (np.all(np.isfinite(K)) and np.all(np.isfinite(S_rest))) or np.any(K != -K.T):
         return {"proven": False, "reason": "K is not a finite skew-symmetric matrix"}
     # A_E S_E - S_E K = -A_R S_R, as (I (x) A_E - K^T (x) I) vec(S_E) = vec(-A_R S_R)
-    AE, AR = Abar[:, state], Abar[:, rest]
+    AE, AR = AN[:, state], AN[:, rest]
     nr = npv * r
     M = flint.fmpq_mat(nr, nr)
     for c in range(r):
@@ -211,7 +317,7 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
             row = c * npv + i
             for j in range(npv):
                 if AE[i, j] != 0:
-                    M[row, c * npv + j] = _fq(flint, AE[i, j])
+                    M[row, c * npv + j] = flint.fmpq(int(AE[i, j]), Aden)
             for c2 in range(r):
                 if K[c2, c] != 0:
                     M[row, c2 * npv + i] = M[row, c2 * npv + i] - _fq(flint, K[c2, c])
@@ -222,83 +328,86 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
             s = flint.fmpq(0)
             for j in range(rest.size):
                 if AR[i, j] != 0:
-                    s -= _fq(flint, AR[i, j]) * SRq[j][c]
+                    s -= flint.fmpq(int(AR[i, j]), Aden) * SRq[j][c]
             rhs[c * npv + i, 0] = s
     try:
         sol = M.solve(rhs)
     except ZeroDivisionError:
         return {"proven": False, "reason": "the Sylvester equation of the face is singular"}
-    # S = N / D with integers N (python ints) and one common denominator D
-    Sq: list[list[Fraction]] = [[Fraction(0)] * r for _ in range(d)]
+    # S = N / D with integers N and one common denominator D: the solve's own (flint), times the
+    # power of two of the float S_R
+    solN, solD = sol.numer_denom()
+    solD = int(solD)
+    SRf = [[Fraction(float(S_rest[j, c])) for c in range(r)] for j in range(rest.size)]
+    two = max((f.denominator for row_ in SRf for f in row_), default=1)  # powers of two: the largest
+    D = solD * two // math.gcd(solD, two)
+    N = flint.fmpz_mat(d, r)
     for c in range(r):
         for i in range(npv):
-            v = sol[c * npv + i, 0]
-            Sq[int(state[i])][c] = Fraction(int(v.p), int(v.q))
+            N[int(state[i]), c] = solN[c * npv + i, 0] * (D // solD)
         for j in range(rest.size):
-            Sq[int(rest[j])][c] = Fraction(float(S_rest[j, c]))
-    D = 1
-    for row_ in Sq:
-        for f in row_:
-            D = D * f.denominator // math.gcd(D, f.denominator)
-    N = flint.fmpz_mat([[int(f * D) for f in row_] for row_ in Sq])
+            f = SRf[j][c]
+            N[int(rest[j]), c] = f.numerator * (D // f.denominator)
     XN = N * N.transpose()  # X = XN / D^2, exactly
-    J, ranges = jacobian(P)
-    Jr = sp.csr_matrix(J)
-    q = _target(P)
-    a, b = ranges[xi]
+    sgn = -1 if P.objective.sense == "max" else 1
+    q = list(ex.objective) if sgn == 1 else [-v for v in ex.objective]
+    Lx, Lp = ex.lmis[xi], ex.lmis[pi]
     ti, tj = tril_rows_cols(d)
-    xn = [int(XN[int(ti[k]), int(tj[k])]) for k in range(b - a)]
-    pa, pb = ranges[pi]
+    # <F_k, X> over the main block: the weight 2 of an off-diagonal tril entry folded into xn
+    xn = [int(XN[int(ti[k]), int(tj[k])]) * (1 if ti[k] == tj[k] else 2) for k in range(ti.size)]
     D2 = D * D
 
     def g(k: int) -> Fraction:
-        """``g_k(X)`` over the main block, exactly (``J``'s floats are dyadic rationals)."""
-        lo, hi = Jr.indptr[k], Jr.indptr[k + 1]
-        num, den = 0, 1
-        for j, v in zip(Jr.indices[lo:hi], Jr.data[lo:hi], strict=True):
-            if a <= j < b and xn[j - a]:
-                vn, vd = float(v).as_integer_ratio()  # vd a power of 2
-                if vd > den:
-                    num *= vd // den
-                    den = vd
-                num += vn * (den // vd) * xn[j - a]
-        return Fraction(num, den * D2)
+        """``g_k(X)`` over the main block, exactly."""
+        rr, vv = Lx.column(k)
+        return Fraction(sum(int(v) * xn[int(j)] for j, v in zip(rr.tolist(), vv.tolist(), strict=True)), Lx.den * D2)
 
     prow = {int(k): t for t, k in enumerate(structure["rows"])}
+    # on a pivot row (P_ab) the coefficients are E^T E_ab Abar + Abar^T E_ab E (checked exactly
+    # by lyapunov_structure): g = <F, X> = 2 (Abar X)[b, s_a] + 2 (Abar X)[a, s_b] (once if a = b)
+    # Abar X = MN / (Aden D^2), MN = (AN N) N^T: two thin products (AN XN costs seconds at 50 states)
+    MN = (flint.fmpz_mat([[int(v) for v in row_] for row_ in AN]) * N) * N.transpose()
+    pa_, pb_ = tril_rows_cols(npv)
+
+    def g_pivot(t: int) -> int:
+        """``g`` of the pivot row of tril entry ``t``, times ``Aden D^2 / 2`` (an integer)."""
+        a_, b_ = int(pa_[t]), int(pb_[t])
+        return int(MN[b_, int(state[a_])]) + (int(MN[a_, int(state[b_])]) if a_ != b_ else 0)
+
     others = [k for k in range(1, 1 + P.n) if k not in prow]
     gv = {k: g(k) for k in others}
     # X / t meets the rows without a pivot: one scale t > 0 for all of them
     t = None
     for k in others:
         if q[k] != 0:
-            t = gv[k] / Fraction(float(q[k]))
+            t = gv[k] / q[k]
             break
     if t is None or not t > 0:
         return {"proven": False, "reason": "no positive scale meets the equality rows without a pivot"}
     for k in others:
-        if gv[k] != t * Fraction(float(q[k])):
+        if gv[k] != t * q[k]:
             return {"proven": False, "reason": f"equality row {k} does not hold on the face"}
     # the pivot block from its rows: W_j = (q_k - g_k(X) / t) / J_kj, exactly
-    w = [Fraction(0)] * (pb - pa)
+    pr, pc = tril_rows_cols(npv)
+    pw = np.where(pr == pc, 1, 2)
+    w = [Fraction(0)] * pr.size
     for k, tt in prow.items():
-        gk = g(k)
-        if gk or q[k]:
-            w[tt] = (Fraction(float(q[k])) - gk / t) / Fraction(float(Jr[k, pa + tt]))
+        gn = g_pivot(tt)
+        if gn or q[k]:  # on the face g = 0 (W = 0): no rational arithmetic unless needed
+            w[tt] = (q[k] - Fraction(2 * gn, Aden * D2) / t) / (int(pw[tt]) * Lp.value(tt, k))
     if any(w):
         den = 1
         for f in w:
             den = den * f.denominator // math.gcd(den, f.denominator)
         Wm = [[0] * npv for _ in range(npv)]
-        pr, pc = tril_rows_cols(npv)
         for f, r_, c_ in zip(w, pr, pc, strict=True):
             Wm[r_][c_] = Wm[c_][r_] = int(f * den)
         if not prove_psd(Wm)["proven"]:
             return {"proven": False, "reason": f"the pivot multiplier of '{P.lmis[pi].name}' is not PSD on the face"}
-    Lf = Fraction(float(q[0])) - g(0) / t
-    lo0, hi0 = Jr.indptr[0], Jr.indptr[1]
-    for j, v in zip(Jr.indices[lo0:hi0], Jr.data[lo0:hi0], strict=True):
-        if pa <= j < pb:
-            Lf -= Fraction(float(v)) * w[int(j) - pa]
+    Lf = q[0] - g(0) / t
+    r0, v0 = Lp.column(0)
+    for j, v in zip(r0.tolist(), v0.tolist(), strict=True):
+        Lf -= int(pw[j]) * Fraction(int(v), Lp.den) * w[int(j)]
     lower = float(Lf)
     if Fraction(lower) > Lf:
         lower = down(lower)
@@ -340,33 +449,63 @@ def _candidates(structure: dict[str, Any], X0: np.ndarray) -> list[tuple[float, 
     return out
 
 
-def face_bound(problem: Problem, duals: dict[str, Any], *, tries: int = 2) -> dict[str, Any]:
+def _ranked(problem: Problem, st: dict[str, Any], mats: list[np.ndarray], y: np.ndarray) -> list[Any]:
+    """Every candidate, best float bound first: the solver's (:func:`_candidates`) and the
+    frequency search's (:mod:`lmic.certify.enclosure_face_kyp`: near the solver's frequency,
+    and over a grid when the best is below the solver's dual objective by more than
+    :data:`GRID_SLACK`, as when the solver stopped inaccurate)."""
+    from lmic.certify.enclosure_face_kyp import estimate, kyp_candidates
+    from lmic.certify.enclosure_repair import _pack
+
+    own = _candidates(st, mats[st["block"]])
+    out = [(estimate(problem, st, K, SR), K, SR) for _, K, SR in own]
+    omega0 = next((float(K[1, 0]) for _, K, _ in own if K.shape[0] == 2 and K[1, 0] != 0), None)
+    out += kyp_candidates(problem, st, omega0, grid=False)
+    J, _ = jacobian(problem)
+    L0 = float(_target(problem)[0] - (J[0] @ _pack(problem, mats, y))[0])
+    top = max((c[0] for c in out if np.isfinite(c[0])), default=-np.inf)
+    if not top >= L0 - GRID_SLACK * max(1.0, abs(L0)):
+        out += kyp_candidates(problem, st, omega0, grid=True)
+    return sorted((c for c in out if np.isfinite(c[0])), key=lambda c: -c[0])
+
+
+def face_bound(problem: Problem, duals: dict[str, Any] | None, *, tries: int = 2) -> dict[str, Any]:
     """Prove a lower bound of the minimisation form's optimum on the face ``W = 0`` (module
-    docstring), from the solver's multiplier of the main LMI: the ranks are tried best first
-    (at most ``tries``), the first proven bound kept.
+    docstring), from the solver's multiplier of the main LMI and the frequency search
+    (:func:`_ranked`; the search alone when ``duals`` has no multipliers): the candidates are
+    tried best first (at most ``tries``), the first proven bound kept.
 
     Returns
     -------
     dict
         As :func:`lmic.certify.enclosure_dual.dual_bound`: ``proven``, ``lower``,
-        ``lower_exact``, ``method`` (``"exact"``), ``route`` (``"face"``), ``reason``, ``dual``
-        (``{"form": "face", "block", "pivot", "K", "S_rest"}``).
+        ``lower_exact``, ``method`` (``"exact"``), ``route`` (``"face"``), ``reason``,
+        ``problem`` (``"ir"``: the bound holds for the IR's own coefficients; ``"exact"``: for
+        the theorem compiled exactly from the system's numbers, :mod:`lmic.compile.exact`),
+        ``dual`` (``{"form": "face", "problem", "block", "pivot", "K", "S_rest"}``).
     """
     from lmic.certify.multipliers import parse_multipliers
 
     if problem.objective.sense == "feasibility":
         raise CertificateError("a feasibility problem has no optimal value to bound")
-    st = lyapunov_structure(problem)
+    st, why = structure_for(problem)
     if st is None:
-        return {"proven": False, "route": "face", "reason": "no Lyapunov structure for the face route"}
-    mats, _ = parse_multipliers(problem, duals, "dual point", missing_is_zero=False)
+        return {"proven": False, "route": "face", "reason": why}
+    if duals and duals.get("lmis") is not None:
+        mats, y = parse_multipliers(problem, duals, "dual point", missing_is_zero=False)
+        cands = _ranked(problem, st, mats, y)
+    else:  # no dual point: the frequency search alone
+        from lmic.certify.enclosure_face_kyp import kyp_candidates
+
+        cands = kyp_candidates(problem, st)
     best: dict[str, Any] = {"proven": False, "route": "face", "reason": "no face candidate"}
-    for _, K, SR in _candidates(st, mats[st["block"]])[:tries]:
+    for _, K, SR in cands[:tries]:
         res = prove_face(problem, st, K, SR)
-        res.update(route="face", method="exact", shift=0.0)
+        res.update(route="face", method="exact", shift=0.0, problem=st["problem"])
         if res["proven"]:
             res["dual"] = {
                 "form": "face",
+                "problem": st["problem"],
                 "block": int(st["block"]),
                 "pivot": int(st["pivot"]),
                 "K": K.tolist(),
@@ -384,7 +523,15 @@ def verify_face(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
     d = record.get("dual")
     if not isinstance(d, dict) or d.get("form") != "face" or record.get("lower") is None:
         return {"ok": False, "lower": None, "reason": "no face dual point recorded"}
-    st = lyapunov_structure(problem)
+    about = d.get("problem", "ir")
+    if about not in ("ir", "exact"):
+        return {"ok": False, "lower": None, "reason": f"unknown problem {about!r} of the face point"}
+    try:
+        st = lyapunov_structure(problem, exact_of(problem) if about == "exact" else None)
+    except ExactUnavailable as exc:
+        return {"ok": False, "lower": None, "reason": f"the exact problem cannot be recompiled: {exc}"}
+    if about == "exact" and st is not None and st["exact"].about != "theorem":
+        return {"ok": False, "lower": None, "reason": "the face point is about the exact compilation of a theorem"}
     if st is None or d.get("block") != st["block"] or d.get("pivot") != st["pivot"]:
         return {"ok": False, "lower": None, "reason": "the recorded face does not match the problem's structure"}
     try:
@@ -405,4 +552,5 @@ def verify_face(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
             "lower": res["lower"],
             "reason": f"recorded lower bound {rec:.17g} exceeds the bound the dual point proves ({res['lower']:.17g})",
         }
-    return {"ok": True, "lower": res["lower"], "reason": "lower bound re-proved exactly on the face"}
+    where = "the theorem's exact compilation" if about == "exact" else "the IR"
+    return {"ok": True, "lower": res["lower"], "reason": f"lower bound re-proved exactly on the face ({where})"}

@@ -208,7 +208,10 @@ def primal_end(problem: Problem, x: np.ndarray) -> dict[str, Any]:
     lambda_min_lower(fl(F_i(x))) - ||E_i||_F`` must be ``>= 0`` (``> 0`` when strict). Rows
     ``ge`` likewise; ``eq`` rows are evaluated exactly (rationals) and must vanish. The
     certifier's tolerances play no part: a point it certifies with a non-strict constraint
-    violated by round-off gives no primal end here.
+    violated by round-off gives no primal end here. Once the problem has an exact counterpart
+    (:func:`lmic.compile.exact.exact_of`, the face route's), every margin must also cover the
+    rigorous bound of ``|G_exact(x) - G(x)|`` (:meth:`~lmic.compile.exact.ExactProblem.perturbation`)
+    and the objective's bound covers ``|c_exact . x - c . x|``: the point is proved for both.
 
     Returns
     -------
@@ -233,7 +236,13 @@ def primal_end(problem: Problem, x: np.ndarray) -> dict[str, Any]:
         return {"proven": False, "value": None, "reason": "no finite point of the right length"}
     xx = np.concatenate([[1.0], x])
     ax = np.abs(xx)
-    for lmi in problem.lmis:
+    # once the problem has an exact counterpart (lmic.compile.exact, built by the face route),
+    # the point is proved for it too: every margin must also cover |G_exact(x) - G(x)|
+    from lmic.compile.exact import cached_exact
+
+    ex = cached_exact(problem)
+    pl, pr, po = ex.perturbation(problem, x) if ex is not None and ex.about == "theorem" else ([], [], 0.0)
+    for i_lmi, lmi in enumerate(problem.lmis):
         C = lmi.coeffs.tocsr()
         f = np.asarray(C @ xx).ravel()
         k = int(np.max(np.diff(C.indptr), initial=0))
@@ -241,6 +250,8 @@ def primal_end(problem: Problem, x: np.ndarray) -> dict[str, Any]:
         F = tril_unvec(f, lmi.dim)
         E = tril_unvec(err, lmi.dim)
         lb = lambda_min_lower(0.5 * (F + F.T)) - float(np.linalg.norm(E)) * _SAFE
+        if pl:  # the exact counterpart's difference, subtracted rounding down
+            lb = _down(_down(lb) - pl[i_lmi])
         if not (lb > 0 if lmi.strict else lb >= 0):
             return {
                 "proven": False,
@@ -264,9 +275,10 @@ def primal_end(problem: Problem, x: np.ndarray) -> dict[str, Any]:
                     ),
                     Fraction(0),
                 )
-                ok = exact == 0
+                ok = exact == 0 and not (pr and pr[i] > 0)
             else:
-                ok = (r[i] - err[i] > 0) if strict else (r[i] - err[i] >= 0)
+                m = _down(_down(r[i] - err[i]) - pr[i]) if pr else r[i] - err[i]
+                ok = (m > 0) if strict else (m >= 0)
             if not ok:
                 return {
                     "proven": False,
@@ -275,10 +287,11 @@ def primal_end(problem: Problem, x: np.ndarray) -> dict[str, Any]:
                 }
     c = problem.objective.c
     v = float(c @ xx)
-    e = _gamma(problem.n + 2) * float(np.abs(c) @ ax) * _SAFE
+    e = _gamma(problem.n + 2) * float(np.abs(c) @ ax) * _SAFE + po * _SAFE
     up = problem.objective.sense != "max"
     value = float(np.nextafter(v + e, np.inf)) if up else float(np.nextafter(v - e, -np.inf))
-    return {"proven": True, "value": value, "reason": "point proved feasible with rigorous rounding"}
+    about = "exact" if pl else "ir"  # the problems the point is proved for: the IR (and its exact counterpart)
+    return {"proven": True, "value": value, "reason": "point proved feasible with rigorous rounding", "problem": about}
 
 
 #: public names of the helpers (used by the other enclosure modules)

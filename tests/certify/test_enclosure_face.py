@@ -17,8 +17,11 @@ from certify_helpers import hinf_norm
 
 import lmic.api
 from lmic.certify import audit_certificate, write_certificate
+from lmic.certify.enclosure import enclosure
 from lmic.certify.enclosure_dual import verify_dual_bound
 from lmic.certify.enclosure_face import face_bound, lyapunov_structure, prove_face
+from lmic.certify.enclosure_float import primal_end
+from lmic.compile.exact import cached_exact, exact_of, from_ir
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 
 
@@ -74,7 +77,7 @@ def test_bounded_real_lower_end_is_proved_exactly_on_the_face(n, seed, tmp_path)
     e = r.enclosure
     d = e["dual"]
     assert d["proven"] and d["route"] == "face" and d["method"] == "exact", e["reason"]
-    assert e["lower"] <= lo and hi <= e["upper"]
+    assert e["lower"] <= hi and hi <= e["upper"]  # the norm is in [lo, hi] (bisection to 1e-12)
     assert _sweep_lower(A, B, C) <= e["upper"]
     assert e["rel_gap"] <= 1e-6
     # the exact value is a rational no larger than the reported (rounded-down) end
@@ -100,18 +103,70 @@ def test_bounded_real_lower_end_is_proved_exactly_on_the_face(n, seed, tmp_path)
         assert bad.field in ("enclosure.dual", "enclosure.lower"), (tamper, bad.field, bad.message)
 
 
-def test_random_diagonal_has_no_exact_structure_and_keeps_the_honest_report():
-    """With a random diagonal the IR's coefficients fl(A_aa + A_bb) are rounded sums: the face
-    W = 0 of the problem lmic certifies is not the Lyapunov one, so the route declines (no
-    false claim) and the enclosure reports what it proves."""
-    (A, B, C), r = _brl(20, 0, dyadic=False)
-    assert lyapunov_structure(r.problem) is None
-    res = face_bound(r.problem, r.solution.duals)
-    assert not res["proven"] and "no Lyapunov structure" in res["reason"]
+@pytest.mark.parametrize("n, seed", [(5, 1), (12, 2), (20, 0)])
+def test_random_diagonal_is_proved_on_the_exact_compilation(n, seed, tmp_path):
+    """With a random diagonal the IR's coefficients fl(A_aa + A_bb) are rounded sums: the IR's
+    own face W = 0 is not the Lyapunov one, but the theorem compiled exactly from the system's
+    numbers (lmic.compile.exact) has it. The lower end is proved there, the certified point is
+    proved for that problem too (its margin covers the rounding), and the enclosure says so."""
+    (A, B, C), r = _brl(n, seed, dyadic=False)
+    assert r.verdict == "certified"
+    assert lyapunov_structure(r.problem) is None  # the IR's own floats
+    assert lyapunov_structure(r.problem, exact_of(r.problem)) is not None
     e = r.enclosure
-    lo, hi = hinf_norm(A, B, C)
-    assert hi <= e["upper"]
-    assert e["lower"] is None or e["lower"] <= lo
+    d = e["dual"]
+    assert d["proven"] and d["route"] == "face" and d["problem"] == "exact", e["reason"]
+    assert e["problem"] == "exact" and d["dual"]["problem"] == "exact"
+    lo, hi = hinf_norm(A, B, C)  # the norm is in [lo, hi] (bisection to 1e-12)
+    assert e["lower"] <= hi and hi <= e["upper"]
+    assert e["rel_gap"] <= 1e-6
+    # python-control's norm (another algorithm) is inside as well
+    control = pytest.importorskip("control")
+    norm = float(control.norm(control.ss(A, B, C, np.zeros((2, 2))), "inf", tol=1e-10, method="scipy"))
+    assert e["lower"] <= norm * (1 + 1e-9) and norm * (1 - 1e-9) <= e["upper"]
+    # the audit recompiles the exact problem from the theorem and the system, re-proves both
+    # ends for it, and rejects tampering (the bound, K, S_R, or the problem it is about)
+    path = tmp_path / "brl.json"
+    write_certificate(path, r.problem, r.solution, r.certificate, enclosure=r.enclosure)
+    assert audit_certificate(path).ok
+    good = json.loads(path.read_text())
+    for tamper in ("lower", "S_rest", "K", "problem", "point problem"):
+        doc = json.loads(json.dumps(good))
+        enc = doc["enclosure"]
+        if tamper == "lower":
+            enc["lower"] = enc["dual"]["lower"] = enc["lower"] + 1e-7 * abs(enc["lower"])
+        elif tamper == "S_rest":
+            enc["dual"]["dual"]["S_rest"][0][0] *= 1.5
+        elif tamper == "K":
+            enc["dual"]["dual"]["K"] = (np.asarray(enc["dual"]["dual"]["K"]) + 1e-3).tolist()
+        elif tamper == "problem":
+            enc["problem"] = "ir"
+        else:
+            enc["dual"]["dual"]["problem"] = "ir"
+        path.write_text(json.dumps(doc))
+        bad = audit_certificate(path)
+        assert not bad.ok, tamper
+        assert bad.field in ("enclosure.dual", "enclosure.lower", "enclosure.problem"), (tamper, bad.field)
+
+
+def test_primal_end_covers_the_exact_counterpart_once_it_exists():
+    """A point proved for the IR whose margin is below |G_exact(x) - G(x)| gives no primal end
+    once the problem has an exact counterpart (a counterpart built by hand here, with one
+    coefficient 1e-3 away from the IR's)."""
+    p = _first_order(-2.0, 1.0, 3.0)
+    x = np.array([3.0, 1.5 + 1e-4])  # G = 3/(s+2): p = 3, t just above the norm 3/2
+    assert primal_end(p, x)["proven"] and primal_end(p, x)["problem"] == "ir"
+    ex = from_ir(p)
+    brl = ex.lmis[1]
+    k = int(brl.indptr[2])  # the coefficient of t at entry (1, 1)
+    brl.num[k] -= brl.den // 1000 + 1  # the exact problem: t's coefficient just below 1 - 1e-3
+    ex.about = "theorem"
+    p._lmic_exact = ex  # what lmic.compile.exact.exact_of caches
+    assert cached_exact(p) is ex
+    res = primal_end(p, x)
+    assert not res["proven"], res
+    assert primal_end(p, np.array([3.0, 1.6]))["proven"]  # a margin 0.1 covers it
+    assert primal_end(p, np.array([3.0, 1.6]))["problem"] == "exact"
 
 
 def _first_order(a: float, b: float, c: float) -> Problem:
@@ -158,3 +213,49 @@ def test_face_rejects_a_non_skew_rotation():
     st = lyapunov_structure(p)
     r = prove_face(p, st, np.array([[0.5]]), np.array([[1.0], [1.0]]))
     assert not r["proven"] and "skew" in r["reason"]
+
+
+def test_frequency_search_gives_the_norm_even_from_a_useless_dual():
+    """The face point from the frequency search (lmic.certify.enclosure_face_kyp) does not need
+    the solver's multiplier: from a dual point that is pure noise the proven bound is still
+    within 1e-9 of the H-infinity norm (the grid runs: the noise's dual objective is far off),
+    and with Clarabel's dual the bound is as tight."""
+    (A, B, C), r = _brl(12, 4, dyadic=False)
+    lo, hi = hinf_norm(A, B, C)
+    rng = np.random.default_rng(0)
+    noise = {
+        "lmis": [(lambda M: M @ M.T)(rng.standard_normal((lmi.dim, lmi.dim))) for lmi in r.problem.lmis],
+        "linear": np.abs(rng.standard_normal(len(r.problem.linear))),
+    }
+    res = face_bound(r.problem, noise)
+    assert res["proven"] and res["problem"] == "exact", res["reason"]
+    assert res["lower"] <= hi and (hi - res["lower"]) / hi <= 1e-9
+    e = r.enclosure
+    assert e["dual"]["route"] == "face" and (hi - e["lower"]) / hi <= 1e-9
+    # with no dual point and no certified point at all (a solver that failed): the lower end alone
+    e0 = enclosure(r.problem, None, None)
+    assert e0["upper"] is None and e0["problem"] == "exact" and e0["lower"] <= hi
+    assert (hi - e0["lower"]) / hi <= 1e-9
+
+
+def test_best_of_never_pairs_ends_of_two_problems():
+    """An exact-problem lower end (the face route) is not combined with a primal end proved for
+    the IR only; the better ends of one problem are kept instead."""
+    from lmic.certify.enclosure import best_of
+
+    ir = {"sense": "min", "kind": "infimum", "lower": 1.0, "upper": 2.0, "problem": "ir", "primal": "certified point"}
+    ir["dual"] = {"proven": True, "problem": "ir"}
+    ex = {
+        "sense": "min",
+        "kind": "infimum",
+        "lower": 1.5,
+        "upper": 3.0,
+        "problem": "exact",
+        "primal": "certified point",
+    }
+    ex["dual"] = {"proven": True, "problem": "exact"}
+    out = best_of(ir, ex, [3.0])  # mixing would give [1.5, 2.0]: the IR's own ends are kept
+    assert (out["lower"], out["upper"], out["problem"], out["dual"]["problem"]) == (1.0, 2.0, "ir", "ir")
+    both = dict(ex, upper=2.5)
+    out = best_of(both, dict(ex, lower=1.4, upper=2.2), [2.2])  # one problem: the better of each
+    assert (out["lower"], out["upper"], out["problem"]) == (1.5, 2.2, "exact")

@@ -21,7 +21,7 @@ import pytest
 from optimisation_instances import ALWAYS_INFEASIBLE, THEOREMS, contains, instance, reference
 
 from lmic.api import solve
-from lmic.certify.enclosure import audit_enclosure
+from lmic.certify.enclosure_audit import audit_enclosure
 from lmic.ir.svec import tril_rows_cols
 
 #: VSDP's relative gap the interior-point backends must reach
