@@ -16,8 +16,11 @@ With no backend (or ``"auto"``) :func:`decide_route` runs:
   When the enclosure misses :attr:`lmic.options.SolveOptions.gap`, the route escalates to the
   next interior point (:func:`lmic.route_rule.gap_escalates`: a gap too wide or a primal end
   missing; at most :data:`MAX_GAP_ESCALATIONS`, within a time cap) and keeps the tightest
-  certified enclosure. A first-order step (``auto:first-order``) whose enclosure does not meet
-  the gap is polished by the interior points. The exact proofs of bounded rays share one
+  certified enclosure. An enclosure within the gap but above
+  :data:`lmic.certify.enclosure.GAP_TARGET` escalates once more while the route has run less
+  than :data:`lmic.route_rule.CHEAP_ESCALATION_S` (small problems: one more cheap solve). A
+  first-order step (``auto:first-order``) whose enclosure does not meet the gap is polished by
+  the interior points. The exact proofs of bounded rays share one
   budget over the route's backends.
 
 An explicit backend is that backend alone, as before. :func:`describe` gives the one line the
@@ -40,9 +43,11 @@ from typing import Any
 
 import numpy as np
 
+from lmic.certify.enclosure import GAP_TARGET
 from lmic.ir.problem import Problem
 from lmic.outcome import Outcome, rank
 from lmic.route_rule import (
+    CHEAP_ESCALATION_S,
     GAP_ESCALATION_FACTOR,
     GAP_ESCALATION_FLOOR_S,
     MAX_GAP_ESCALATIONS,
@@ -427,7 +432,10 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
         enc = None
         holds = out.verdict == "undecided" and getattr(out.certificate, "verdict", None) == "certified"
         if out.verdict == "certified" or holds:
-            enc, t_enc = enclosure_of(problem, out.solution, out.certificate, exact, name, opts, target=options.gap)
+            # the tight re-solve aims at GAP_TARGET (1e-6) when the budget pays for it, whatever
+            # the looser --gap that decides escalation: a cheap re-solve on small problems
+            aim = min(float(options.gap), GAP_TARGET)
+            enc, t_enc = enclosure_of(problem, out.solution, out.certificate, exact, name, opts, target=aim)
             enc_s += t_enc
             rel = None if enc is None else enc.get("rel_gap")
             step["rel_gap"] = rel
@@ -441,7 +449,14 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
         if out.verdict == "certified":
             rel = step.get("rel_gap")
             if rel is not None and rel <= options.gap:
-                break  # the enclosure proves the optimum to the requested gap
+                cheap = time.perf_counter() - t_route < CHEAP_ESCALATION_S
+                if first_order or rel <= GAP_TARGET or escalated > 0 or not cheap or k == len(names) - 1:
+                    break  # the enclosure proves the optimum to the requested gap
+                # within --gap but above GAP_TARGET, and cheap: one more interior point may close it
+                escalated += 1
+                step["escalate"] = "gap above 1e-6, cheap"
+                names = names[: k + 1] + [nm for nm in names[k + 1 :] if method_of(nm) != "first-order"]
+                continue
             if not first_order:
                 first_s = first_s or (time.perf_counter() - t_route)
                 late = time.perf_counter() - t_route > max(GAP_ESCALATION_FLOOR_S, GAP_ESCALATION_FACTOR * first_s)

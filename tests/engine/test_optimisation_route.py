@@ -236,3 +236,35 @@ def test_sdpa_skips_its_feasibility_error_recomputation_and_restores_it(monkeypa
     assert r.enclosure["upper"] >= lo and r.enclosure["lower"] <= hi
     assert calls == []
     assert sdpaputils.get_primalerror is recorder and sdpaputils.get_dualerror is recorder
+
+
+def test_a_gap_within_gap_but_above_1e_6_escalates_once_when_cheap(monkeypatch):
+    """An enclosure inside --gap but above GAP_TARGET (1e-6): while the route is cheap, one more
+    interior point runs and the tighter enclosure is kept; once the route is not cheap, none."""
+    from lmic.certify.enclosure import GAP_TARGET
+
+    system, (lo, hi) = _brl(4, 7)
+    real = lmic.routes.enclosure_of
+    calls: list[str] = []
+
+    def loose_first(problem, sol, cert, exact, backend, options, budget_s=None, target=None):
+        enc, t = real(problem, sol, cert, exact, backend, options, budget_s, target)
+        calls.append(str(backend))
+        if len(calls) == 1 and enc["lower"] is not None:  # the first solver's lower end, loosened
+            lower = enc["lower"] - 5e-6 * abs(enc["lower"])
+            enc = dict(enc, lower=lower, gap=enc["upper"] - lower)
+            enc["rel_gap"] = enc["gap"] / max(1.0, 0.5 * (abs(enc["upper"]) + abs(lower)))
+        return enc, t
+
+    monkeypatch.setattr(lmic.routes, "enclosure_of", loose_first)
+    r = lmic.api.solve("tutorial.bounded_real", system, backoff=0)
+    steps = r.route["steps"]
+    assert [s.get("escalate") for s in steps[:1]] == ["gap above 1e-6, cheap"] and len(steps) == 2
+    assert steps[0]["rel_gap"] > GAP_TARGET >= r.enclosure["rel_gap"]
+    assert _checked(r, lo, hi)["rel_gap"] <= GAP_TARGET
+
+    calls.clear()
+    monkeypatch.setattr(lmic.routes, "CHEAP_ESCALATION_S", 0.0)
+    r = lmic.api.solve("tutorial.bounded_real", system, backoff=0)
+    assert len(r.route["steps"]) == 1 and r.enclosure["rel_gap"] > GAP_TARGET
+    assert r.enclosure["lower"] <= hi and r.enclosure["upper"] >= lo
