@@ -432,8 +432,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
         enc = None
         holds = out.verdict == "undecided" and getattr(out.certificate, "verdict", None) == "certified"
         if out.verdict == "certified" or holds:
-            # the tight re-solve aims at GAP_TARGET (1e-6) when the budget pays for it, whatever
-            # the looser --gap that decides escalation: a cheap re-solve on small problems
+            # the tight re-solve aims at GAP_TARGET (1e-6) whatever the looser --gap of escalation
             aim = min(float(options.gap), GAP_TARGET)
             enc, t_enc = enclosure_of(problem, out.solution, out.certificate, exact, name, opts, target=aim)
             enc_s += t_enc
