@@ -119,6 +119,17 @@ def _warm_start(prev: Solution | None, n: int, n_ge: int, n_eq: int, dims: list[
     return {"primalstart": primal, "dualstart": dual}
 
 
+def _structured_kkt(data: Any, problem: Problem) -> Any:
+    """The structured KKT solver (:mod:`lmic.backends.cvxopt_kkt`) of ``data`` where it is
+    cheaper than CVXOPT's 'chol' (:func:`~lmic.backends.cvxopt_kkt.worth_it`), else ``None``."""
+    from lmic.backends.cvxopt_kkt import StructuredKKT, analyse, worth_it
+
+    if not data.G or not worth_it(problem):
+        return None
+    blocks = analyse(problem)[2]
+    return StructuredKKT([-g for g in data.G], -data.A_ge[:, 1:], data.A_eq[:, 1:], data.dims, blocks)
+
+
 class CVXOPTBackend(Backend):
     """CVXOPT's primal-dual interior-point SDP solver (``solvers.sdp``), LMI form."""
 
@@ -175,7 +186,9 @@ class CVXOPTBackend(Backend):
         c = cvxopt.matrix(data.c)
         warm = _warm_start(warm_from, len(data.c), len(data.ge), len(data.eq), [lmi.dim for lmi in problem.lmis])
 
-        def run(kkt: str) -> Any:
+        structured = None if chosen else _structured_kkt(data, problem)
+
+        def run(kkt: Any) -> Any:
             nonlocal warm
             if warm:
                 try:
@@ -185,8 +198,8 @@ class CVXOPTBackend(Backend):
             return solvers.sdp(c, kktsolver=kkt, options=dict(opts), **kwargs)
 
         t0 = time.perf_counter()
-        result, _ = in_turn(
-            [chosen] if chosen else KKT_ORDER,
+        result, kkt = in_turn(
+            [chosen] if chosen else ([structured, "qr"] if structured is not None else KKT_ORDER),
             run,
             lambda r: str(r["status"]) == "unknown",
         )
@@ -209,5 +222,9 @@ class CVXOPTBackend(Backend):
             iterations=result.get("iterations"),
             message=message,
             # the native iterates, for the next solve of a problem of the same shape (warm start)
-            info={"warm_started": bool(warm), "cvxopt_iterates": _iterates(result)},
+            info={
+                "warm_started": bool(warm),
+                "cvxopt_iterates": _iterates(result),
+                "kktsolver": "structured" if kkt is structured and structured is not None else str(kkt),
+            },
         )

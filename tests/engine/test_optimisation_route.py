@@ -11,7 +11,7 @@ import pytest
 
 import lmic.api
 import lmic.routes
-from lmic import policy
+from lmic import policy, route_rule
 from lmic.certify import certify
 from lmic.options import SolveOptions
 
@@ -77,7 +77,11 @@ def test_the_bounded_real_lemma_goes_to_clarabel_and_a_few_variable_theorem_to_t
     system, _ = _brl(30, 0)
     brl = load_target("tutorial.bounded_real", system)[0]
     clarabel, schur = policy.ipm_costs(brl)
-    assert policy.SCHUR_PENALTY * schur >= clarabel and policy.route(brl)[0] == "clarabel"
+    assert policy.SCHUR_PENALTY * schur >= clarabel
+    # ... its coefficients are crosses (A'P + PA): CVXOPT's structured KKT solver goes first
+    structured = route_rule.structured_ipm_cost(brl)
+    assert structured is not None and route_rule.STRUCTURED_PENALTY * structured < clarabel
+    assert policy.route(brl)[:3] == ["cvxopt", "clarabel", "sdpa"]
     # uncertain_dt.thm1 at 8 states: 91 variables against blocks of 58 and 33
     spec = {"count": 1, "seed": 1, "dims": {"n": 8, "p": 2, "nw": 1, "nz": 8, "r": 2, "s": 2}}
     spec.update(spectral_radius={"A": 0.3}, scale=0.1)
