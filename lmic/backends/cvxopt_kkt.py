@@ -61,6 +61,7 @@ __all__ = [
     "worth_it",
 ]
 
+
 def _lower_entries(G: sp.spmatrix, d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(var, row, col, value)`` of the lower-triangle non-zeros (``row >= col``) of every
     column of ``G`` (column-major ``d x d`` blocks; CVXOPT reads only the lower triangle)."""
@@ -151,9 +152,6 @@ class _Block:
         lo = int(narrow[0]) if len(narrow) else 0
         #: the narrow variables as a slice when they are consecutive (no fancy-indexed update)
         self.narrow_slice = slice(lo, lo + len(narrow)) if len(narrow) and narrow[-1] - lo + 1 == len(narrow) else None
-        # tr(F_i Y) for every variable i and symmetric Y: the lower entries, off-diagonals twice
-        weight = np.where(row == col, 1.0, 2.0) * val
-        self.trace = sp.csr_matrix((weight, (var, row + d * col)), shape=(n, d * d))
 
     def scaled(self, L: np.ndarray) -> dict[str, Any]:
         """The iteration's scaled data for ``L = rti`` (``W^{-T} F = L' F L``): ``V_k = L' C_k``,
