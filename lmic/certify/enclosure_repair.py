@@ -96,6 +96,13 @@ def _target(problem: Problem) -> tuple[float, np.ndarray]:
 CHUNK_ENTRIES = 4_000_000
 
 
+#: the support form's cost unit (a gathered entry) against the congruence form's (a BLAS flop),
+#: measured: ``uncertain_dt.thm1`` n = 8, 58 x 58 block, rank 58, 91 rows: support 13.4 ms for
+#: 4.0e6 units, congruence 2.6 ms for 3.6e7 flops; its 33 x 33 block: 0.43 ms for 2.6e5 units
+#: against 0.54 ms for 6.3e6 flops (a ratio of 20 to 45)
+CONGRUENCE_RATE = 20.0
+
+
 def _block_gradient(Jb: sp.spmatrix, U: np.ndarray, dim: int, ia: np.ndarray, ib: np.ndarray) -> np.ndarray:
     """``Jb @ T`` with ``T[s, (a, b)] = d svec(U E U^T)_s / d E_ab`` (``E`` symmetric).
 
@@ -114,6 +121,13 @@ def _block_gradient(Jb: sp.spmatrix, U: np.ndarray, dim: int, ia: np.ndarray, ib
     out = np.zeros((Jc.shape[0], ia.size))
     if not support.size or not ia.size:
         return out
+    r = U.shape[1]
+    rows_used = np.unique(Jc.indices)
+    # the support form costs |support| x (the factor's pairs) for T and nnz(Jb) x pairs for the
+    # product, in gathers; the congruence form r d^2 + r^2 d flops per row of Jb, in BLAS
+    # (:data:`CONGRUENCE_RATE`)
+    if rows_used.size * (r * dim * dim + r * r * dim) < CONGRUENCE_RATE * (support.size + Jc.nnz) * ia.size:
+        return _congruence_gradient(Jc, U, dim, ia, ib, rows_used, out)
     ri, ci = tril_rows_cols(dim)
     diag = ia == ib
     step = max(1, CHUNK_ENTRIES // max(1, ia.size))
@@ -123,6 +137,42 @@ def _block_gradient(Jb: sp.spmatrix, U: np.ndarray, dim: int, ia: np.ndarray, ib
         T = P[:, ia] * Qm[:, ib] + P[:, ib] * Qm[:, ia]
         T[:, diag] *= 0.5
         out += np.asarray(Jc[:, rows] @ T)
+    return out
+
+
+def _congruence_gradient(
+    Jc: sp.csc_matrix, U: np.ndarray, dim: int, ia: np.ndarray, ib: np.ndarray, rows_used: np.ndarray, out: np.ndarray
+) -> np.ndarray:
+    """:func:`_block_gradient` row by row: row ``i`` of ``Jb T`` is the upper triangle of ``U' S_i
+    U`` (its diagonal halved), ``S_i`` the symmetric matrix of row ``i``'s tril entries (each
+    placed at ``(r, c)`` and ``(c, r)``, a diagonal one twice). Dense products of order ``dim``
+    for every row of ``Jb`` with a nonzero, in chunks of at most :data:`CHUNK_ENTRIES` entries:
+    cheaper than the support form when ``Jb`` is dense on a large block (``uncertain_dt.thm1``
+    n = 8: a 58 x 58 block, 1.7e3 support rows, 91 rows of ``Jb``).
+
+    >>> import scipy.sparse as sp
+    >>> ia, ib = np.triu_indices(2)
+    >>> J = sp.csc_matrix([[1.0, 0.0, 1.0]])
+    >>> _congruence_gradient(J, np.eye(2), 2, ia, ib, np.array([0]), np.zeros((1, 3))).tolist()
+    [[1.0, 0.0, 1.0]]
+    """
+    ri, ci = tril_rows_cols(dim)
+    coo = sp.coo_matrix(Jc)
+    diag = ia == ib
+    step = max(1, CHUNK_ENTRIES // max(1, dim * dim))
+    for s0 in range(0, rows_used.size, step):
+        chunk = rows_used[s0 : s0 + step]
+        local = np.full(Jc.shape[0], -1)
+        local[chunk] = np.arange(chunk.size)
+        keep = local[coo.row] >= 0
+        k, col, val = local[coo.row[keep]], coo.col[keep], coo.data[keep]
+        S = np.zeros((chunk.size, dim, dim))
+        np.add.at(S, (k, ri[col], ci[col]), val)
+        np.add.at(S, (k, ci[col], ri[col]), val)
+        C = np.matmul(np.matmul(U.T, S), U)
+        block = C[:, ia, ib]
+        block[:, diag] *= 0.5
+        out[chunk] = block
     return out
 
 

@@ -61,6 +61,39 @@ def test_block_gradient_in_chunks_equals_one_chunk(monkeypatch: pytest.MonkeyPat
     np.testing.assert_allclose(_block_gradient(Jb, U, dim, ia, ib), whole, rtol=1e-13, atol=1e-13)
 
 
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_congruence_form_equals_the_dense_definition(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Row by row ``U' S_i U`` (chosen for a dense ``Jb`` on a large block), whole and in chunks
+    of one row, against the full ``T``."""
+    import lmic.certify.enclosure_repair as rep
+
+    rng = np.random.default_rng(seed)
+    dim, r = 24, 24
+    t = dim * (dim + 1) // 2
+    Jb = sp.random(6, t, density=0.9, random_state=seed, format="csc")
+    Jb = sp.vstack([Jb, sp.csc_matrix((1, t))]).tocsc()  # a row without nonzeros stays zero
+    U = rng.normal(size=(dim, r))
+    ia, ib = np.triu_indices(r)
+    reference = _dense_gradient(Jb.toarray(), U, dim)
+    rows = np.unique(sp.csc_matrix(Jb).indices)
+    direct = rep._congruence_gradient(sp.csc_matrix(Jb), U, dim, ia, ib, rows, np.zeros((7, ia.size)))
+    np.testing.assert_array_equal(direct[6], 0.0)
+    np.testing.assert_allclose(direct, reference, rtol=1e-12, atol=1e-12)
+    calls: list[int] = []
+    real = rep._congruence_gradient
+
+    def spy(*args):
+        calls.append(1)
+        return real(*args)
+
+    monkeypatch.setattr(rep, "_congruence_gradient", spy)
+    chosen = _block_gradient(Jb, U, dim, ia, ib)
+    assert calls, "the cost rule should pick the congruence form for a dense Jb on a large block"
+    np.testing.assert_allclose(chosen, reference, rtol=1e-12, atol=1e-12)
+    monkeypatch.setattr(rep, "CHUNK_ENTRIES", dim * dim)  # one row per chunk
+    np.testing.assert_allclose(_block_gradient(Jb, U, dim, ia, ib), reference, rtol=1e-12, atol=1e-12)
+
+
 def test_face_centre_newton_uses_the_hessian_of_minus_log_det() -> None:
     """The face centring on a slice whose centre is known: ``max log det S`` over ``tr S = 3``
     (no other equation) is ``S = I``, whatever the start inside the cone."""
