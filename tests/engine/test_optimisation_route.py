@@ -78,10 +78,18 @@ def test_the_bounded_real_lemma_goes_to_clarabel_and_a_few_variable_theorem_to_t
     brl = load_target("tutorial.bounded_real", system)[0]
     clarabel, schur = policy.ipm_costs(brl)
     assert policy.SCHUR_PENALTY * schur >= clarabel
-    # ... its coefficients are crosses (A'P + PA): CVXOPT's structured KKT solver goes first
+    # its coefficients are crosses (A'P + PA), but Clarabel is still fast enough to keep it first
     structured = route_rule.structured_ipm_cost(brl)
     assert structured is not None and route_rule.STRUCTURED_PENALTY * structured < clarabel
-    assert policy.route(brl)[:3] == ["cvxopt", "clarabel", "sdpa"]
+    assert clarabel < route_rule.STRUCTURED_MIN_COST and policy.route(brl)[0] == "clarabel"
+    # at 40 states CVXOPT's structured KKT solver goes first
+    system, _ = _brl(40, 0)
+    big = load_target("tutorial.bounded_real", system)[0]
+    clarabel, _ = policy.ipm_costs(big)
+    structured = route_rule.structured_ipm_cost(big)
+    assert clarabel >= route_rule.STRUCTURED_MIN_COST
+    assert structured is not None and route_rule.STRUCTURED_PENALTY * structured < clarabel
+    assert policy.route(big)[:3] == ["cvxopt", "clarabel", "sdpa"]
     # uncertain_dt.thm1 at 8 states: 91 variables against blocks of 58 and 33
     spec = {"count": 1, "seed": 1, "dims": {"n": 8, "p": 2, "nw": 1, "nz": 8, "r": 2, "s": 2}}
     spec.update(spectral_radius={"A": 0.3}, scale=0.1)
