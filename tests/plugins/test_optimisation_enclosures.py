@@ -116,3 +116,23 @@ def test_uio_dt_thm4_1_upper_end_and_degenerate_dual():
     # hence no certified lower end (never an invented one), and the record says so
     assert enc["lower"] is None and enc["dual"]["proven"] is False
     assert "no certified lower end" in enc["reason"]
+
+
+def test_a_rejected_small_margin_point_still_gives_the_upper_end():
+    """sampled_euler.thm2 at 8 states (seed 0, objective 7.2e4): the default strategy's point
+    holds its strict LMIs with margin 9e-9, below the certifier's relative threshold, so the
+    certified point is the rescaled strategy's, 3e-4 above the optimum. The enclosure re-solves
+    the strict problem and proves that point with rigorous rounding (``polish`` from the strict
+    problem): the gap meets 1e-6, the independent optimum is inside, and the audit re-proves it."""
+    tid = "sampled_euler.thm2"
+    system = instance(tid, 0, 8)
+    status, value, tol = reference(tid, system)
+    assert status == "optimal" and value is not None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = solve(tid, system, backend="clarabel", backoff=0)
+    assert [a["reduction"] for a in r.attempts][-1] != "default/fixed-margin"  # the certified point is not it
+    assert r.objective > value * (1 + 1e-5)  # ... and it keeps a large margin
+    enc = _enclosure_checked(r, value, tol)
+    assert enc["primal"] == "restored point" and enc["polish"]["from"] == "strict problem"
+    assert enc["rel_gap"] <= GAP, enc["reason"]
