@@ -233,4 +233,8 @@ def test_dense_coefficients_keep_cvxopts_own_solver():
         LinearConstraints.empty(n),
         Objective("min", np.concatenate([[0.0], rng.standard_normal(n)])),
     )
-    assert cvxopt_backend._structured_kkt(LMIForm.apply(problem), problem) is None
+    data = LMIForm.apply(problem)
+    assert cvxopt_backend._structured_kkt(data, problem) is None
+    # the entry count alone rules it out: no cover is searched
+    ours, theirs, blocks = structured_cost([-g for g in data.G], data.dims, problem.n)
+    assert ours == float("inf") and theirs > 0 and blocks == []
