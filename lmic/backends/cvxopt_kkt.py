@@ -31,8 +31,10 @@ solver only where it wins (:func:`lmic.backends.cvxopt`).
 The solver follows CVXOPT's contract for a user ``kktsolver`` (``coneprog.conelp``): ``f =
 kktsolver(W)``, and ``f(x, y, z)`` overwrites the right-hand side ``(bx, by, bz)`` with ``(ux,
 uy, W uz)``. Equality constraints are eliminated by a QR factorisation of ``A'``, as CVXOPT's
-``chol`` does. When the Schur complement is numerically indefinite, CVXOPT's QR-based solver
-takes over for the rest of the run (:meth:`StructuredKKT.__call__`).
+``chol`` does. Every solve is refined (at most :data:`REFINEMENT_STEPS`) against the true
+operator, applied from the scaled data without the formed ``H``. When the Schur complement is
+numerically indefinite, or a refined solve stays inaccurate (:data:`INACCURATE`), CVXOPT's
+QR-based solver takes over for the rest of the run (:meth:`StructuredKKT.__call__`).
 
 Examples
 --------
@@ -58,6 +60,7 @@ __all__ = [
     "analyse",
     "STRUCTURED_MARGIN",
     "MAX_STRUCTURED_ITERATIONS",
+    "STRUCTURED_MIN_WORK",
     "worth_it",
 ]
 
@@ -311,18 +314,19 @@ STRUCTURED_MARGIN = 2.0
 
 
 def worth_it(problem: Any) -> bool:
-    """Whether CVXOPT should use the structured solver on ``problem`` (:data:`STRUCTURED_MARGIN`).
+    """Whether CVXOPT should use the structured solver on ``problem`` (:data:`STRUCTURED_MARGIN`,
+    :data:`STRUCTURED_MIN_WORK`).
 
     >>> from lmic.testing.conformance import bounded_real_problem
     >>> import numpy as np
     >>> A = lambda n: -np.eye(n) + np.diag(np.ones(n - 1), 1)
-    >>> [worth_it(bounded_real_problem(A(n), np.ones((n, 1)), np.ones((1, n)))) for n in (3, 12)]
+    >>> [worth_it(bounded_real_problem(A(n), np.ones((n, 1)), np.ones((1, n)))) for n in (3, 24)]
     [False, True]
     """
     if not problem.lmis:
         return False
     ours, theirs, _ = analyse(problem)
-    return STRUCTURED_MARGIN * ours < theirs
+    return theirs >= STRUCTURED_MIN_WORK and STRUCTURED_MARGIN * ours < theirs
 
 
 #: factorisations after which the QR-based solver takes over (CVXOPT converges in 15 to 30
@@ -330,6 +334,25 @@ def worth_it(problem: Any) -> bool:
 #: equations' rounding can stall it: ``uncertain_dt.thm1`` n = 8 stalled at gap 2e-8 for 80
 #: iterations before this limit)
 MAX_STRUCTURED_ITERATIONS = 35
+
+
+#: refinement steps of each KKT solve against the true operator (:meth:`StructuredKKT._structured`)
+REFINEMENT_STEPS = 2
+#: ... none needed below this relative residual
+REFINED = 1e-11
+#: a solve left above this relative residual after its refinement hands the next
+#: factorisations to CVXOPT's QR solver (``uncertain_dt.thm1`` n = 6: the directions lost
+#: accuracy from iteration 21, and the run stalled at gap 4e-8 until the iteration cap)
+INACCURATE = 1e-9
+
+
+#: ... and only where 'chol''s estimate is at least this (a few ms per iteration): below it the
+#: per-iteration overhead of the structured solver (and its refinement) is not repaid. Measured
+#: whole CVXOPT solves, structured against 'chol' then 'qr' (lmic's previous default): SDPLIB
+#: control2 (1.7e6) 0.108 against 0.096 s, hinf1 (1e4) 0.101 against 0.043 s, a 16-state
+#: bounded-real lemma (7.8e6) 0.049 against 0.035 s; 20 states (2.6e7) 0.101 against 0.215 s,
+#: 30 states (2.5e8) 0.317 against 1.00 s, uir.thm4_1 n = 12 (2e8) 0.158 against 0.345 s
+STRUCTURED_MIN_WORK = 2e7
 
 
 _ANALYSES: dict[int, tuple[Any, tuple[float, float, list[_Block]]]] = {}
@@ -468,6 +491,25 @@ class StructuredKKT:
         self.iterations += 1
         offsets = np.cumsum([0] + [b.d**2 for b in self.blocks])
 
+        def reduced(rx: np.ndarray, ry: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            """``[[H, A'], [A, 0]] [ux; uy] = [rx; ry]`` by the factorisation (QR of ``A'``)."""
+            if p:
+                xq = self.QA.T @ rx
+                v = sla.solve_triangular(self.RA, ry, trans="T")
+                w = sla.cho_solve(factor, xq[p:] - K[p:, :p] @ v) if factor is not None else np.zeros(0)
+                uy = sla.solve_triangular(self.RA, xq[:p] - K[:p, :p] @ v - K[:p, p:] @ w)
+                return self.QA @ np.concatenate([v, w]), uy
+            return (sla.cho_solve(factor, rx) if factor is not None else rx.copy()), np.zeros(0)
+
+        def schur_times(u: np.ndarray) -> np.ndarray:
+            """``H u`` from the scaled data, without the formed ``H``."""
+            out = np.zeros(n)
+            for b, sc in zip(self.blocks, scs, strict=True):
+                b.rhs(sc, b.apply_scaled(sc, u), out)
+            if ml:
+                out += self.Gl.T @ (di * di * (self.Gl @ u))
+            return out
+
         def solve(x: Any, y: Any, z: Any) -> None:
             bx = np.array(x, dtype=float).ravel()
             bz = np.array(z, dtype=float).ravel()
@@ -479,16 +521,24 @@ class StructuredKKT:
                 b.rhs(sc, B, rhs)  # G' W^{-1} W^{-T} bz
             if ml:
                 rhs += self.Gl.T @ (di * di * bz[:ml])
+            by = np.array(y, dtype=float).ravel() if p else np.zeros(0)
+            ux, uy = reduced(rhs, by)
+            # iterative refinement against the true operator (from the scaled data: H is
+            # formed with rounding that grows with the scaling's condition number)
+            for step in range(REFINEMENT_STEPS + 1):
+                Hu = schur_times(ux)
+                rx = rhs - Hu - (self.A.T @ uy if p else 0.0)
+                ry = by - self.A @ ux if p else np.zeros(0)
+                size = float(np.linalg.norm(rhs) + np.linalg.norm(Hu) + np.linalg.norm(by)) or 1.0
+                err = float(max(np.linalg.norm(rx), np.linalg.norm(ry) if p else 0.0)) / size
+                if err <= REFINED or step == REFINEMENT_STEPS:
+                    break
+                dx, dy = reduced(rx, ry)
+                ux, uy = ux + dx, uy + dy
+            if err > INACCURATE and self.fallback_from is None:
+                self.fallback_from = self.iterations  # the next factorisations: CVXOPT's QR
             if p:
-                by = np.array(y, dtype=float).ravel()
-                xq = self.QA.T @ rhs
-                v = sla.solve_triangular(self.RA, by, trans="T")
-                w = sla.cho_solve(factor, xq[p:] - K[p:, :p] @ v) if factor is not None else np.zeros(0)
-                uy = sla.solve_triangular(self.RA, xq[:p] - K[:p, :p] @ v - K[:p, p:] @ w)
-                ux = self.QA @ np.concatenate([v, w])
                 y[:] = _cvx(uy)
-            else:
-                ux = sla.cho_solve(factor, rhs) if factor is not None else rhs
             out = np.empty_like(bz)
             if ml:
                 out[:ml] = di * (self.Gl @ ux - bz[:ml])

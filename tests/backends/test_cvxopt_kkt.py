@@ -163,8 +163,23 @@ def brl_system(n, seed):
     return A, B, C, {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}
 
 
+@pytest.fixture
+def small_problems_too(monkeypatch):
+    """The structured solver on problems below its work threshold (kept small for speed)."""
+    monkeypatch.setattr(kkt_module, "STRUCTURED_MIN_WORK", 0.0)
+
+
+def test_small_problems_keep_cvxopts_own_solver():
+    from lmic.api import load_target, solve_problem
+
+    problem = load_target("tutorial.bounded_real", brl_system(8, 0)[3])[0]
+    assert not kkt_module.worth_it(problem)  # 'chol''s estimate is below STRUCTURED_MIN_WORK
+    assert kkt_module.analyse(problem)[1] < kkt_module.STRUCTURED_MIN_WORK
+    assert solve_problem(problem, "cvxopt").info["kktsolver"] in ("chol", "qr")
+
+
 @pytest.mark.parametrize("seed", [0, 1])
-def test_cvxopt_with_the_structured_solver_reaches_the_hinf_norm(seed):
+def test_cvxopt_with_the_structured_solver_reaches_the_hinf_norm(seed, small_problems_too):
     from lmic.api import load_target, solve_problem
     from lmic.certify import certify
 
@@ -180,7 +195,7 @@ def test_cvxopt_with_the_structured_solver_reaches_the_hinf_norm(seed):
     assert lo * (1 - 1e-9) <= gamma <= hi * (1 + 1e-6)
 
 
-def test_a_failed_cholesky_hands_over_to_cvxopts_qr_solver(monkeypatch):
+def test_a_failed_cholesky_hands_over_to_cvxopts_qr_solver(monkeypatch, small_problems_too):
     """After the structured factorisation fails (forced from the 6th), CVXOPT's QR solver
     finishes the same run: the answer is still the norm, and the hand-over is recorded."""
     from lmic.api import load_target, solve_problem
@@ -238,3 +253,59 @@ def test_dense_coefficients_keep_cvxopts_own_solver():
     # the entry count alone rules it out: no cover is searched
     ours, theirs, blocks = structured_cost([-g for g in data.G], data.dims, problem.n)
     assert ours == float("inf") and theirs > 0 and blocks == []
+
+
+def test_an_inaccurate_solve_hands_over_to_cvxopts_qr_solver(monkeypatch, small_problems_too):
+    """A refined solve whose residual stays above INACCURATE (forced: 0) hands the next
+    factorisations to CVXOPT's QR solver; the run still reaches the norm, certified."""
+    from lmic.api import load_target, solve_problem
+    from lmic.certify import certify
+
+    A, B, C, system = brl_system(10, 4)
+    problem = load_target("tutorial.bounded_real", system)[0]
+    made: list[StructuredKKT] = []
+    real_factory = cvxopt_backend._structured_kkt
+
+    def recording(data, prob):
+        kkt = real_factory(data, prob)
+        made.append(kkt)
+        return kkt
+
+    monkeypatch.setattr(kkt_module, "INACCURATE", 0.0)
+    monkeypatch.setattr(cvxopt_backend, "_structured_kkt", recording)
+    solution = solve_problem(problem, "cvxopt")
+    assert made and made[0] is not None and made[0].fallback_from == 1  # after the first factorisation
+    assert solution.status == "optimal" and certify(problem, solution).verdict == "certified"
+    lo, hi = hinf_norm(A, B, C)
+    assert lo * (1 - 1e-9) <= solution.objective <= hi * (1 + 1e-6)
+
+
+def test_refinement_makes_the_solve_exact_for_the_true_operator(small_problems_too):
+    """With the formed Schur complement perturbed (a wrong H), the refined solve still solves
+    the KKT system of the true operator: it matches CVXOPT's own solver."""
+    rng = np.random.default_rng(7)
+    A = rng.standard_normal((4, 4))
+    Gs, d = lyapunov_columns(A, 2, rng)
+    n = Gs.shape[1]
+    dims = {"l": 0, "q": [], "s": [d]}
+    W = random_scaling(dims, rng)
+    kkt = StructuredKKT([Gs], sp.csc_matrix((0, n)), sp.csc_matrix((0, n)), [d])
+    real_schur = kkt.blocks[0].schur
+
+    def perturbed(sc, H, work=None):
+        real_schur(sc, H, work)
+        H *= 1.0 + 1e-4  # a relative error far above rounding
+        H[np.diag_indices_from(H)] *= 1.0 + 1e-4
+
+    kkt.blocks[0].schur = perturbed
+    ours = kkt(W)
+    theirs = misc.kkt_chol(cvxopt.matrix(Gs.toarray()), dims, cvxopt.matrix(np.zeros((0, n))))(W)
+    bx = rng.standard_normal(n)
+    S = rng.standard_normal((d, d))
+    bz = vec(S + S.T)
+    out = []
+    for f in (ours, theirs):
+        x, y, z = cvxopt.matrix(bx.copy()), cvxopt.matrix(0.0, (0, 1)), cvxopt.matrix(bz.copy())
+        f(x, y, z)
+        out.append(np.array(x).ravel())
+    np.testing.assert_allclose(out[0], out[1], rtol=1e-7, atol=1e-9 * np.abs(out[1]).max())
