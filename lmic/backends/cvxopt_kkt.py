@@ -342,8 +342,11 @@ REFINEMENT_STEPS = 2
 REFINED = 1e-11
 #: a solve left above this relative residual after its refinement hands the next
 #: factorisations to CVXOPT's QR solver (``uncertain_dt.thm1`` n = 6: the directions lost
-#: accuracy from iteration 21, and the run stalled at gap 4e-8 until the iteration cap)
-INACCURATE = 1e-9
+#: accuracy from iteration 21, and the run stalled at gap 4e-8 until the iteration cap).
+#: Measured: 1e-6 and above let that run stall again; 1e-7 hands over later (bounded-real
+#: lemma n = 40: after 15 factorisations, 1.27 s, against 13 and 1.41 s at 1e-9); 1e-8 keeps a
+#: factor of 100 from the stall
+INACCURATE = 1e-8
 
 
 #: ... and only where 'chol''s estimate is at least this (a few ms per iteration): below it the
