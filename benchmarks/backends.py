@@ -174,9 +174,11 @@ def _child(conn: Any, fn: Any, args: tuple) -> None:
 
 
 def _timed(fn: Any, args: tuple, limit: float) -> dict[str, Any]:
+    """``fn(*args)`` in a forked child (not a daemon: lmic's time-limited solves fork their own
+    children), killed after ``limit`` seconds."""
     ctx = multiprocessing.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(send, fn, args), daemon=True)
+    proc = ctx.Process(target=_child, args=(send, fn, args), daemon=False)
     t0 = time.perf_counter()
     proc.start()
     send.close()
@@ -189,8 +191,8 @@ def _timed(fn: Any, args: tuple, limit: float) -> dict[str, Any]:
         out = {"status": "crashed"}
     finally:
         if proc.is_alive():
-            proc.terminate()
-        proc.join(2)
+            proc.kill()
+        proc.join(5)
     out["wall_s"] = time.perf_counter() - t0
     return out
 

@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import sys
 import time
 import warnings
@@ -50,7 +49,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from enclosure import brl_problems  # noqa: E402
-from routes import _cvxpy_brl, _plant, ratio  # noqa: E402
+from routes import _cvxpy_brl, _med, _plant, _rounds, ratio  # noqa: E402
 
 __all__ = ["fmt", "cvxpy_ir", "lmic_run", "main"]
 
@@ -129,57 +128,6 @@ def _prepare(problem: Any) -> dict[str, Any]:
         "c": np.asarray(problem.objective.c, dtype=float),
         "sense": problem.objective.sense,
     }
-
-
-def _child(conn: Any, fn: Any, args: tuple) -> None:
-    try:
-        conn.send(fn(*args))
-    except BaseException as exc:  # noqa: BLE001 - reported as the run's status
-        conn.send({"status": f"crashed: {type(exc).__name__}: {exc}"})
-    finally:
-        conn.close()
-
-
-def _timed(fn: Any, args: tuple, limit: float) -> dict[str, Any]:
-    """``fn(*args)`` in a forked child (not a daemon: lmic's time-limited solves fork their own
-    children), stopped after ``limit`` seconds."""
-    import multiprocessing
-
-    ctx = multiprocessing.get_context("fork")
-    recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(send, fn, args), daemon=False)
-    t0 = time.perf_counter()
-    proc.start()
-    send.close()
-    try:
-        out = recv.recv() if recv.poll(limit) else {"status": f"timeout > {limit:g} s"}
-    except EOFError:
-        out = {"status": "crashed"}
-    finally:
-        if proc.is_alive():
-            proc.kill()
-        proc.join(5)
-    out["wall_s"] = time.perf_counter() - t0
-    return out
-
-
-def _rounds(jobs: list[tuple[str, Any, tuple]], repeat: int, limit: float, label: str) -> dict[str, list[dict]]:
-    out: dict[str, list[dict]] = {name: [] for name, _, _ in jobs}
-    for k in range(repeat):
-        order = jobs[k % len(jobs) :] + jobs[: k % len(jobs)]
-        for name, fn, args in order:
-            r = _timed(fn, args, limit)
-            if "total_s" not in r:
-                r["total_s"] = None
-            out[name].append(r)
-            what = r.get("verdict", r.get("status"))
-            print(f"  [{label} {k + 1}/{repeat}] {name}: {what} {fmt(r['total_s'])} s", file=sys.stderr, flush=True)
-    return out
-
-
-def _med(rows: list[dict], key: str) -> float | None:
-    vals = [r[key] for r in rows if isinstance(r.get(key), int | float)]
-    return statistics.median(vals) if vals else None
 
 
 def _inside(last: dict[str, Any], lo: float | None, hi: float | None) -> str:

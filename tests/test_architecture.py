@@ -63,7 +63,15 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("certify", ("lmic.certify.*",)),
     (
         "engine",
-        ("lmic.outcome", "lmic.reductions.*", "lmic.policy", "lmic.routes", "lmic.route_rule", "lmic.backoff", "lmic.testing.*"),
+        (
+            "lmic.outcome",
+            "lmic.reductions.*",
+            "lmic.policy",
+            "lmic.routes",
+            "lmic.route_rule",
+            "lmic.backoff",
+            "lmic.testing.*",
+        ),
     ),
     (
         "studies",

@@ -124,9 +124,9 @@ def _structured_kkt(data: Any, problem: Problem) -> Any:
     cheaper than CVXOPT's 'chol' (:func:`~lmic.backends.cvxopt_kkt.worth_it`), else ``None``."""
     from lmic.backends.cvxopt_kkt import StructuredKKT, analyse, worth_it
 
-    if not data.G or not worth_it(problem):
+    if not data.G or not worth_it(problem, data):
         return None
-    blocks = analyse(problem)[2]
+    blocks = analyse(problem, data)[2]
     return StructuredKKT([-g for g in data.G], -data.A_ge[:, 1:], data.A_eq[:, 1:], data.dims, blocks)
 
 

@@ -155,20 +155,18 @@ class _Block:
         lo = int(narrow[0]) if len(narrow) else 0
         #: the narrow variables as a slice when they are consecutive (no fancy-indexed update)
         self.narrow_slice = slice(lo, lo + len(narrow)) if len(narrow) and narrow[-1] - lo + 1 == len(narrow) else None
+        #: the wide variables' coefficients as symmetric matrices
+        cols = self.G[:, self.wide].toarray()
+        self.wide_F = [_sym_lower(cols[:, k], d) for k in range(len(self.wide))]
 
     def scaled(self, L: np.ndarray) -> dict[str, Any]:
         """The iteration's scaled data for ``L = rti`` (``W^{-T} F = L' F L``): ``V_k = L' C_k``,
         ``U_k = L[R_k]`` per slot and ``M_j = L' F_j L`` per wide variable."""
-        d = self.d
-        out: dict[str, Any] = {
+        return {
             "V": [L.T @ C for C in self.slot_C],
             "U": [L[R] for R in self.slot_R],
-            "M": [],
+            "M": [L.T @ F @ L for F in self.wide_F],
         }
-        if len(self.wide):
-            cols = self.G[:, self.wide].toarray()
-            out["M"] = [L.T @ _sym_lower(cols[:, k], d) @ L for k in range(len(self.wide))]
-        return out
 
     def schur(self, sc: dict[str, Any], H: np.ndarray, work: list[np.ndarray] | None = None) -> None:
         """Add this block's ``tr(F_i Q F_j Q) = <L' F_i L, L' F_j L>`` to ``H`` (``sc`` from
@@ -313,7 +311,7 @@ def structured_cost(G: list[sp.spmatrix], dims: list[int], n: int) -> tuple[floa
 STRUCTURED_MARGIN = 2.0
 
 
-def worth_it(problem: Any) -> bool:
+def worth_it(problem: Any, data: Any = None) -> bool:
     """Whether CVXOPT should use the structured solver on ``problem`` (:data:`STRUCTURED_MARGIN`,
     :data:`STRUCTURED_MIN_WORK`).
 
@@ -325,7 +323,7 @@ def worth_it(problem: Any) -> bool:
     """
     if not problem.lmis:
         return False
-    ours, theirs, _ = analyse(problem)
+    ours, theirs, _ = analyse(problem, data)
     return theirs >= STRUCTURED_MIN_WORK and STRUCTURED_MARGIN * ours < theirs
 
 
@@ -361,9 +359,10 @@ STRUCTURED_MIN_WORK = 2e7
 _ANALYSES: dict[int, tuple[Any, tuple[float, float, list[_Block]]]] = {}
 
 
-def analyse(problem: Any) -> tuple[float, float, list[_Block]]:
+def analyse(problem: Any, data: Any = None) -> tuple[float, float, list[_Block]]:
     """:func:`structured_cost` of a problem's LMI-form data (:class:`~lmic.backends.lowering.LMIForm`,
-    CVXOPT's sign), computed once per problem object (the route rule and the backend share it).
+    CVXOPT's sign), computed once per problem object (the route rule and the backend share it;
+    ``data``: the backend's lowering of it, not made again).
 
     >>> from lmic.testing.conformance import bounded_real_problem
     >>> import numpy as np
@@ -379,7 +378,7 @@ def analyse(problem: Any) -> tuple[float, float, list[_Block]]:
     hit = _ANALYSES.get(key)
     if hit is not None and hit[0]() is problem:
         return hit[1]
-    data = LMIForm.apply(problem)
+    data = LMIForm.apply(problem) if data is None else data
     result = structured_cost([-g for g in data.G], data.dims, problem.n)
 
     def forget(_ref: Any, key: int = key) -> None:

@@ -54,19 +54,9 @@ fails with the reason (no exact ``d*`` found, or the reduced coefficients not re
 
 Examples
 --------
->>> import numpy as np, scipy.sparse as sp
->>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
->>> # inf x1 s.t. [[x1, 1], [1, x2]] >= 0 is 0 (not attained); every dual Z is [[1, 0], [0, 0]]
->>> C = sp.csc_matrix(np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]))
->>> p = Problem([Variable("x", "full", (2, 1))], [LMI("M", 2, C, strict=False)],
-...             LinearConstraints.empty(2), Objective("min", [0.0, 1.0, 0.0]))
->>> from lmic.certify.enclosure_facial_exact import exact_step, reduce_v
->>> st = exact_step(p, np.array([1e-12, 1.0]))  # the solver's d ~ (0, 1): W = [[0, 0], [0, 1]]
->>> st["ok"], st["d"], st["V"][0]
-(True, ['0', '1'], [['1'], ['0']])
->>> red = reduce_v(p, st)  # x1 >= 0
->>> [lmi.dim for lmi in red.lmis], red.lmis[0].coeffs.toarray().tolist()
-([1], [[0.0, 1.0, 0.0]])
+One exact step and its reduced problem on ``inf x1 s.t. [[x1, 1], [1, x2]] >= 0``: the module
+example of :mod:`lmic.certify.enclosure_facial_exact`; the search for ``d`` on the same problem:
+:func:`exposing_problem`.
 """
 
 import time

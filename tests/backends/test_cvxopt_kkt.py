@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from certify_helpers import hinf_norm, stable_system
 
 cvxopt = pytest.importorskip("cvxopt")
 from cvxopt import misc  # noqa: E402
@@ -138,28 +139,8 @@ def test_the_kkt_solve_matches_cvxopts_own_solver(with_rows):
         np.testing.assert_allclose(mine, ref, rtol=1e-7, atol=1e-9 * max(1.0, np.abs(ref).max(initial=0.0)))
 
 
-def hinf_norm(A, B, C, tol=1e-10):
-    """H-infinity norm (D = 0) by bisection on the Hamiltonian's imaginary-axis eigenvalues."""
-    lo, hi = 1e-12, 1.0
-
-    def crosses(g):
-        H = np.block([[A, B @ B.T / g**2], [-C.T @ C, -A.T]])
-        ev = np.linalg.eigvals(H)
-        return np.any(np.abs(ev.real) < 1e-8 * max(1.0, np.abs(ev).max()))
-
-    while crosses(hi):
-        hi *= 2
-    while hi - lo > tol * hi:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if crosses(mid) else (lo, mid)
-    return lo, hi
-
-
 def brl_system(n, seed):
-    rng = np.random.default_rng(seed)
-    A = rng.standard_normal((n, n))
-    A -= (max(np.linalg.eigvals(A).real) + 1.0) * np.eye(n)
-    B, C = rng.standard_normal((n, 2)), rng.standard_normal((2, n))
+    A, B, C = stable_system(n, seed, margin=1.0)
     return A, B, C, {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}
 
 

@@ -76,6 +76,21 @@ def observer(A: np.ndarray, C: np.ndarray) -> Problem:
     )
 
 
+def stable_system(n, seed, margin=0.5, eighths=False):
+    """A random ``(A, B, C)`` (2 inputs, 2 outputs) with spectral abscissa ``-margin``, drawn
+    from ``default_rng(seed)`` in that order; ``eighths``: the diagonal of ``A`` rounded to
+    eighths (the coefficients ``A_aa + A_bb`` of ``A^T P + P A`` are then exact in floating
+    point), shifted by eighths until the abscissa is at most ``-0.1``."""
+    rng = np.random.default_rng(seed)
+    A = rng.standard_normal((n, n))
+    A -= (max(np.linalg.eigvals(A).real) + margin) * np.eye(n)
+    if eighths:
+        A[np.diag_indices(n)] = np.round(A[np.diag_indices(n)] * 8) / 8
+        while max(np.linalg.eigvals(A).real) >= -0.1:
+            A -= 0.125 * np.eye(n)
+    return A, rng.standard_normal((n, 2)), rng.standard_normal((2, n))
+
+
 def hinf_norm(A, B, C, tol=1e-12):
     """Bracket ``(lo, hi)`` of the H-infinity norm of (A, B, C, 0) by bisection on the
     imaginary-axis eigenvalues of the Hamiltonian (independent of any LMI solver)."""

@@ -13,7 +13,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from certify_helpers import hinf_norm
+from certify_helpers import hinf_norm, stable_system
 
 import lmic.api
 from lmic.certify import audit_certificate, write_certificate
@@ -28,14 +28,7 @@ from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 def _system(n: int, seed: int, dyadic: bool):
     """A random stable system; with ``dyadic`` its diagonal is rounded to eighths, so the
     coefficients ``A_aa + A_bb`` of ``A^T P + P A`` are exact in floating point."""
-    rng = np.random.default_rng(seed)
-    A = rng.standard_normal((n, n))
-    A -= (max(np.linalg.eigvals(A).real) + 0.5) * np.eye(n)
-    if dyadic:
-        A[np.diag_indices(n)] = np.round(A[np.diag_indices(n)] * 8) / 8
-        while max(np.linalg.eigvals(A).real) >= -0.1:
-            A -= 0.125 * np.eye(n)
-    return A, rng.standard_normal((n, 2)), rng.standard_normal((2, n))
+    return stable_system(n, seed, eighths=dyadic)
 
 
 def _brl(n: int, seed: int, dyadic: bool = True):

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from certify_helpers import hinf_norm, stable_system
 
 import lmic.api
 import lmic.routes
@@ -16,37 +17,12 @@ from lmic.certify import certify
 from lmic.options import SolveOptions
 
 
-def hamiltonian_hinf(A: np.ndarray, B: np.ndarray, C: np.ndarray, tol: float = 1e-12) -> tuple[float, float]:
-    """``(lo, hi)`` around the H-infinity norm of ``(A, B, C, 0)``: ``gamma`` is above the norm
-    iff the Hamiltonian ``[[A, B B^T / g], [-C^T C / g, -A^T]]`` has no imaginary eigenvalue."""
-
-    def imaginary(g: float) -> bool:
-        H = np.block([[A, B @ B.T / g], [-C.T @ C / g, -A.T]])
-        ev = np.linalg.eigvals(H)
-        return bool(np.any(np.abs(ev.real) < 1e-8 * max(1.0, float(np.abs(ev).max()))))
-
-    lo, hi = 0.0, 1.0
-    while imaginary(hi):
-        lo, hi = hi, 2.0 * hi
-    while hi - lo > tol * hi:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if imaginary(mid) else (lo, mid)
-    return lo, hi
-
-
 def _brl(n: int, seed: int, eighths: bool = False) -> tuple[dict, tuple[float, float]]:
     """A random stable system; ``eighths``: the diagonal of ``A`` rounded to eighths (the IR's
     Lyapunov coefficients ``A_aa + A_bb`` are then exact: the exact face route proves the
     lower end, lmic.certify.enclosure_face)."""
-    rng = np.random.default_rng(100 + seed)
-    A = rng.standard_normal((n, n))
-    A -= (max(np.linalg.eigvals(A).real) + 0.5) * np.eye(n)
-    if eighths:
-        A[np.diag_indices(n)] = np.round(A[np.diag_indices(n)] * 8) / 8
-        while max(np.linalg.eigvals(A).real) >= -0.1:
-            A -= 0.125 * np.eye(n)
-    B, C = rng.standard_normal((n, 2)), rng.standard_normal((2, n))
-    return {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}, hamiltonian_hinf(A, B, C)
+    A, B, C = stable_system(n, 100 + seed, eighths=eighths)
+    return {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}, hinf_norm(A, B, C)
 
 
 def _checked(r, lo: float, hi: float) -> dict:
@@ -176,20 +152,19 @@ def test_escalation_only_when_another_solver_can_close_the_gap(monkeypatch):
     system, (lo, hi) = _brl(4, 5)
     real = lmic.routes.enclosure_of
 
-    def without_lower_end(problem, sol, cert, exact, backend, options, budget_s=None, target=None):
-        enc, t = real(problem, sol, cert, exact, backend, options, budget_s, target)
-        return dict(enc, lower=None, rel_gap=None, gap=None), t
+    def without(end):
+        def enclosure_of(problem, sol, cert, exact, backend, options, budget_s=None, target=None):
+            enc, t = real(problem, sol, cert, exact, backend, options, budget_s, target)
+            return dict(enc, **{end: None}, rel_gap=None, gap=None), t
 
-    monkeypatch.setattr(lmic.routes, "enclosure_of", without_lower_end)
+        return enclosure_of
+
+    monkeypatch.setattr(lmic.routes, "enclosure_of", without("lower"))
     r = lmic.api.solve("tutorial.bounded_real", system, backoff=0)
     assert r.verdict == "certified" and certify(r.problem, r.solution).verdict == "certified"
     assert len(r.route["steps"]) == 1 and r.enclosure["upper"] >= lo
 
-    def without_upper_end(problem, sol, cert, exact, backend, options, budget_s=None, target=None):
-        enc, t = real(problem, sol, cert, exact, backend, options, budget_s, target)
-        return dict(enc, upper=None, rel_gap=None, gap=None), t
-
-    monkeypatch.setattr(lmic.routes, "enclosure_of", without_upper_end)
+    monkeypatch.setattr(lmic.routes, "enclosure_of", without("upper"))
     r = lmic.api.solve("tutorial.bounded_real", system, backoff=0)
     assert r.verdict == "certified" and certify(r.problem, r.solution).verdict == "certified"
     assert len(r.route["steps"]) == 1 + lmic.routes.MAX_GAP_ESCALATIONS

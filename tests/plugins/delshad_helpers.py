@@ -57,6 +57,34 @@ def _sym(M):
     return (M + M.T) / 2
 
 
+def uio_thm4_1_block(P, d13, d23, rho, n: int, q: int):
+    """Paper C Theorem 4.1, LMI (25) (catalogue 4.3) as a CVXPY block, from its ``d13``, ``d23``
+    (``<< 0`` is the condition)."""
+    Z = np.zeros
+    return cp.bmat(
+        [
+            [-P, Z((n, q)), d13, np.eye(n)],
+            [Z((q, n)), -np.eye(q), d23, Z((q, n))],
+            [d13.T, d23.T, -P, Z((n, n))],
+            [np.eye(n), Z((n, q)), Z((n, n)), -rho * np.eye(n)],
+        ]
+    )
+
+
+def uir_big_block(PN, P, M, Gam, a13, a14, a33, a34, rho, n: int, nw: int, nh: int):
+    """Paper E Theorems 4.1 / 5.1, the main LMI (catalogue 6.2-6.3) as a CVXPY block from its
+    entries (``<< 0`` is the condition)."""
+    Z = np.zeros
+    return cp.bmat(
+        [
+            [PN + PN.T, P @ M, a13, a14],
+            [(P @ M).T, -Gam, Z((n, nw)), Z((n, nh))],
+            [a13.T, Z((nw, n)), a33, a34],
+            [a14.T, Z((nh, n)), a34.T, -rho * np.eye(nh)],
+        ]
+    )
+
+
 def cvx_max_margin(neg_strict: list, extra: list | None = None) -> float | None:
     """``max t`` s.t. ``M <= -t I`` for each ``M`` of ``neg_strict``, ``t <= 1``; returns t*.
 

@@ -301,15 +301,7 @@ def _uio(d: dict[str, np.ndarray]) -> tuple[str, float | None, float]:
     Yb, Kb, rho = cp.Variable((n, p)), cp.Variable((n, p)), cp.Variable()
     d13 = A.T @ P + (U @ C @ A).T @ P + (V @ C @ A).T @ Yb.T - C.T @ Kb.T
     d23 = D.T @ P + (U @ C @ D).T @ P + (V @ C @ D).T @ Yb.T
-    Z = np.zeros
-    M = cp.bmat(
-        [
-            [-P, Z((n, q)), d13, np.eye(n)],
-            [Z((q, n)), -np.eye(q), d23, Z((q, n))],
-            [d13.T, d23.T, -P, Z((n, n))],
-            [np.eye(n), Z((n, q)), Z((n, n)), -rho * np.eye(n)],
-        ]
-    )
+    M = dh.uio_thm4_1_block(P, d13, d23, rho, n, q)
     return _solve(rho, [_sym(M) << 0, rho >= 0])
 
 
@@ -343,15 +335,7 @@ def _uir(item: str, d: dict[str, np.ndarray], params: dict[str, Any]) -> tuple[s
         mubar = cp.Variable()
         a33, objective = -mubar * np.eye(nw), lam * rho + (1 - lam) * mubar
         cons.append(mubar >= 0)
-    Z = np.zeros
-    big = cp.bmat(
-        [
-            [PN + PN.T, P @ M, a13, a14],
-            [(P @ M).T, -Gam, Z((n, nw)), Z((n, nh))],
-            [a13.T, Z((nw, n)), a33, a34],
-            [a14.T, Z((nh, n)), a34.T, -rho * np.eye(nh)],
-        ]
-    )
+    big = dh.uir_big_block(PN, P, M, Gam, a13, a14, a33, a34, rho, n, nw, nh)
     cons += [P >> 0, _sym(Gam - np.eye(n)) << 0, _sym(big) << 0, 1 - (1 + gamma0**2) * rho >= 0]
     return _solve(objective, cons)
 

@@ -17,6 +17,7 @@ from delshad_helpers import (
     example,
     largest_eig,
     pinv,
+    uio_thm4_1_block,
     with_fixed_margin,
 )
 
@@ -213,15 +214,7 @@ def _cvx_thm4_1(d):
     P = cp.Variable((n, n), symmetric=True)
     Yb, Kb, rho = cp.Variable((n, p)), cp.Variable((n, p)), cp.Variable()
     d13, d23 = _deltas(d, P, Yb, Kb)
-    Z = np.zeros
-    M = cp.bmat(
-        [
-            [-P, Z((n, q)), d13, np.eye(n)],
-            [Z((q, n)), -np.eye(q), d23, Z((q, n))],
-            [d13.T, d23.T, -P, Z((n, n))],
-            [np.eye(n), Z((n, q)), Z((n, n)), -rho * np.eye(n)],
-        ]
-    )
+    M = uio_thm4_1_block(P, d13, d23, rho, n, q)
     return cvx_min(rho, [M], [rho])
 
 

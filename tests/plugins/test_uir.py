@@ -18,6 +18,7 @@ from delshad_helpers import (
     example,
     pinv,
     point,
+    uir_big_block,
 )
 
 from lmic.api import solve
@@ -239,15 +240,7 @@ def _cvx_robust(d, gamma0, mu=None, lam=None):
     else:
         mubar = cp.Variable()
         a33, objective, scalars = -mubar * np.eye(nw), lam * rho + (1 - lam) * mubar, [rho, mubar]
-    Z = np.zeros
-    big = cp.bmat(
-        [
-            [PN + PN.T, P @ M, a13, a14],
-            [(P @ M).T, -Gam, Z((n, nw)), Z((n, nh))],
-            [a13.T, Z((nw, n)), a33, a34],
-            [a14.T, Z((nh, n)), a34.T, -rho * np.eye(nh)],
-        ]
-    )
+    big = uir_big_block(PN, P, M, Gam, a13, a14, a33, a34, rho, n, nw, nh)
     side = [1 - (1 + gamma0**2) * rho >= MARGIN]  # (40), strict
     return cvx_min(objective, [-P, Gam - np.eye(n), big], scalars, side)
 
