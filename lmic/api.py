@@ -105,7 +105,7 @@ class Result:
     @property
     def verdict(self) -> str:
         """The outcome's verdict (:data:`lmic.outcome.VERDICTS`: ``certified``, ``rejected``,
-        ``undecided``, ``infeasible-certified``, ``infeasible-bounded``)."""
+        ``undecided``, ``infeasible-certified``, ``infeasible-bounded``, ``unbounded-certified``)."""
         if self.outcome is not None:
             return str(self.outcome.verdict)
         from lmic.outcome import verdict_of
@@ -148,7 +148,7 @@ class Result:
 
     def exit_code(self) -> int:
         """:func:`lmic.outcome.exit_code` of the verdict (0 certified, 1 rejected / undecided,
-        3 infeasible-certified, 4 infeasible-bounded)."""
+        3 infeasible-certified, 4 infeasible-bounded, 5 unbounded-certified)."""
         from lmic.outcome import exit_code
 
         return exit_code(self.verdict)
@@ -189,6 +189,8 @@ class Result:
             "route": self.route,  # lmic.routes: the backends tried, their method and verdict
             # -- optimal-value enclosure (lmic.certify.enclosure) --
             "enclosure": _enclosure_summary(self.enclosure),
+            # -- unboundedness (lmic.route_unbounded): the exact improving ray --
+            "unbounded": getattr(self.outcome, "unbounded", None),
             "backoff": to_jsonable(self.backoff),
             "exit_code": self.exit_code(),
         }
@@ -381,6 +383,8 @@ def solve(
     enc: dict[str, Any] | None
     if routed.enclosure is not None:  # computed by the route (its --gap test)
         enc, enclosure_s = routed.enclosure, routed.enclosure_s
+    elif outcome.verdict == "unbounded-certified":  # no optimum: nothing to enclose or back off
+        enc, enclosure_s = None, 0.0
     else:
         enc, enclosure_s = _enclosure(problem, sol, cert, exact, used, options)
     tight_x = enc.pop("tight_x", None) if enc is not None else None

@@ -16,6 +16,10 @@ verdict                    meaning                                              
                            (:func:`lmic.certify.farkas.scope`)
 ``infeasible-bounded``     only "no solution with ``||x||_inf <= R``"; never called     4
                            infeasible
+``unbounded-certified``    an optimisation problem with no optimum: a certified         5
+                           feasible point and an exact improving ray (the optimal
+                           value is ``-inf`` for ``min``, ``+inf`` for ``max``;
+                           :mod:`lmic.route_unbounded`)
 ``interrupted``            Ctrl-C (``lmic: interrupted``)                               130
 =========================  ==========================================================  =====
 
@@ -60,6 +64,7 @@ EXIT_CODES: dict[str, int] = {
     "bad input": 2,
     "infeasible-certified": 3,
     "infeasible-bounded": 4,
+    "unbounded-certified": 5,
     "interrupted": 130,
 }
 VERDICTS = tuple(EXIT_CODES)
@@ -70,7 +75,7 @@ def exit_code(outcome: Outcome | str) -> int:
     """The exit code of an outcome (or of a verdict string); unknown verdicts are ``undecided``.
 
     >>> [exit_code(v) for v in VERDICTS]
-    [0, 1, 1, 2, 3, 4, 130]
+    [0, 1, 1, 2, 3, 4, 5, 130]
     """
     verdict = outcome if isinstance(outcome, str) else outcome.verdict
     return EXIT_CODES.get(verdict, 1)
@@ -82,7 +87,8 @@ def rank(verdict: str) -> int:
     >>> rank("certified") > rank("infeasible-bounded") > rank("rejected") > rank("undecided")
     True
     """
-    return {"certified": 4, "infeasible-certified": 4, "infeasible-bounded": 2, "rejected": 1}.get(verdict, 0)
+    decided = ("certified", "infeasible-certified", "unbounded-certified")
+    return 4 if verdict in decided else {"infeasible-bounded": 2, "rejected": 1}.get(verdict, 0)
 
 
 @dataclass
@@ -170,6 +176,8 @@ class Outcome:
     solution: Any = field(default=None, repr=False)
     certificate: Any = field(default=None, repr=False)
     backend: str | None = None
+    #: ``unbounded-certified``: the exact improving ray (:mod:`lmic.route_unbounded`)
+    unbounded: dict[str, Any] | None = field(default=None, repr=False)
 
     def exit_code(self) -> int:
         """:func:`exit_code` of this outcome."""
@@ -177,8 +185,8 @@ class Outcome:
 
     @property
     def decided(self) -> bool:
-        """A certified point or a global infeasibility proof."""
-        return self.verdict in ("certified", "infeasible-certified")
+        """A certified point, a global infeasibility proof or a proof of unboundedness."""
+        return self.verdict in ("certified", "infeasible-certified", "unbounded-certified")
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (without the solution and certificate objects)."""
@@ -189,6 +197,7 @@ class Outcome:
             "backend": self.backend,
             "attempts": [a.to_dict() for a in self.attempts],
             "exit_code": self.exit_code(),
+            "unbounded": self.unbounded,
         }
 
 

@@ -54,6 +54,8 @@ from lmic.route_rule import (
     gap_escalates,
     ray_proof_s,
 )
+from lmic.route_unbounded import unbounded_checked as _unbounded_checked
+from lmic.route_unbounded import unbounded_outcome
 
 __all__ = [
     "RouteResult",
@@ -467,10 +469,10 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
                 step["escalate"] = "gap not met"
                 names = names[: k + 1] + [nm for nm in names[k + 1 :] if method_of(nm) != "first-order"]
             continue  # a first-order point whose gap is too wide: polish
-        if out.verdict == "infeasible-certified":
+        if out.verdict in ("infeasible-certified", "unbounded-certified"):
             break
         if out.verdict == "undecided" and getattr(out.evidence, "kind", "") == "exact-proof":
-            break  # proved unbounded (or dual infeasible): lmic.policy.unbounded_outcome
+            break  # proved dual infeasible, feasibility not decided: lmic.route_unbounded
         if out.verdict == "infeasible-bounded":
             bounded += 1
             if bounded >= 2:
@@ -492,72 +494,6 @@ def _tighter(enc: dict[str, Any] | None, best_enc: dict[str, Any] | None, out: O
         return False
     new, old = (enc or {}).get("rel_gap"), (best_enc or {}).get("rel_gap")
     return old is None or (new is not None and new <= old)
-
-
-def unbounded_outcome(problem: Problem, best: Outcome, options: Any = None) -> Outcome:
-    """A solver said ``unbounded``: prove what can be proved about it.
-
-    The improving rays of ``problem`` (:func:`lmic.certify.farkas_unbounded.ray_problem`) are
-    decided by this policy; a ray is proved exactly
-    (:func:`~lmic.certify.farkas_unbounded.prove_improving_ray`), and the problem's feasibility
-    is decided too. Then ``reason`` says exactly what holds: with an exact ray and a certified
-    point, the objective is unbounded (no optimum: the optimal value is infinite); with an exact
-    ray only, "unbounded or infeasible"; with a feasibility problem proved infeasible, the
-    global infeasibility proof is the outcome. The verdict stays ``undecided`` (exit 1) unless
-    infeasibility is proved: the outcome vocabulary has no word for "unbounded", and an
-    unbounded problem has no optimum point to certify.
-
-    >>> from lmic.testing.conformance import lyapunov_problem
-    >>> import numpy as np
-    >>> o = Outcome("undecided", None, "unbounded")
-    >>> unbounded_outcome(lyapunov_problem(-np.eye(1)), o).verdict  # a feasibility problem: nothing to do
-    'undecided'
-    """
-    from lmic.certify.farkas_unbounded import prove_improving_ray, ray_problem
-    from lmic.outcome import Evidence
-    from lmic.policy import decide, feasibility_problem
-
-    if problem.objective.sense == "feasibility":
-        return best
-    ray_out = decide(ray_problem(problem), None, options, rescue=False)
-    ray = None
-    if ray_out.verdict == "certified" and ray_out.solution is not None and ray_out.solution.x is not None:
-        ray = prove_improving_ray(problem, ray_out.solution.x)
-    feas = decide(feasibility_problem(problem), None, options)
-    if feas.verdict == "infeasible-certified":
-        feas.attempts = best.attempts + ray_out.attempts + feas.attempts
-        return feas
-    word = "below" if problem.objective.sense == "min" else "above"
-    if ray is not None and ray["proven"]:
-        if feas.verdict == "certified":
-            inf = "-inf" if word == "below" else "+inf"
-            statement = (
-                f"unbounded {word}: a certified feasible point and an exact improving ray "
-                f"(q.d = {ray['slope']:.3g}); the optimal value is {inf}, no optimum exists (the dual is infeasible)"
-            )
-        else:
-            statement = (
-                f"the dual is infeasible (an exact improving ray, q.d = {ray['slope']:.3g}): the problem is unbounded "
-                f"{word} if it has a feasible point, else infeasible; feasibility not decided ({feas.verdict})"
-            )
-        out = Outcome("undecided", Evidence("exact-proof", None, statement), statement, solution=best.solution)
-        out.certificate, out.backend = (
-            feas.certificate if feas.verdict == "certified" else best.certificate,
-            best.backend,
-        )
-        out.attempts = best.attempts + ray_out.attempts + feas.attempts
-        return out
-    why = ray["reason"] if ray is not None else f"no improving ray found ({ray_out.verdict})"
-    best.reason = f"{best.reason}; the solver reports unbounded, not proved: {why}".lstrip("; ")
-    return best
-
-
-def _unbounded_checked(problem: Problem, out: Outcome, options: Any) -> Outcome:
-    """:func:`unbounded_outcome` when a solve of an optimisation problem said ``unbounded``."""
-    said = any(a.status == "unbounded" for a in out.attempts)
-    if out.decided or problem.objective.sense == "feasibility" or not said:
-        return out
-    return unbounded_outcome(problem, out, options)
 
 
 def _score(out: Outcome) -> float:

@@ -462,6 +462,13 @@ def audit_certificate(
                 doc, "backoff", f"backoff differs: recorded {rec_b.get('verdict')}, recomputed {cb.verdict}", cert, **kw
             )
         checked.append("backoff")
+    if doc.get("unbounded") is not None:  # -- unbounded-certified: the exact ray (lmic.route_unbounded) --
+        from lmic.certify.farkas_unbounded import audit_unbounded
+
+        unb = audit_unbounded(problem, doc["unbounded"])
+        if not unb["ok"]:
+            return _fail(doc, unb["field"], unb["message"], cert, **kw)
+        checked.append("unbounded (exact ray)")
     if hashed is not None:
         return _fail(doc, hashed[0], hashed[1], cert, **kw)
     checked.append("integrity")
@@ -480,6 +487,9 @@ def audit_certificate(
             )
     shown = cert
     msg = f"every hash and number matches ({label}); verdict {cert.label}"
+    if doc.get("unbounded") is not None:
+        word = "below" if problem.objective.sense == "min" else "above"
+        msg += f"; unbounded {word} (exact improving ray re-proved): no optimum"
     if exact and not recorded_exact:
         # asked for a proof the file does not record: run it, report it, compare nothing new
         shown = certify(problem, solution, exact=True, tol=final)

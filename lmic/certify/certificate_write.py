@@ -96,6 +96,7 @@ def certificate_document(
     embed_ir: bool | None = None,
     enclosure: dict[str, Any] | None = None,
     backoff: dict[str, Any] | None = None,
+    unbounded: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """The certificate file's content as a dict (see the module docstring).
 
@@ -115,6 +116,10 @@ def certificate_document(
         the ``enclosure`` section with its dual point; the audit re-verifies both ends.
     backoff : dict, optional
         The backed-off point (:func:`lmic.backoff.backoff`); the audit re-certifies it.
+    unbounded : dict, optional
+        An ``unbounded-certified`` outcome's exact improving ray
+        (:mod:`lmic.route_unbounded`): the audit re-proves it exactly, and the point is the
+        certified feasible point.
 
     Examples
     --------
@@ -196,6 +201,8 @@ def certificate_document(
         doc["enclosure"] = enclosure
     if backoff is not None:  # -- backed-off point (lmic.backoff) --
         doc["backoff"] = backoff
+    if unbounded is not None:  # -- unboundedness: exact improving ray (lmic.route_unbounded) --
+        doc["unbounded"] = unbounded
     doc = _json(doc)
     doc["integrity"] = integrity_of(doc)
     return doc
@@ -264,6 +271,7 @@ def write_certificate(
     embed_ir: bool | None = None,
     enclosure: dict[str, Any] | None = None,
     backoff: dict[str, Any] | None = None,
+    unbounded: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Write a certificate file atomically (temporary file + rename); return its content.
 
@@ -292,6 +300,7 @@ def write_certificate(
         embed_ir=embed_ir,
         enclosure=enclosure,
         backoff=backoff,
+        unbounded=unbounded,
     )
     text = json.dumps(doc, indent=1, allow_nan=False) + "\n"
     write_output(path, text)  # atomic; the output-path rules of lmic.output

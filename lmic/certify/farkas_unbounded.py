@@ -39,7 +39,7 @@ import scipy.sparse as sp
 
 from lmic.ir.problem import LinearConstraints, Objective, Problem
 
-__all__ = ["ray_problem", "prove_improving_ray", "RAY_BITS"]
+__all__ = ["ray_problem", "prove_improving_ray", "audit_unbounded", "RAY_BITS"]
 
 #: the ray is rounded to a multiple of ``2^-RAY_BITS`` (relative to its largest entry)
 RAY_BITS = 30
@@ -50,11 +50,13 @@ def _q(problem: Problem) -> np.ndarray:
     return s * np.asarray(problem.objective.c, dtype=float)
 
 
-def ray_problem(problem: Problem) -> Problem:
+def ray_problem(problem: Problem, strict: bool = True) -> Problem:
     """The feasibility problem of improving rays of ``problem`` (module docstring).
 
-    Every LMI keeps its homogeneous part only (constant column zero) and is made strict; every
-    row keeps its kind with a zero constant; one row ``-1 - q . d >= 0`` is added.
+    Every LMI keeps its homogeneous part only (constant column zero) and is made strict (with
+    ``strict=False``: non-strict, for rays on the boundary of the recession cone, e.g. when a
+    homogeneous part has a zero diagonal entry); every row keeps its kind with a zero constant;
+    one row ``-1 - q . d >= 0`` is added.
 
     >>> import scipy.sparse as sp
     >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
@@ -68,7 +70,7 @@ def ray_problem(problem: Problem) -> Problem:
     for lmi in problem.lmis:
         C = sp.csc_matrix(lmi.coeffs, copy=True).tolil()
         C[:, 0] = 0.0
-        lmis.append(dataclasses.replace(lmi, coeffs=sp.csc_matrix(C), strict=True))
+        lmis.append(dataclasses.replace(lmi, coeffs=sp.csc_matrix(C), strict=strict))
     lin = problem.linear
     q = _q(problem)
     row = sp.csr_matrix(np.concatenate([[-1.0], -q[1:]])[None, :])
@@ -106,15 +108,24 @@ def prove_improving_ray(problem: Problem, d: np.ndarray) -> dict[str, Any]:
         ``proven`` (bool), ``reason``, ``ray`` (the rounded ray as strings of fractions when
         proven), ``slope`` (``q . d``, a float rounded from the exact value).
     """
-    from lmic.certify.exact import exact_matrix, round_point
-    from lmic.certify.psd import prove_psd
+    from lmic.certify.exact import round_point
 
     d = np.asarray(d, dtype=float).ravel()
     if d.size != problem.n or not np.all(np.isfinite(d)) or not np.any(d):
         return {"proven": False, "reason": "no finite non-zero ray of the right length"}
     top = float(np.max(np.abs(d)))
     point = round_point(d / top, RAY_BITS)  # a positive multiple of a ray is a ray
+    return _prove_rational_ray(problem, point)
+
+
+def _prove_rational_ray(problem: Problem, point: Any) -> dict[str, Any]:
+    """:func:`prove_improving_ray` on an exact rational ray (an :class:`ExactPoint`)."""
+    from lmic.certify.exact import exact_matrix
+    from lmic.certify.psd import prove_psd
+
     dq = [Fraction(v) for v in point.fractions()]
+    if not any(dq):
+        return {"proven": False, "reason": "the ray is zero"}
     q = _q(problem)
     slope = _exact_dot(q[1:], dq)
     if not slope < 0:
@@ -143,3 +154,62 @@ def prove_improving_ray(problem: Problem, d: np.ndarray) -> dict[str, Any]:
         "ray": [str(v) for v in dq],
         "slope": float(slope),
     }
+
+
+def audit_unbounded(problem: Problem, record: Any) -> dict[str, Any]:
+    """Re-prove a certificate's ``unbounded`` section: its ray, exactly, on ``problem``.
+
+    The ray is read from fraction strings (``"-3/8"``; no evaluation of text), every condition
+    of an improving ray is proved again in rational arithmetic, and the recorded ``sense`` and
+    ``slope`` must match the problem and the exact ``q.d`` rounded to float.
+
+    Returns
+    -------
+    dict
+        ``ok`` (bool), ``field`` (the first field at fault, or ``None``) and ``message``.
+
+    Examples
+    --------
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t >= 1", 1, sp.csc_matrix([[-1.0, 1.0]]))],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, -1.0]))
+    >>> audit_unbounded(p, {"ray": ["1"], "slope": -1.0, "sense": "min"})["ok"]
+    True
+    >>> audit_unbounded(p, {"ray": ["-1"], "slope": 1.0, "sense": "min"})["field"]
+    'unbounded.ray'
+    """
+    import math
+    import re
+
+    from lmic.certify.exact import ExactPoint
+
+    def fail(fld: str, why: str) -> dict[str, Any]:
+        return {"ok": False, "field": fld, "message": why}
+
+    if not isinstance(record, dict):
+        return fail("unbounded", "unbounded is not an object")
+    if record.get("sense") != problem.objective.sense or problem.objective.sense == "feasibility":
+        return fail(
+            "unbounded.sense",
+            f"unbounded.sense is {record.get('sense')!r}, the IR's objective {problem.objective.sense!r}",
+        )
+    ray = record.get("ray")
+    pattern = re.compile(r"-?[0-9]+(/[0-9]+)?")
+    if not isinstance(ray, list) or len(ray) != problem.n:
+        return fail("unbounded.ray", f"unbounded.ray needs {problem.n} entries")
+    if not all(isinstance(v, str) and pattern.fullmatch(v) for v in ray):
+        return fail("unbounded.ray", "unbounded.ray entries must be integers or fractions 'p/q'")
+    try:
+        fracs = [Fraction(v) for v in ray]
+    except ZeroDivisionError:
+        return fail("unbounded.ray", "unbounded.ray has a zero denominator")
+    den = math.lcm(*(f.denominator for f in fracs)) if fracs else 1
+    res = _prove_rational_ray(problem, ExactPoint([int(f * den) for f in fracs], den))
+    if not res["proven"]:
+        return fail("unbounded.ray", f"the recorded ray is not an improving ray: {res['reason']}")
+    if record.get("slope") != res["slope"]:
+        return fail(
+            "unbounded.slope", f"unbounded.slope differs: recorded {record.get('slope')}, recomputed {res['slope']}"
+        )
+    return {"ok": True, "field": None, "message": res["reason"]}

@@ -62,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
     """Cross-check and print the table (or JSON)."""
     from lmic.commands._common import backend_names, check_executor_args, parse_params, print_json, solve_options
     from lmic.formatting import value_text
-    from lmic.studies.crosscheck import DEFAULT_RTOL, check_rtol, crosscheck
+    from lmic.studies.crosscheck import DECISIONS, DEFAULT_RTOL, check_rtol, crosscheck
 
     names = backend_names(args.backends)
     if args.rtol is not None:
@@ -150,6 +150,6 @@ def run(args: argparse.Namespace) -> int:
     for c in report.conflicts:
         console.print(f"  conflict: {c}", markup=False)
     for r in report.results:
-        if r["decision"] not in ("certified", "infeasible-certified", "infeasible-bounded"):
+        if r["decision"] not in DECISIONS:
             console.print(f"  failure {r['backend']}: {r['decision']}: {r.get('message') or r['status']}", markup=False)
     return report.exit_code()

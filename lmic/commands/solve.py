@@ -101,6 +101,7 @@ def _write_certificate(path: str, result: Any, system: Any) -> None:
         system=sysobj,
         enclosure=getattr(result, "enclosure", None),  # lmic.certify.enclosure
         backoff=getattr(result, "backoff", None),  # lmic.backoff
+        unbounded=getattr(result.outcome, "unbounded", None),  # lmic.route_unbounded
     )
 
 

@@ -24,6 +24,7 @@ _VERDICT_STYLE = {
     "unverified": "bold yellow",
     "undecided": "bold yellow",
     "infeasible-bounded": "bold cyan",
+    "unbounded-certified": "bold magenta",
 }
 
 
@@ -44,7 +45,9 @@ def print_result(
     if sol.message:
         head.add_row("message", sol.message)
     if result.objective is not None:
-        head.add_row("objective", f"{result.objective:.10g}")
+        # an unbounded problem has no optimum: the value is the certified point's, not an optimum
+        at = " (at the certified point; no optimum)" if result.verdict == "unbounded-certified" else ""
+        head.add_row("objective", f"{result.objective:.10g}{at}")
     if sol.strategy != "none":
         head.add_row("strict", f"{sol.strategy}, margin {format_value(sol.margin)}")
     cert = result.certificate_dict()

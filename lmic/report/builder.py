@@ -140,7 +140,17 @@ def _kv(rows: list[list[str]], cls: str = "kv no-math") -> str:
 
 
 def _badge(text: str) -> str:
-    good = text in ("certified", "infeasible-certified", "feasible", "optimal", "ok", "yes", "agree", "decayed")
+    good = text in (
+        "certified",
+        "infeasible-certified",
+        "unbounded-certified",
+        "feasible",
+        "optimal",
+        "ok",
+        "yes",
+        "agree",
+        "decayed",
+    )
     bad = text in ("rejected", "error", "infeasible", "VIOLATED", "FAILED", "no", "disagree", "did not decay")
     cls = "good" if good else ("bad" if bad else "warn")
     return f'<span class="badge {cls}">{_esc(text)}</span>'

@@ -52,7 +52,7 @@ __all__ = [
 ]
 
 #: verdicts that are decisions (the others are failures)
-DECISIONS = ("certified", "infeasible-certified", "infeasible-bounded")
+DECISIONS = ("certified", "infeasible-certified", "infeasible-bounded", "unbounded-certified")
 
 #: ``progress(done, total, backend, row)``: called before each backend (``row`` is ``None``) and
 #: after it (``row`` is its result row)
@@ -122,6 +122,14 @@ def conflicts(rows: list[dict[str, Any]], sense: str, rtol: float) -> tuple[list
     """
     found: list[str] = []
     points = [r for r in rows if r["decision"] == "certified"]
+    for r in rows:  # an unbounded problem has a feasible point and no optimum
+        if r["decision"] != "unbounded-certified":
+            continue
+        for q in rows:
+            if q["decision"] == "infeasible-certified":
+                found.append(f"{r['backend']} proves the problem unbounded but {q['backend']} proves it infeasible")
+            elif q["decision"] == "certified" and sense != "feasibility":
+                found.append(f"{q['backend']} certifies an optimum but {r['backend']} proves the problem unbounded")
     for r in points:
         for q in rows:
             if q["decision"] == "infeasible-certified":

@@ -28,9 +28,17 @@ from typing import Any
 __all__ = ["OUTCOMES", "outcome", "run_job", "run_reproduce_file", "run_crosscheck_backend"]
 
 #: the outcomes a study counts, in display order (HELPERS vocabulary plus ``error``)
-OUTCOMES = ("certified", "infeasible-certified", "infeasible-bounded", "rejected", "undecided", "error")
+OUTCOMES = (
+    "certified",
+    "infeasible-certified",
+    "infeasible-bounded",
+    "unbounded-certified",
+    "rejected",
+    "undecided",
+    "error",
+)
 
-_PASS = {"certified", "infeasible-certified", "infeasible-bounded", "rejected", "undecided"}
+_PASS = {"certified", "infeasible-certified", "infeasible-bounded", "unbounded-certified", "rejected", "undecided"}
 
 
 def outcome(kind: str, obj: Any) -> str:
@@ -65,6 +73,8 @@ def outcome(kind: str, obj: Any) -> str:
             return "certified"
         if obj.agree and verdicts == {"infeasible-certified"}:
             return "infeasible-certified"
+        if obj.agree and verdicts == {"unbounded-certified"}:
+            return "unbounded-certified"
         return "undecided"
     if kind == "maximize":
         if obj.lower is not None:

@@ -60,13 +60,80 @@ def test_ray_problem_points_are_rays() -> None:
     assert prove_improving_ray(p, out.solution.x)["proven"]
 
 
-def test_route_says_exactly_what_is_proved_for_an_unbounded_problem() -> None:
+@pytest.mark.parametrize("sense", ["min", "max"])
+def test_an_unbounded_problem_is_decided_with_a_point_and_an_exact_ray(sense: str) -> None:
+    from lmic.certify import certify
     from lmic.routes import decide_route
 
-    out = decide_route(_unbounded_problem(), "clarabel").outcome
-    assert out.verdict == "undecided" and out.exit_code() == 1  # no optimum exists to certify
+    p = _unbounded_problem(sense)
+    out = decide_route(p, "clarabel").outcome
+    assert out.verdict == "unbounded-certified" and out.exit_code() == 5  # a decision: no optimum exists
     assert out.evidence.kind == "exact-proof"
-    assert out.reason.startswith("unbounded below: a certified feasible point and an exact improving ray")
+    word = "below" if sense == "min" else "above"
+    assert out.reason.startswith(f"unbounded {word}: a certified feasible point and an exact improving ray")
+    # both halves, independently: the point meets t >= 1 (the closed-form feasible set) and is
+    # certified on the problem itself; the recorded ray is a positive multiple of the true one
+    assert out.solution.x[0] >= 1.0 and certify(p, out.solution).verdict == "certified"
+    assert out.unbounded["sense"] == sense and out.unbounded["ray"] == ["1"]
+    assert out.unbounded["slope"] == -1.0  # q.d with q = s c (s = -1 for max): -1 for both senses
+
+
+def test_a_ray_without_a_feasible_point_is_not_called_unbounded() -> None:
+    """min -t s.t. [[t, 1], [1, t]] >= 0 and t <= -2: the ray t -> +inf is improving for the
+    cone, but the problem is infeasible (t >= 1 and t <= -2): never unbounded-certified."""
+    from lmic.routes import decide_route
+
+    base = _unbounded_problem()
+    rows = LinearConstraints(sp.csr_matrix(np.array([[-2.0, -1.0]])), ["ge"], [False], ["t <= -2"])
+    p = Problem(base.variables, base.lmis, rows, base.objective)
+    out = decide_route(p, "clarabel").outcome
+    assert out.verdict != "unbounded-certified"
+    assert out.verdict in ("infeasible-certified", "infeasible-bounded"), out.reason
+
+
+def _write_unbounded_certificate(tmp_path: Path) -> tuple[Path, dict]:
+    import json
+
+    from lmic.api import solve
+    from lmic.certify.certificate_write import write_certificate
+
+    r = solve(_unbounded_problem(), backend="clarabel")
+    assert r.verdict == "unbounded-certified" and r.exit_code() == 5
+    assert r.enclosure is None and r.to_dict()["unbounded"]["ray"] == ["1"]
+    path = tmp_path / "unbounded.json"
+    write_certificate(path, r.problem, r.solution, r.certificate, unbounded=r.outcome.unbounded)
+    return path, json.loads(path.read_text())
+
+
+def test_the_certificate_of_an_unbounded_problem_audits_and_tampering_is_named(tmp_path: Path) -> None:
+    import json
+
+    from lmic.certify.certificate import audit_certificate
+
+    path, doc = _write_unbounded_certificate(tmp_path)
+    good = audit_certificate(path)
+    assert good.ok and "unbounded (exact ray)" in good.checked and "unbounded below" in good.message
+    for edit, field in [
+        (lambda d: d["unbounded"].__setitem__("ray", ["-1"]), "unbounded.ray"),  # objective increases
+        (lambda d: d["unbounded"].__setitem__("ray", ["0"]), "unbounded.ray"),
+        (lambda d: d["unbounded"].__setitem__("slope", -2.0), "unbounded.slope"),
+        (lambda d: d["unbounded"].__setitem__("sense", "max"), "unbounded.sense"),
+    ]:
+        bad = json.loads(json.dumps(doc))
+        edit(bad)
+        path.write_text(json.dumps(bad))
+        r = audit_certificate(path)
+        assert not r.ok and r.field == field, (field, r.field, r.message)
+
+
+def test_audit_unbounded_reads_fractions_only() -> None:
+    from lmic.certify.farkas_unbounded import audit_unbounded
+
+    p = _unbounded_problem()
+    assert audit_unbounded(p, {"ray": ["3/7"], "slope": -3 / 7, "sense": "min"})["ok"]
+    for ray in (["1e3"], ["__import__('os')"], ["1/0"], [1], ["1", "2"]):
+        res = audit_unbounded(p, {"ray": ray, "slope": -1.0, "sense": "min"})
+        assert not res["ok"] and res["field"] == "unbounded.ray", ray
 
 
 @pytest.mark.skipif(not (SDPLIB / "infd1.dat-s").exists(), reason="SDPLIB not available")
@@ -77,13 +144,15 @@ def test_sdplib_infd1_is_reported_dual_infeasible_and_unbounded() -> None:
 
     problem = read_sdpa(SDPLIB / "infd1.dat-s")
     r = decide_route(problem)
-    assert r.outcome.verdict == "undecided"
+    assert r.outcome.verdict == "unbounded-certified" and r.outcome.exit_code() == 5
     assert "unbounded below" in r.outcome.reason and "the dual is infeasible" in r.outcome.reason
     # the point behind "a certified feasible point" is certified against the feasibility problem
     from lmic.certify import certify
+    from lmic.certify.farkas_unbounded import audit_unbounded
 
     assert r.outcome.certificate is not None
     assert certify(feasibility_problem(problem), _solution(r.outcome.certificate.x)).verdict == "certified"
+    assert audit_unbounded(problem, r.outcome.unbounded)["ok"]
 
 
 def _solution(x: np.ndarray):

@@ -25,7 +25,7 @@ import yaml
 
 from lmic.api import solve
 from lmic.certify import certify
-from lmic.crosscheck import conflicts, crosscheck
+from lmic.crosscheck import assemble, conflicts, crosscheck
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 from lmic.outcome import EXIT_CODES, exit_code, verdict_of
 from lmic.solution import Solution
@@ -141,6 +141,25 @@ def test_crosscheck_semantics_failures_are_not_conflicts():
     assert conflicts(rows, "feasibility", 1e-3)[0] == []
     rows[1]["radius"] = 3.0
     assert conflicts(rows, "feasibility", 1e-3)[0]
+
+
+def test_crosscheck_unbounded_conflicts_with_an_optimum_and_with_infeasibility():
+    unb = {"backend": "u", "decision": "unbounded-certified", "objective": None, "x_norm": 1.0}
+    opt = {"backend": "a", "decision": "certified", "objective": 1.0, "x_norm": 2.0}
+    inf = {"backend": "b", "decision": "infeasible-certified", "objective": None}
+    assert conflicts([unb, dict(unb, backend="v")], "min", 1e-3)[0] == []
+    assert "proves the problem unbounded" in conflicts([unb, opt], "min", 1e-3)[0][0]
+    assert "proves it infeasible" in conflicts([unb, inf], "min", 1e-3)[0][0]
+    assert assemble("p", [unb, {"backend": "c", "decision": "undecided", "objective": None}], "min").agree
+
+
+def test_batch_counts_unbounded_as_its_own_outcome():
+    from lmic.api import solve
+    from lmic.studies.tasks import OUTCOMES, outcome
+    from lmic.testing.conformance import CASES
+
+    r = solve(CASES["unbounded"].build())
+    assert outcome("solve", r) == "unbounded-certified" and "unbounded-certified" in OUTCOMES
 
 
 def test_crosscheck_control1_agrees_with_failures_listed():

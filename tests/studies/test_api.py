@@ -36,9 +36,11 @@ def test_infeasible_exit_code():
     assert r.exit_code() == 3
 
 
-def test_unbounded_is_a_failed_solve():
+def test_a_proved_unbounded_problem_exits_5():
+    # max x1 s.t. [[1 + x1, x2], [x2, 1]] >= 0: x1 -> +inf along (1, 0) (closed form)
     r = solve(CASES["unbounded"].build())
-    assert r.status == "unbounded" and r.exit_code() == 1
+    assert r.verdict == "unbounded-certified" and r.exit_code() == 5
+    assert r.to_dict()["unbounded"]["sense"] == "max" and r.to_dict()["exit_code"] == 5
 
 
 def test_theorem_target_compiles_with_params():
