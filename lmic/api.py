@@ -46,7 +46,7 @@ if TYPE_CHECKING:
 __all__ = ["Result", "solve", "load_target", "solve_problem", "certify_solution", "EXIT_CODES"]
 
 #: exit codes (kept for callers of the old names; the table is :data:`lmic.outcome.EXIT_CODES`)
-EXIT_CODES = {"certified": 0, "failed": 1, "usage": 2, "infeasible": 3, "infeasible-bounded": 4}
+EXIT_CODES = {"certified": 0, "failed": 1, "usage": 2, "infeasible": 3, "infeasible-bounded": 4, "unbounded": 5}
 
 _FILE_SUFFIXES = (".json", ".dat-s")
 

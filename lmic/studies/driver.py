@@ -97,6 +97,7 @@ class _Bar:
             "certified": "ok",
             "infeasible-certified": "inf",
             "infeasible-bounded": "bnd",
+            "unbounded-certified": "unb",
             "rejected": "rej",
             "undecided": "?",
             "error": "err",

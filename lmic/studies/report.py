@@ -29,6 +29,7 @@ COLOURS = {
     "certified": "#2e9e44",
     "infeasible-certified": "#c0392b",
     "infeasible-bounded": "#f08a5d",
+    "unbounded-certified": "#2874a6",
     "rejected": "#8e44ad",
     "undecided": "#bdbdbd",
     "error": "#222222",
