@@ -18,6 +18,7 @@ import importlib
 import sys
 import traceback
 from collections.abc import Sequence
+from typing import Any
 
 from lmic import __version__
 from lmic.errors import LmicError
@@ -159,8 +160,58 @@ def _notes_as_lines() -> None:
         warnings.showwarning = show
 
 
+#: numpy's lazily imported submodules that SciPy's array-API shim imports only to copy them into its
+#: own namespace (``scipy._lib.array_api_compat.numpy`` runs ``from numpy import *`` and
+#: ``getattr(numpy, name)`` for every name of ``dir(numpy)``): ``numpy.f2py`` (and through it
+#: ``charset_normalizer``), ``numpy.testing`` (``unittest``, ``importlib.metadata``) and
+#: ``numpy.ma``. No lmic code path uses them; SciPy's namespace reads them only for CuPy and
+#: PyTorch arrays. Measured: 60-120 ms of every ``lmic solve`` process (``python -X importtime``).
+_UNUSED_NUMPY_SUBMODULES = frozenset({"f2py", "testing", "ma"})
+_SHIM = "scipy._lib.array_api_compat.numpy"
+
+
+class _LeanNumpyNames:
+    """While a command runs: the first import of SciPy's array-API shim sees ``numpy.__all__``
+    and ``dir(numpy)`` without :data:`_UNUSED_NUMPY_SUBMODULES`, so it does not import them.
+    Nothing else changes: ``numpy.f2py`` etc. still import on first use, and both names lists
+    are whole again when the command returns.
+
+    >>> with _LeanNumpyNames():
+    ...     pass
+    """
+
+    def __enter__(self) -> _LeanNumpyNames:
+        self._saved: tuple[Any, Any, Any] | None = None
+        if _SHIM not in sys.modules:
+            sys.meta_path.insert(0, self)
+        return self
+
+    def find_spec(self, name: str, path: Any = None, target: Any = None) -> None:
+        """Before the shim is imported (numpy is by then): hide the unused names."""
+        if name == _SHIM and self._saved is None:
+            numpy: Any = sys.modules.get("numpy")
+            full_dir, full_all = getattr(numpy, "__dir__", None), getattr(numpy, "__all__", None)
+            if numpy is not None and callable(full_dir) and isinstance(full_all, list):
+                self._saved = (numpy, full_dir, full_all)
+                numpy.__all__ = [n for n in full_all if n not in _UNUSED_NUMPY_SUBMODULES]
+                numpy.__dir__ = lambda: [n for n in full_dir() if n not in _UNUSED_NUMPY_SUBMODULES]
+        return None  # the ordinary finders import it
+
+    def __exit__(self, *exc: object) -> None:
+        if self in sys.meta_path:
+            sys.meta_path.remove(self)
+        if self._saved is not None:
+            numpy, full_dir, full_all = self._saved
+            numpy.__dir__, numpy.__all__ = full_dir, full_all  # the module's own functions and list
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit code."""
+    with _LeanNumpyNames():
+        return _main(argv)
+
+
+def _main(argv: Sequence[str] | None = None) -> int:
     _notes_as_lines()
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv  # accepted anywhere: lmic --debug solve ..., lmic solve ... --debug
