@@ -29,8 +29,12 @@ a fresh forked child with a time limit (``qib.thm1``'s plan analysed once in the
 are whole in-process times of the call; medians; ``x lmic`` is the ratio of a method's median to
 default lmic's. ``--cli`` adds a one-shot ``lmic solve`` process for the default route, with a warm
 plan cache (a folder of its own, filled by one run before the rounds: the analysed plan is read,
-not recomputed, as in any run after the first): ``cli s`` is its wall time, ``cli%`` lmic's share
-of it (everything but the solver's own time), ``start s`` the interpreter start and the imports
+not recomputed, as in any run after the first), and in the same rounds a baseline process
+``python -c "import numpy, scipy.sparse, scs"`` (``base s``: what any script calling SCS on
+sparse data pays before its first line). ``cli s`` is the one-shot run's wall time; its two
+shares: ``cli%a``, everything but the solver's own time, interpreter included (``1 - solver /
+wall``), and ``cli%b``, lmic's own time beyond the baseline (``(wall - base - solver) / wall``,
+the baseline of the same round); ``start s`` the interpreter start and the imports
 (``benchmarks/startup.py``'s split; its ``--split`` table has every phase). Usage::
 
     python benchmarks/routes.py --quick          # a few minutes
@@ -204,11 +208,47 @@ def _cli(target: str, system: dict[str, Any]) -> dict[str, Any]:
     return {
         "total_s": parts["wall"],
         "share": parts["share"],
+        "solver_s": parts["solver"],
         "start_s": parts["python"] + parts["imports"],
         "verdict": rec["verdict"],
         "sympy": rec["sympy"],
         "status": f"exit {rec['rc']}",
     }
+
+
+#: what any Python script calling SCS on sparse data must import: the baseline of a one-shot run
+BASELINE_IMPORTS = "import numpy, scipy.sparse, scs"
+
+
+def _baseline() -> dict[str, Any]:
+    """One ``python -c "import numpy, scipy.sparse, scs"`` process (same environment as ``_cli``):
+    the interpreter's start and exit and the imports any script using the solver pays."""
+    import subprocess
+
+    from startup import _env
+
+    t0 = time.perf_counter()
+    out = subprocess.run([sys.executable, "-c", BASELINE_IMPORTS], env=_env(), capture_output=True, text=True)
+    return {"total_s": time.perf_counter() - t0, "status": f"exit {out.returncode}", "verdict": "baseline"}
+
+
+def cli_shares(cli_rows: list[dict[str, Any]], base_rows: list[dict[str, Any]]) -> tuple[float | None, float | None]:
+    """Medians over the rounds of the two shares of a one-shot run (percent).
+
+    ``(a)``: everything but the solver's own time, interpreter included (``1 - solver / wall``);
+    ``(b)``: lmic's own time beyond the baseline process of the same round
+    (``(wall - baseline - solver) / wall``).
+
+    >>> cli_shares([{"total_s": 1.0, "solver_s": 0.5}], [{"total_s": 0.3}])
+    (50.0, 20.0)
+    """
+    a = [100 * (1 - r["solver_s"] / r["total_s"]) for r in cli_rows if r.get("total_s") and "solver_s" in r]
+    b = [
+        100 * (r["total_s"] - base["total_s"] - r["solver_s"]) / r["total_s"]
+        for r, base in zip(cli_rows, base_rows, strict=False)
+        if r.get("total_s") and "solver_s" in r and isinstance(base.get("total_s"), int | float)
+    ]
+    return (statistics.median(a) if a else None), (statistics.median(b) if b else None)
 
 
 def _plant(tid: str, n: int, seed: int) -> dict[str, Any]:
@@ -271,7 +311,8 @@ def feasibility(
     """The qib.thm1 table (``warm_child``: see :func:`_warmed`; ``clarabel``: the CVXPY + Clarabel column)."""
     heads = [("n", 3), ("lmic s", 8), ("lmic%", 6), ("bind%", 6), ("route%", 6), ("cert%", 6), ("it", 3)]
     heads += [("verdict", 10), ("cvxpy+clarabel s", 17), ("x lmic", 7)]
-    heads += [("expert scs s", 13), ("x lmic", 7), ("verdict", 10), ("cli s", 7), ("cli%", 5), ("start s", 8)]
+    heads += [("expert scs s", 13), ("x lmic", 7), ("verdict", 10), ("cli s", 7), ("cli%a", 6), ("cli%b", 6)]
+    heads += [("base s", 7), ("start s", 8)]
     lines = [" ".join(f"{h:>{w}}" for h, w in heads) + "  route"]
     for n in sizes:
         system = random_qib_system(n)
@@ -292,6 +333,7 @@ def feasibility(
             if "modules" not in _CLI:
                 _cli_warm_up("qib.thm1", system)
             jobs.append(("cli", _cli, ("qib.thm1", system)))
+            jobs.append(("baseline", _baseline, ()))
         res = _rounds(jobs, repeat, limit, f"qib n={n}")
         res.setdefault("cvxpy:CLARABEL", [])
         lm, cv, ex = (_med(res[k], "total_s") for k in ("lmic", "cvxpy:CLARABEL", "expert"))
@@ -303,18 +345,19 @@ def feasibility(
         cells += [(_med(res["lmic"], "iterations"), 3, ".0f")]
         cells += [(str(last.get("verdict"))[:10], 10, ""), (cv_txt, 17, ""), (ratio(cv, lm), 7, ".1f")]
         cells += [(ex, 13, ".3f"), (ratio(ex, lm), 7, ".1f"), (str(res["expert"][-1].get("verdict"))[:10], 10, "")]
-        cli_share = _med(res.get("cli", []), "share")
-        cells += [(_med(res.get("cli", []), "total_s"), 7, ".3f")]
-        cells += [
-            (None if cli_share is None else 100 * cli_share, 5, ".0f"),
-            (_med(res.get("cli", []), "start_s"), 8, ".3f"),
-        ]
+        share_a, share_b = cli_shares(res.get("cli", []), res.get("baseline", []))
+        cells += [(_med(res.get("cli", []), "total_s"), 7, ".3f"), (share_a, 6, ".0f"), (share_b, 6, ".0f")]
+        cells += [(_med(res.get("baseline", []), "total_s"), 7, ".3f"), (_med(res.get("cli", []), "start_s"), 8, ".3f")]
         lines.append(_row(cells) + "  " + str(last.get("route", "")))
     lines.append("  lmic%: lmic's own share of its in-process time (everything but the solver's own time), the")
     lines.append("  median of the per-run shares; bind% / route% / cert%: compile, the route (reduction, lowering,")
     lines.append("  iterate tests, result mapping) and the certification; it: the solver's iterations")
     if cli:
-        lines.append("  cli%: lmic's share of a warm one-shot process (1 - solver / wall); start s: python + imports")
+        lines.append("  cli s: a warm one-shot 'lmic solve' process (plan cache warm); two shares of it, medians of")
+        lines.append("  the per-round values: cli%a = everything but the solver's own time, interpreter included")
+        lines.append("  (1 - solver / wall); cli%b = lmic's own time beyond the baseline process of the same round")
+        lines.append(f"  ((wall - base - solver) / wall), base s = python -c '{BASELINE_IMPORTS}' (interpreter")
+        lines.append("  start and exit plus the imports any script calling SCS pays); start s: python + imports")
     return lines
 
 
