@@ -155,8 +155,8 @@ def _scan_entry_points() -> list[EntryPointRecord]:
     return out
 
 
-#: this process's scan: (distribution signature, records)
-_EP_MEMO: list[tuple[Any, list[EntryPointRecord]]] = []
+#: this process's entry points: (sys.path when read, records)
+_EP_MEMO: list[tuple[tuple[str, ...], list[EntryPointRecord]]] = []
 
 
 def group_entry_points(group: str) -> list[EntryPointRecord]:
@@ -164,19 +164,20 @@ def group_entry_points(group: str) -> list[EntryPointRecord]:
 
     :mod:`importlib.metadata` reads every installed distribution's metadata (~20 ms of import
     and 5-30 ms per scan in a one-shot process); the answer is kept in lmic's cache (kind
-    ``entry-points``) under :func:`_distribution_signature`, and in this process for as long
-    as that signature holds. Any doubt (cache off or unreadable, a foreign distribution
-    finder) is a full scan.
+    ``entry-points``) under :func:`_distribution_signature`; a process reads them once per
+    ``sys.path`` (a distribution installed into a folder already on it while the process runs
+    is seen by the next process). Any doubt (cache off or
+    unreadable, a foreign distribution finder) is a full scan.
 
     >>> any(r.name == "scs" for r in group_entry_points("lmic.backends"))
     True
     """
     if group not in EP_GROUPS:
         raise ValueError(f"not an lmic entry-point group: {group}")
+    if _EP_MEMO and _EP_MEMO[0][0] == tuple(sys.path):  # read once per process (and sys.path)
+        return [r for r in _EP_MEMO[0][1] if r.group == group]
     sig = _distribution_signature()
     records: list[EntryPointRecord] | None = None
-    if sig is not None and _EP_MEMO and _EP_MEMO[0][0] == sig:
-        records = _EP_MEMO[0][1]
     key = None if sig is None else {"python": list(sys.version_info[:3]), "signature": sig}
     if records is None and key is not None:
         payload = cache.load(EP_KIND, key)
@@ -191,8 +192,7 @@ def group_entry_points(group: str) -> list[EntryPointRecord]:
         records = _scan_entry_points()
         if key is not None and _distribution_signature() == sig:  # nothing installed meanwhile
             cache.store(EP_KIND, key, {"records": [list(asdict(r).values()) for r in records]})
-    if sig is not None:
-        _EP_MEMO[:] = [(sig, records)]
+    _EP_MEMO[:] = [(tuple(sys.path), records)]
     return [r for r in records if r.group == group]
 
 
