@@ -57,7 +57,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
+#: the checkout whose ``lmic`` the processes run (``LMIC_BENCH_ROOT``: another one, e.g. a before/after
+#: comparison run by the same benchmark code)
+ROOT = Path(os.environ.get("LMIC_BENCH_ROOT") or Path(__file__).resolve().parents[1]).resolve()
 EXAMPLE = ROOT / "examples" / "qib.thm1.flexible-joint.yaml"
 LMIC = [sys.executable, "-c", "from lmic.cli import _entry; _entry()"]
 
