@@ -33,8 +33,8 @@ not recomputed, as in any run after the first), and in the same rounds a baselin
 ``python -c "import numpy, scipy.sparse, scs"`` (``base s``: what any script calling SCS on
 sparse data pays before its first line). ``cli s`` is the one-shot run's wall time; its two
 shares: ``cli%a``, everything but the solver's own time, interpreter included (``1 - solver /
-wall``), and ``cli%b``, lmic's own time beyond the baseline (``(wall - base - solver) / wall``,
-the baseline of the same round); ``start s`` the interpreter start and the imports
+wall``), and ``cli%b``, lmic's own time beyond the baseline (``(wall - base - solver) / wall``),
+both from the medians over the rounds; ``start s`` the interpreter start and the imports
 (``benchmarks/startup.py``'s split; its ``--split`` table has every phase). Usage::
 
     python benchmarks/routes.py --quick          # a few minutes
@@ -176,34 +176,49 @@ def _cvxpy_brl(system: dict[str, Any], eps: float = 1e-7) -> dict[str, Any]:
     }
 
 
-#: the one-shot runs' cache folder and the modules a warm run imports (set by _cli_warm_up)
-_CLI: dict[str, Any] = {}
+#: the one-shot runs' cache folders and the modules a warm run imports, per checkout (``""``: this
+#: one, else a ``--compare`` checkout; set by _cli_warm_up)
+_CLI: dict[str, dict[str, Any]] = {}
 
 
-def _cli_run(target: str, system: dict[str, Any]) -> dict[str, Any]:
-    from startup import _env, one_shot
+def _cli_env(root: str) -> tuple[dict[str, str], Any]:
+    """The environment and working folder of a one-shot run of checkout ``root`` (``""``: this one)."""
+    from startup import ROOT, _env
+
+    env = _env(LMIC_CACHE_DIR=_CLI[root]["cache"])
+    if not root:
+        return env, ROOT
+    from pathlib import Path
+
+    env["PYTHONPATH"] = os.pathsep.join([root, os.path.join(root, "plugins")])
+    return env, Path(root)
+
+
+def _cli_run(target: str, system: dict[str, Any], root: str = "") -> dict[str, Any]:
+    from startup import one_shot
 
     with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as fh:
         json.dump(system, fh)
     try:
         argv = ["solve", target, fh.name, "--backoff", "0", "--json"]
-        return one_shot(argv, _env(LMIC_CACHE_DIR=_CLI["cache"]), _CLI.get("modules"))
+        env, cwd = _cli_env(root)
+        return one_shot(argv, env, _CLI[root].get("modules"), cwd)
     finally:
         os.unlink(fh.name)
 
 
-def _cli_warm_up(target: str, system: dict[str, Any]) -> None:
+def _cli_warm_up(target: str, system: dict[str, Any], root: str = "") -> None:
     """Fill the one-shot runs' cache folder and learn what a warm run imports."""
-    _CLI.setdefault("cache", tempfile.mkdtemp(prefix="lmic-routes-cli-"))
-    _cli_run(target, system)  # cold: analyses and stores the plan
-    _CLI["modules"] = _cli_run(target, system)["modules"]
+    _CLI.setdefault(root, {"cache": tempfile.mkdtemp(prefix="lmic-routes-cli-")})
+    _cli_run(target, system, root)  # cold: analyses and stores the plan
+    _CLI[root]["modules"] = _cli_run(target, system, root)["modules"]
 
 
-def _cli(target: str, system: dict[str, Any]) -> dict[str, Any]:
+def _cli(target: str, system: dict[str, Any], root: str = "") -> dict[str, Any]:
     """One warm one-shot ``lmic solve`` process (the default route): wall time and split."""
     from startup import split_parts
 
-    rec = _cli_run(target, system)
+    rec = _cli_run(target, system, root)
     parts = split_parts(rec)
     return {
         "total_s": parts["wall"],
@@ -233,22 +248,19 @@ def _baseline() -> dict[str, Any]:
 
 
 def cli_shares(cli_rows: list[dict[str, Any]], base_rows: list[dict[str, Any]]) -> tuple[float | None, float | None]:
-    """Medians over the rounds of the two shares of a one-shot run (percent).
+    """The two shares of a one-shot run (percent), from the medians over the rounds.
 
     ``(a)``: everything but the solver's own time, interpreter included (``1 - solver / wall``);
-    ``(b)``: lmic's own time beyond the baseline process of the same round
-    (``(wall - baseline - solver) / wall``).
+    ``(b)``: lmic's own time beyond the baseline process (``(wall - baseline - solver) / wall``).
+    Medians first (a loaded machine gives single processes outliers of either kind).
 
-    >>> cli_shares([{"total_s": 1.0, "solver_s": 0.5}], [{"total_s": 0.3}])
-    (50.0, 20.0)
+    >>> cli_shares([{"total_s": 1.0, "solver_s": 0.5}], [{"total_s": 0.25}])
+    (50.0, 25.0)
     """
-    a = [100 * (1 - r["solver_s"] / r["total_s"]) for r in cli_rows if r.get("total_s") and "solver_s" in r]
-    b = [
-        100 * (r["total_s"] - base["total_s"] - r["solver_s"]) / r["total_s"]
-        for r, base in zip(cli_rows, base_rows, strict=False)
-        if r.get("total_s") and "solver_s" in r and isinstance(base.get("total_s"), int | float)
-    ]
-    return (statistics.median(a) if a else None), (statistics.median(b) if b else None)
+    wall, solver, base = _med(cli_rows, "total_s"), _med(cli_rows, "solver_s"), _med(base_rows, "total_s")
+    if not wall or solver is None:
+        return None, None
+    return 100 * (1 - solver / wall), (None if base is None else 100 * (wall - base - solver) / wall)
 
 
 def _plant(tid: str, n: int, seed: int) -> dict[str, Any]:
@@ -306,13 +318,20 @@ def _row(cells: list[tuple[Any, int, str]]) -> str:
 
 
 def feasibility(
-    sizes: list[int], repeat: int, limit: float, cli: bool, warm_child: bool = False, clarabel: bool = True
+    sizes: list[int],
+    repeat: int,
+    limit: float,
+    cli: bool,
+    warm_child: bool = False,
+    clarabel: bool = True,
+    compare: str = "",
 ) -> list[str]:
-    """The qib.thm1 table (``warm_child``: see :func:`_warmed`; ``clarabel``: the CVXPY + Clarabel column)."""
+    """The qib.thm1 table (``warm_child``: see :func:`_warmed`; ``clarabel``: the CVXPY + Clarabel
+    column; ``compare``: another checkout's one-shot run too, in the same rounds)."""
     heads = [("n", 3), ("lmic s", 8), ("lmic%", 6), ("bind%", 6), ("route%", 6), ("cert%", 6), ("it", 3)]
     heads += [("verdict", 10), ("cvxpy+clarabel s", 17), ("x lmic", 7)]
     heads += [("expert scs s", 13), ("x lmic", 7), ("verdict", 10), ("cli s", 7), ("cli%a", 6), ("cli%b", 6)]
-    heads += [("base s", 7), ("start s", 8)]
+    heads += [("base s", 7), ("start s", 8)] + ([("cmp s", 7), ("cmp%a", 6), ("cmp%b", 6)] if compare else [])
     lines = [" ".join(f"{h:>{w}}" for h, w in heads) + "  route"]
     for n in sizes:
         system = random_qib_system(n)
@@ -330,10 +349,13 @@ def feasibility(
             }
             jobs = [(name, _warmed, (fn, small[name], args)) for name, fn, args in jobs]
         if cli:
-            if "modules" not in _CLI:
-                _cli_warm_up("qib.thm1", system)
+            for root in [""] + ([compare] if compare else []):
+                if "modules" not in _CLI.get(root, {}):
+                    _cli_warm_up("qib.thm1", system, root)
             jobs.append(("cli", _cli, ("qib.thm1", system)))
             jobs.append(("baseline", _baseline, ()))
+            if compare:
+                jobs.append(("cli-compare", _cli, ("qib.thm1", system, compare)))
         res = _rounds(jobs, repeat, limit, f"qib n={n}")
         res.setdefault("cvxpy:CLARABEL", [])
         lm, cv, ex = (_med(res[k], "total_s") for k in ("lmic", "cvxpy:CLARABEL", "expert"))
@@ -348,16 +370,21 @@ def feasibility(
         share_a, share_b = cli_shares(res.get("cli", []), res.get("baseline", []))
         cells += [(_med(res.get("cli", []), "total_s"), 7, ".3f"), (share_a, 6, ".0f"), (share_b, 6, ".0f")]
         cells += [(_med(res.get("baseline", []), "total_s"), 7, ".3f"), (_med(res.get("cli", []), "start_s"), 8, ".3f")]
+        if compare:
+            cmp_a, cmp_b = cli_shares(res.get("cli-compare", []), res.get("baseline", []))
+            cells += [(_med(res.get("cli-compare", []), "total_s"), 7, ".3f"), (cmp_a, 6, ".0f"), (cmp_b, 6, ".0f")]
         lines.append(_row(cells) + "  " + str(last.get("route", "")))
     lines.append("  lmic%: lmic's own share of its in-process time (everything but the solver's own time), the")
     lines.append("  median of the per-run shares; bind% / route% / cert%: compile, the route (reduction, lowering,")
     lines.append("  iterate tests, result mapping) and the certification; it: the solver's iterations")
     if cli:
-        lines.append("  cli s: a warm one-shot 'lmic solve' process (plan cache warm); two shares of it, medians of")
-        lines.append("  the per-round values: cli%a = everything but the solver's own time, interpreter included")
-        lines.append("  (1 - solver / wall); cli%b = lmic's own time beyond the baseline process of the same round")
+        lines.append("  cli s: a warm one-shot 'lmic solve' process (plan cache warm); two shares of it, from the")
+        lines.append("  medians: cli%a = everything but the solver's own time, interpreter included")
+        lines.append("  (1 - solver / wall); cli%b = lmic's own time beyond the baseline process")
         lines.append(f"  ((wall - base - solver) / wall), base s = python -c '{BASELINE_IMPORTS}' (interpreter")
         lines.append("  start and exit plus the imports any script calling SCS pays); start s: python + imports")
+    if cli and compare:
+        lines.append(f"  cmp s / cmp%a / cmp%b: the same one-shot run of {compare}, in the same rounds")
     return lines
 
 
@@ -454,6 +481,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--no-clarabel", action="store_true", help="feasibility: skip the (slow) CVXPY + Clarabel column")
     ap.add_argument("--only", default="feasibility,brl,theorems")
+    ap.add_argument("--compare", default="", help="--cli: also the one-shot run of another checkout (e.g. /work/main)")
     ap.add_argument("--brl-route", default=None, help="lmic's backend for the BRL table, e.g. auto:first-order")
     args = ap.parse_args(argv)
     if args.quick:
@@ -466,7 +494,13 @@ def main(argv: list[str] | None = None) -> int:
     if "feasibility" in only:
         title = "Feasibility, qib.thm1 (medians of interleaved runs" + (", warm children)" if args.warm_child else ")")
         out += ["", title] + feasibility(
-            ints(args.sizes), args.repeat, args.limit, args.cli, args.warm_child, not args.no_clarabel
+            ints(args.sizes),
+            args.repeat,
+            args.limit,
+            args.cli,
+            args.warm_child,
+            not args.no_clarabel,
+            os.path.abspath(args.compare) if args.compare else "",
         )
     if "brl" in only:
         out += ["", "Optimisation, bounded-real lemma (min gamma)"] + brl(
