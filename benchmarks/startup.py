@@ -25,7 +25,8 @@ theorems`` at most 6x). Methods:
   ``lmic.cli._LeanNumpyNames`` as ``lmic.cli.main`` applies to a command), *load/bind*
   (``compile_s``: system file, warm plan, bind), *lower* (``lower_s``), *solver* (``solve_s``,
   the solver's own time), *certify* (``certify_s`` + ``enclosure_s``) and *output* (the rest of
-  ``main``: arguments, the JSON written). ``share`` is lmic's share, everything but the solver
+  ``main``: arguments, the JSON written); the driver ends the process as ``lmic`` does
+  (``lmic.cli.exit_now``). ``share`` is lmic's share, everything but the solver
   (``1 - solver / wall``); ``share ex.`` leaves out the interpreter and the imports of numpy and
   scipy too (what a process must pay before any lmic code runs); ``sympy`` says whether the
   process imported sympy (it must not when warm).
@@ -253,6 +254,11 @@ t_done = time.perf_counter()
 sys.stderr.write("\\nSPLIT " + json.dumps({
     "rc": rc, "imports_s": t_imported - t_enter, "numpy_scipy_s": third, "main_s": t_done - t_imported,
     "stdout": buf.getvalue(), "modules": list(sys.modules), "sympy": "sympy" in sys.modules}) + "\\n")
+try:  # the process ends as the lmic command's does (lmic.cli._entry)
+    from lmic.cli import exit_now
+except ImportError:  # a checkout without it (--compare)
+    exit_now = sys.exit
+exit_now(rc)
 """
 
 
