@@ -344,14 +344,17 @@ def feasibility(
     warm_child: bool = False,
     clarabel: bool = True,
     compare: str = "",
+    session: bool = False,
 ) -> list[str]:
     """The qib.thm1 table (``warm_child``: see :func:`_warmed`; ``clarabel``: the CVXPY + Clarabel
-    column; ``compare``: another checkout's one-shot run too, in the same rounds)."""
+    column; ``compare``: another checkout's one-shot run too, in the same rounds; ``session``: lmic's
+    solve after a first one of another system of the same size, in the same child)."""
     heads = [("n", 3), ("lmic s", 8), ("lmic%", 6), ("bind%", 6), ("route%", 6), ("cert%", 6), ("it", 3)]
     heads += [("verdict", 10), ("cvxpy+clarabel s", 17), ("x lmic", 7)]
     heads += [("expert scs s", 13), ("x lmic", 7), ("verdict", 10), ("cli s", 7), ("cli%a", 6), ("cli%b", 6)]
     heads += [("base s", 7), ("cli%b'", 6), ("lean s", 7), ("start s", 8)]
     heads += [("cmp s", 7), ("cmp%a", 6), ("cmp%b", 6)] if compare else []
+    heads += [("ses s", 7), ("ses%", 6)] if session else []
     lines = [" ".join(f"{h:>{w}}" for h, w in heads) + "  route"]
     for n in sizes:
         system = random_qib_system(n)
@@ -368,6 +371,9 @@ def feasibility(
                 "expert": (3,),
             }
             jobs = [(name, _warmed, (fn, small[name], args)) for name, fn, args in jobs]
+        if session:  # a later solve of a session: another system of the same size solved first
+            first = ("qib.thm1", random_qib_system(n, seed=1), None)
+            jobs.append(("session", _warmed, (_lmic, first, ("qib.thm1", system, None))))
         if cli:
             for root in [""] + ([compare] if compare else []):
                 if "modules" not in _CLI.get(root, {}):
@@ -397,6 +403,8 @@ def feasibility(
         if compare:
             cmp_a, cmp_b = cli_shares(res.get("cli-compare", []), res.get("baseline", []))
             cells += [(_med(res.get("cli-compare", []), "total_s"), 7, ".3f"), (cmp_a, 6, ".0f"), (cmp_b, 6, ".0f")]
+        if session:
+            cells += [(_med(res["session"], "total_s"), 7, ".3f"), (_share(res["session"], "lmic_s"), 6, ".1f")]
         lines.append(_row(cells) + "  " + str(last.get("route", "")))
     lines.append("  lmic%: lmic's own share of its in-process time (everything but the solver's own time), the")
     lines.append("  median of the per-run shares; bind% / route% / cert%: compile, the route (reduction, lowering,")
@@ -409,6 +417,9 @@ def feasibility(
         lines.append("  start and exit plus the imports any script calling SCS pays); cli%b' = the same against")
         lines.append("  lean s, those imports made as lmic makes them (numpy.f2py/testing/ma not pulled in by")
         lines.append("  SciPy's array-API shim, no teardown at exit): lmic's own code; start s: python + imports")
+    if session:
+        lines.append("  ses s / ses%: lmic's solve in a child that solved another system of the same size first (a")
+        lines.append("  session's later solve: the LMI's structure at these dimensions cached, memory warm)")
     if cli and compare:
         lines.append(f"  cmp s / cmp%a / cmp%b: the same one-shot run of {compare}, in the same rounds")
     return lines
@@ -506,6 +517,9 @@ def main(argv: list[str] | None = None) -> int:
         help="feasibility: each timed child runs its method once on n = 3 first (pays the fork's copy-on-write faults)",
     )
     ap.add_argument("--no-clarabel", action="store_true", help="feasibility: skip the (slow) CVXPY + Clarabel column")
+    ap.add_argument(
+        "--session", action="store_true", help="feasibility: also lmic's solve after another of the same size"
+    )
     ap.add_argument("--only", default="feasibility,brl,theorems")
     ap.add_argument("--compare", default="", help="--cli: also the one-shot run of another checkout (e.g. /work/main)")
     ap.add_argument("--brl-route", default=None, help="lmic's backend for the BRL table, e.g. auto:first-order")
@@ -527,6 +541,7 @@ def main(argv: list[str] | None = None) -> int:
             args.warm_child,
             not args.no_clarabel,
             os.path.abspath(args.compare) if args.compare else "",
+            args.session,
         )
     if "brl" in only:
         out += ["", "Optimisation, bounded-real lemma (min gamma)"] + brl(
