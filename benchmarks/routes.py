@@ -29,9 +29,17 @@ a fresh forked child with a time limit (``qib.thm1``'s plan analysed once in the
 are whole in-process times of the call; medians; ``x lmic`` is the ratio of a method's median to
 default lmic's. ``--cli`` adds a one-shot ``lmic solve`` process for the default route, with a warm
 plan cache (a folder of its own, filled by one run before the rounds: the analysed plan is read,
-not recomputed, as in any run after the first): ``cli s`` is its wall time, ``cli%`` lmic's share
-of it (everything but the solver's own time), ``start s`` the interpreter start and the imports
-(``benchmarks/startup.py``'s split; its ``--split`` table has every phase). Usage::
+not recomputed, as in any run after the first), and in the same rounds a baseline process
+``python -c "import numpy, scipy.sparse, scs"`` (``base s``: what any script calling SCS on
+sparse data pays before its first line). ``cli s`` is the one-shot run's wall time; its two
+shares: ``cli%a``, everything but the solver's own time, interpreter included (``1 - solver /
+wall``), and ``cli%b``, lmic's own time beyond the baseline (``(wall - base - solver) / wall``),
+both from the medians over the rounds; ``cli%b'`` the same against ``lean s``, a baseline that
+makes those imports the way ``lmic`` makes them (:data:`LEAN_BASELINE`: lmic avoids part of what
+the plain baseline pays, so ``cli%b`` can be negative; ``cli%b'`` is lmic's own code); ``start
+s`` the interpreter start and the imports (``benchmarks/startup.py``'s split; its ``--split``
+table has every phase); ``--compare ROOT`` adds another checkout's one-shot run to the same
+rounds (``cmp s``, ``cmp%a``, ``cmp%b``: before/after). Usage::
 
     python benchmarks/routes.py --quick          # a few minutes
     python benchmarks/routes.py --sizes 10,20,30,40,50 --brl-sizes 10,20,30,40 --repeat 3 --cli
@@ -172,43 +180,106 @@ def _cvxpy_brl(system: dict[str, Any], eps: float = 1e-7) -> dict[str, Any]:
     }
 
 
-#: the one-shot runs' cache folder and the modules a warm run imports (set by _cli_warm_up)
-_CLI: dict[str, Any] = {}
+#: the one-shot runs' cache folders and the modules a warm run imports, per checkout (``""``: this
+#: one, else a ``--compare`` checkout; set by _cli_warm_up)
+_CLI: dict[str, dict[str, Any]] = {}
 
 
-def _cli_run(target: str, system: dict[str, Any]) -> dict[str, Any]:
-    from startup import _env, one_shot
+def _cli_env(root: str) -> tuple[dict[str, str], Any]:
+    """The environment and working folder of a one-shot run of checkout ``root`` (``""``: this one)."""
+    from startup import ROOT, _env
+
+    env = _env(LMIC_CACHE_DIR=_CLI[root]["cache"])
+    if not root:
+        return env, ROOT
+    from pathlib import Path
+
+    env["PYTHONPATH"] = os.pathsep.join([root, os.path.join(root, "plugins")])
+    return env, Path(root)
+
+
+def _cli_run(target: str, system: dict[str, Any], root: str = "") -> dict[str, Any]:
+    from startup import one_shot
 
     with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as fh:
         json.dump(system, fh)
     try:
         argv = ["solve", target, fh.name, "--backoff", "0", "--json"]
-        return one_shot(argv, _env(LMIC_CACHE_DIR=_CLI["cache"]), _CLI.get("modules"))
+        env, cwd = _cli_env(root)
+        return one_shot(argv, env, _CLI[root].get("modules"), cwd)
     finally:
         os.unlink(fh.name)
 
 
-def _cli_warm_up(target: str, system: dict[str, Any]) -> None:
+def _cli_warm_up(target: str, system: dict[str, Any], root: str = "") -> None:
     """Fill the one-shot runs' cache folder and learn what a warm run imports."""
-    _CLI.setdefault("cache", tempfile.mkdtemp(prefix="lmic-routes-cli-"))
-    _cli_run(target, system)  # cold: analyses and stores the plan
-    _CLI["modules"] = _cli_run(target, system)["modules"]
+    _CLI.setdefault(root, {"cache": tempfile.mkdtemp(prefix="lmic-routes-cli-")})
+    _cli_run(target, system, root)  # cold: analyses and stores the plan
+    _CLI[root]["modules"] = _cli_run(target, system, root)["modules"]
 
 
-def _cli(target: str, system: dict[str, Any]) -> dict[str, Any]:
+def _cli(target: str, system: dict[str, Any], root: str = "") -> dict[str, Any]:
     """One warm one-shot ``lmic solve`` process (the default route): wall time and split."""
     from startup import split_parts
 
-    rec = _cli_run(target, system)
+    rec = _cli_run(target, system, root)
     parts = split_parts(rec)
     return {
         "total_s": parts["wall"],
         "share": parts["share"],
+        "solver_s": parts["solver"],
         "start_s": parts["python"] + parts["imports"],
         "verdict": rec["verdict"],
         "sympy": rec["sympy"],
         "status": f"exit {rec['rc']}",
     }
+
+
+#: what any Python script calling SCS on sparse data must import: the baseline of a one-shot run
+BASELINE_IMPORTS = "import numpy, scipy.sparse, scs"
+
+
+#: the same imports as a script can make them, with the two savings of ``lmic.cli`` (SciPy's
+#: array-API shim kept from importing numpy.f2py / testing / ma, no teardown at exit): what is
+#: left of a one-shot run's cost beyond it is lmic's own code
+LEAN_BASELINE = """import os, numpy
+hide, full_all, full_dir = {"f2py", "testing", "ma"}, numpy.__all__, numpy.__dir__
+numpy.__all__ = [n for n in full_all if n not in hide]
+numpy.__dir__ = lambda: [n for n in full_dir() if n not in hide]
+import scipy.sparse, scs
+numpy.__all__, numpy.__dir__ = full_all, full_dir
+os._exit(0)
+"""
+
+
+def _baseline(lean: bool = False) -> dict[str, Any]:
+    """One ``python -c "import numpy, scipy.sparse, scs"`` process (same environment as ``_cli``):
+    the interpreter's start and exit and the imports any script using the solver pays
+    (``lean``: :data:`LEAN_BASELINE`, the same imports made the way ``lmic`` makes them)."""
+    import subprocess
+
+    from startup import _env
+
+    t0 = time.perf_counter()
+    code = LEAN_BASELINE if lean else BASELINE_IMPORTS
+    out = subprocess.run([sys.executable, "-c", code], env=_env(), capture_output=True, text=True)
+    return {"total_s": time.perf_counter() - t0, "status": f"exit {out.returncode}", "verdict": "baseline"}
+
+
+def cli_shares(cli_rows: list[dict[str, Any]], base_rows: list[dict[str, Any]]) -> tuple[float | None, float | None]:
+    """The two shares of a one-shot run (percent), from the medians over the rounds.
+
+    ``(a)``: everything but the solver's own time, interpreter included (``1 - solver / wall``);
+    ``(b)``: lmic's own time beyond the baseline process (``(wall - baseline - solver) / wall``).
+    Medians first (a loaded machine gives single processes outliers of either kind).
+
+    >>> cli_shares([{"total_s": 1.0, "solver_s": 0.5}], [{"total_s": 0.25}])
+    (50.0, 25.0)
+    """
+    wall, solver, base = _med(cli_rows, "total_s"), _med(cli_rows, "solver_s"), _med(base_rows, "total_s")
+    if not wall or solver is None:
+        return None, None
+    return 100 * (1 - solver / wall), (None if base is None else 100 * (wall - base - solver) / wall)
 
 
 def _plant(tid: str, n: int, seed: int) -> dict[str, Any]:
@@ -266,12 +337,24 @@ def _row(cells: list[tuple[Any, int, str]]) -> str:
 
 
 def feasibility(
-    sizes: list[int], repeat: int, limit: float, cli: bool, warm_child: bool = False, clarabel: bool = True
+    sizes: list[int],
+    repeat: int,
+    limit: float,
+    cli: bool,
+    warm_child: bool = False,
+    clarabel: bool = True,
+    compare: str = "",
+    session: bool = False,
 ) -> list[str]:
-    """The qib.thm1 table (``warm_child``: see :func:`_warmed`; ``clarabel``: the CVXPY + Clarabel column)."""
+    """The qib.thm1 table (``warm_child``: see :func:`_warmed`; ``clarabel``: the CVXPY + Clarabel
+    column; ``compare``: another checkout's one-shot run too, in the same rounds; ``session``: lmic's
+    solve after a first one of another system of the same size, in the same child)."""
     heads = [("n", 3), ("lmic s", 8), ("lmic%", 6), ("bind%", 6), ("route%", 6), ("cert%", 6), ("it", 3)]
     heads += [("verdict", 10), ("cvxpy+clarabel s", 17), ("x lmic", 7)]
-    heads += [("expert scs s", 13), ("x lmic", 7), ("verdict", 10), ("cli s", 7), ("cli%", 5), ("start s", 8)]
+    heads += [("expert scs s", 13), ("x lmic", 7), ("verdict", 10), ("cli s", 7), ("cli%a", 6), ("cli%b", 6)]
+    heads += [("base s", 7), ("cli%b'", 6), ("lean s", 7), ("start s", 8)]
+    heads += [("cmp s", 7), ("cmp%a", 6), ("cmp%b", 6)] if compare else []
+    heads += [("ses s", 7), ("ses%", 6)] if session else []
     lines = [" ".join(f"{h:>{w}}" for h, w in heads) + "  route"]
     for n in sizes:
         system = random_qib_system(n)
@@ -288,10 +371,18 @@ def feasibility(
                 "expert": (3,),
             }
             jobs = [(name, _warmed, (fn, small[name], args)) for name, fn, args in jobs]
+        if session:  # a later solve of a session: another system of the same size solved first
+            first = ("qib.thm1", random_qib_system(n, seed=1), None)
+            jobs.append(("session", _warmed, (_lmic, first, ("qib.thm1", system, None))))
         if cli:
-            if "modules" not in _CLI:
-                _cli_warm_up("qib.thm1", system)
+            for root in [""] + ([compare] if compare else []):
+                if "modules" not in _CLI.get(root, {}):
+                    _cli_warm_up("qib.thm1", system, root)
             jobs.append(("cli", _cli, ("qib.thm1", system)))
+            jobs.append(("baseline", _baseline, ()))
+            jobs.append(("baseline-lean", _baseline, (True,)))
+            if compare:
+                jobs.append(("cli-compare", _cli, ("qib.thm1", system, compare)))
         res = _rounds(jobs, repeat, limit, f"qib n={n}")
         res.setdefault("cvxpy:CLARABEL", [])
         lm, cv, ex = (_med(res[k], "total_s") for k in ("lmic", "cvxpy:CLARABEL", "expert"))
@@ -303,18 +394,34 @@ def feasibility(
         cells += [(_med(res["lmic"], "iterations"), 3, ".0f")]
         cells += [(str(last.get("verdict"))[:10], 10, ""), (cv_txt, 17, ""), (ratio(cv, lm), 7, ".1f")]
         cells += [(ex, 13, ".3f"), (ratio(ex, lm), 7, ".1f"), (str(res["expert"][-1].get("verdict"))[:10], 10, "")]
-        cli_share = _med(res.get("cli", []), "share")
-        cells += [(_med(res.get("cli", []), "total_s"), 7, ".3f")]
-        cells += [
-            (None if cli_share is None else 100 * cli_share, 5, ".0f"),
-            (_med(res.get("cli", []), "start_s"), 8, ".3f"),
-        ]
+        share_a, share_b = cli_shares(res.get("cli", []), res.get("baseline", []))
+        cells += [(_med(res.get("cli", []), "total_s"), 7, ".3f"), (share_a, 6, ".0f"), (share_b, 6, ".0f")]
+        share_lean = cli_shares(res.get("cli", []), res.get("baseline-lean", []))[1]
+        cells += [(_med(res.get("baseline", []), "total_s"), 7, ".3f"), (share_lean, 6, ".0f")]
+        cells += [(_med(res.get("baseline-lean", []), "total_s"), 7, ".3f")]
+        cells += [(_med(res.get("cli", []), "start_s"), 8, ".3f")]
+        if compare:
+            cmp_a, cmp_b = cli_shares(res.get("cli-compare", []), res.get("baseline", []))
+            cells += [(_med(res.get("cli-compare", []), "total_s"), 7, ".3f"), (cmp_a, 6, ".0f"), (cmp_b, 6, ".0f")]
+        if session:
+            cells += [(_med(res["session"], "total_s"), 7, ".3f"), (_share(res["session"], "lmic_s"), 6, ".1f")]
         lines.append(_row(cells) + "  " + str(last.get("route", "")))
     lines.append("  lmic%: lmic's own share of its in-process time (everything but the solver's own time), the")
     lines.append("  median of the per-run shares; bind% / route% / cert%: compile, the route (reduction, lowering,")
     lines.append("  iterate tests, result mapping) and the certification; it: the solver's iterations")
     if cli:
-        lines.append("  cli%: lmic's share of a warm one-shot process (1 - solver / wall); start s: python + imports")
+        lines.append("  cli s: a warm one-shot 'lmic solve' process (plan cache warm); two shares of it, from the")
+        lines.append("  medians: cli%a = everything but the solver's own time, interpreter included")
+        lines.append("  (1 - solver / wall); cli%b = lmic's own time beyond the baseline process")
+        lines.append(f"  ((wall - base - solver) / wall), base s = python -c '{BASELINE_IMPORTS}' (interpreter")
+        lines.append("  start and exit plus the imports any script calling SCS pays); cli%b' = the same against")
+        lines.append("  lean s, those imports made as lmic makes them (numpy.f2py/testing/ma not pulled in by")
+        lines.append("  SciPy's array-API shim, no teardown at exit): lmic's own code; start s: python + imports")
+    if session:
+        lines.append("  ses s / ses%: lmic's solve in a child that solved another system of the same size first (a")
+        lines.append("  session's later solve: the LMI's structure at these dimensions cached, memory warm)")
+    if cli and compare:
+        lines.append(f"  cmp s / cmp%a / cmp%b: the same one-shot run of {compare}, in the same rounds")
     return lines
 
 
@@ -410,7 +517,11 @@ def main(argv: list[str] | None = None) -> int:
         help="feasibility: each timed child runs its method once on n = 3 first (pays the fork's copy-on-write faults)",
     )
     ap.add_argument("--no-clarabel", action="store_true", help="feasibility: skip the (slow) CVXPY + Clarabel column")
+    ap.add_argument(
+        "--session", action="store_true", help="feasibility: also lmic's solve after another of the same size"
+    )
     ap.add_argument("--only", default="feasibility,brl,theorems")
+    ap.add_argument("--compare", default="", help="--cli: also the one-shot run of another checkout (e.g. /work/main)")
     ap.add_argument("--brl-route", default=None, help="lmic's backend for the BRL table, e.g. auto:first-order")
     args = ap.parse_args(argv)
     if args.quick:
@@ -423,7 +534,14 @@ def main(argv: list[str] | None = None) -> int:
     if "feasibility" in only:
         title = "Feasibility, qib.thm1 (medians of interleaved runs" + (", warm children)" if args.warm_child else ")")
         out += ["", title] + feasibility(
-            ints(args.sizes), args.repeat, args.limit, args.cli, args.warm_child, not args.no_clarabel
+            ints(args.sizes),
+            args.repeat,
+            args.limit,
+            args.cli,
+            args.warm_child,
+            not args.no_clarabel,
+            os.path.abspath(args.compare) if args.compare else "",
+            args.session,
         )
     if "brl" in only:
         out += ["", "Optimisation, bounded-real lemma (min gamma)"] + brl(

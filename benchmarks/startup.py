@@ -21,10 +21,12 @@ theorems`` at most 6x). Methods:
 * the **one-shot split** (``--split 10,30,50``): a warm ``lmic solve qib.thm1 SYSTEM --json`` on
   random ``n``-state systems, each process split into *python* (interpreter start and exit:
   the wall time minus what the driver measures inside), *imports* (every module the solve
-  imports, imported up front in the order a first run imported them), *load/bind*
+  imports, imported up front in the order a first run imported them, under the same
+  ``lmic.cli._LeanNumpyNames`` as ``lmic.cli.main`` applies to a command), *load/bind*
   (``compile_s``: system file, warm plan, bind), *lower* (``lower_s``), *solver* (``solve_s``,
   the solver's own time), *certify* (``certify_s`` + ``enclosure_s``) and *output* (the rest of
-  ``main``: arguments, the JSON written). ``share`` is lmic's share, everything but the solver
+  ``main``: arguments, the JSON written); the driver ends the process as ``lmic`` does
+  (``lmic.cli.exit_now``). ``share`` is lmic's share, everything but the solver
   (``1 - solver / wall``); ``share ex.`` leaves out the interpreter and the imports of numpy and
   scipy too (what a process must pay before any lmic code runs); ``sympy`` says whether the
   process imported sympy (it must not when warm).
@@ -56,7 +58,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
+#: the checkout whose ``lmic`` the processes run (``LMIC_BENCH_ROOT``: another one, e.g. a before/after
+#: comparison run by the same benchmark code)
+ROOT = Path(os.environ.get("LMIC_BENCH_ROOT") or Path(__file__).resolve().parents[1]).resolve()
 EXAMPLE = ROOT / "examples" / "qib.thm1.flexible-joint.yaml"
 LMIC = [sys.executable, "-c", "from lmic.cli import _entry; _entry()"]
 
@@ -227,14 +231,20 @@ from contextlib import redirect_stdout
 t_enter = time.perf_counter()
 modules, argv = json.loads(sys.argv[1]), sys.argv[2:]
 third = 0.0
-for name in modules:
-    t = time.perf_counter()
-    try:
-        importlib.import_module(name)
-    except Exception:
-        pass
-    if name.split(".")[0] in ("numpy", "scipy"):
-        third += time.perf_counter() - t
+import contextlib
+try:  # what lmic.cli.main does around a command (the imports below stand for the command's)
+    from lmic.cli import _LeanNumpyNames as lean
+except ImportError:  # a checkout without it (--compare)
+    lean = contextlib.nullcontext
+with lean():
+    for name in modules:
+        t = time.perf_counter()
+        try:
+            importlib.import_module(name)
+        except Exception:
+            pass
+        if name.split(".")[0] in ("numpy", "scipy"):
+            third += time.perf_counter() - t
 t_imported = time.perf_counter()
 from lmic.cli import main
 buf = io.StringIO()
@@ -244,6 +254,11 @@ t_done = time.perf_counter()
 sys.stderr.write("\\nSPLIT " + json.dumps({
     "rc": rc, "imports_s": t_imported - t_enter, "numpy_scipy_s": third, "main_s": t_done - t_imported,
     "stdout": buf.getvalue(), "modules": list(sys.modules), "sympy": "sympy" in sys.modules}) + "\\n")
+try:  # the process ends as the lmic command's does (lmic.cli._entry)
+    from lmic.cli import exit_now
+except ImportError:  # a checkout without it (--compare)
+    exit_now = sys.exit
+exit_now(rc)
 """
 
 

@@ -93,10 +93,14 @@ def entry_path(kind: str, key: Any) -> Path | None:
     >>> entry_path("plans", {"x": 1}).name.endswith(".json")
     True
     """
+    return _entry_path(kind, _canonical(key))
+
+
+def _entry_path(kind: str, canonical_key: bytes) -> Path | None:
     root = cache_dir()
     if root is None:
         return None
-    digest = hashlib.sha256(kind.encode() + b"\0" + _canonical(key)).hexdigest()[:40]
+    digest = hashlib.sha256(kind.encode() + b"\0" + canonical_key).hexdigest()[:40]
     return root / kind / f"{digest}.json"
 
 
@@ -106,7 +110,11 @@ def load(kind: str, key: Any) -> Any:
     >>> load("demo", {"never": "stored"}) is None
     True
     """
-    path = entry_path(kind, key)
+    try:
+        canonical_key = _canonical(key)  # once: the file name and the stored key's check
+    except (ValueError, TypeError, RecursionError):
+        return None
+    path = _entry_path(kind, canonical_key)
     if path is None:
         return None
     try:
@@ -119,7 +127,7 @@ def load(kind: str, key: Any) -> Any:
         doc = json.loads(raw)
         if not isinstance(doc, dict) or doc.get("format") != FORMAT or doc.get("kind") != kind:
             return None
-        if _canonical(doc.get("key")) != _canonical(key):
+        if _canonical(doc.get("key")) != canonical_key:
             return None
         payload = doc.get("payload")
         if doc.get("sha256") != hashlib.sha256(_canonical(payload)).hexdigest():

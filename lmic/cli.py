@@ -18,6 +18,7 @@ import importlib
 import sys
 import traceback
 from collections.abc import Sequence
+from typing import Any
 
 from lmic import __version__
 from lmic.errors import LmicError
@@ -159,8 +160,58 @@ def _notes_as_lines() -> None:
         warnings.showwarning = show
 
 
+#: numpy's lazily imported submodules that SciPy's array-API shim imports only to copy them into its
+#: own namespace (``scipy._lib.array_api_compat.numpy`` runs ``from numpy import *`` and
+#: ``getattr(numpy, name)`` for every name of ``dir(numpy)``): ``numpy.f2py`` (and through it
+#: ``charset_normalizer``), ``numpy.testing`` (``unittest``, ``importlib.metadata``) and
+#: ``numpy.ma``. No lmic code path uses them; SciPy's namespace reads them only for CuPy and
+#: PyTorch arrays. Measured: 60-120 ms of every ``lmic solve`` process (``python -X importtime``).
+_UNUSED_NUMPY_SUBMODULES = frozenset({"f2py", "testing", "ma"})
+_SHIM = "scipy._lib.array_api_compat.numpy"
+
+
+class _LeanNumpyNames:
+    """While a command runs: the first import of SciPy's array-API shim sees ``numpy.__all__``
+    and ``dir(numpy)`` without :data:`_UNUSED_NUMPY_SUBMODULES`, so it does not import them.
+    Nothing else changes: ``numpy.f2py`` etc. still import on first use, and both names lists
+    are whole again when the command returns.
+
+    >>> with _LeanNumpyNames():
+    ...     pass
+    """
+
+    def __enter__(self) -> _LeanNumpyNames:
+        self._saved: tuple[Any, Any, Any] | None = None
+        if _SHIM not in sys.modules:
+            sys.meta_path.insert(0, self)
+        return self
+
+    def find_spec(self, name: str, path: Any = None, target: Any = None) -> None:
+        """Before the shim is imported (numpy is by then): hide the unused names."""
+        if name == _SHIM and self._saved is None:
+            numpy: Any = sys.modules.get("numpy")
+            full_dir, full_all = getattr(numpy, "__dir__", None), getattr(numpy, "__all__", None)
+            if numpy is not None and callable(full_dir) and isinstance(full_all, list):
+                self._saved = (numpy, full_dir, full_all)
+                numpy.__all__ = [n for n in full_all if n not in _UNUSED_NUMPY_SUBMODULES]
+                numpy.__dir__ = lambda: [n for n in full_dir() if n not in _UNUSED_NUMPY_SUBMODULES]
+        return None  # the ordinary finders import it
+
+    def __exit__(self, *exc: object) -> None:
+        if self in sys.meta_path:
+            sys.meta_path.remove(self)
+        if self._saved is not None:
+            numpy, full_dir, full_all = self._saved
+            numpy.__dir__, numpy.__all__ = full_dir, full_all  # the module's own functions and list
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit code."""
+    with _LeanNumpyNames():
+        return _main(argv)
+
+
+def _main(argv: Sequence[str] | None = None) -> int:
     _notes_as_lines()
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv  # accepted anywhere: lmic --debug solve ..., lmic solve ... --debug
@@ -194,8 +245,55 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_INTERRUPTED  # lmic.outcome.EXIT_CODES["interrupted"]
 
 
+#: commands after which the process ends without the interpreter's teardown (:func:`exit_now`)
+QUICK_EXIT_COMMANDS = frozenset({"solve", "theorems", "backends", "show", "--version"})
+
+
+def exit_now(code: int) -> None:
+    """End a one-shot process as the interpreter would, minus the teardown of every module.
+
+    Python's exit waits for non-daemon threads, runs the ``atexit`` handlers (``weakref.finalize``
+    and ``multiprocessing`` included), flushes the standard streams, then frees every module:
+    with numpy and SciPy loaded that last step alone is ~0.1 s (a third of ``python -c "import
+    numpy, scipy.sparse"``). Here the first three run and the process ends (``os._exit``).
+    Anything unusual -- a non-daemon thread still running, an ``atexit`` handler or a flush that
+    fails (a closed pipe) -- takes the ordinary ``SystemExit`` path, so the exit code and the
+    messages are exactly the ordinary ones.
+
+    >>> exit_now(0)
+    Traceback (most recent call last):
+    ...
+    SystemExit: 0
+    """
+    import atexit
+    import os
+    import threading
+
+    quick = os.environ.get("LMIC_QUICK_EXIT", "1") != "0" and "pytest" not in sys.modules  # tests keep running
+    if not quick or threading.active_count() > 1 or threading.current_thread() is not threading.main_thread():
+        raise SystemExit(code)
+    try:
+        atexit._run_exitfuncs()
+        for stream in (sys.stdout, sys.stderr):
+            if stream is not None:
+                stream.flush()
+    except BaseException:  # noqa: BLE001 - the ordinary exit reports it as it always did
+        raise SystemExit(code) from None
+    os._exit(code)
+
+
 def _entry() -> None:
-    raise SystemExit(main())
+    argv = sys.argv[1:]
+    try:
+        code = main()
+    except SystemExit as done:  # argparse: --version, --help, a usage error
+        if done.code is not None and not isinstance(done.code, int):
+            raise
+        code = done.code or 0
+    first = next((a for a in argv if a.startswith("--version") or not a.startswith("-")), None)
+    if first in QUICK_EXIT_COMMANDS and "--debug" not in argv:
+        exit_now(code)
+    raise SystemExit(code)
 
 
 if __name__ == "__main__":

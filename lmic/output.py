@@ -36,6 +36,7 @@ lmic.output.OutputError: ... is a directory
 from __future__ import annotations
 
 import errno
+import math
 import os
 import secrets
 import stat
@@ -45,7 +46,7 @@ from typing import IO, Any
 
 from lmic.errors import LmicError
 
-__all__ = ["OutputError", "check_output_path", "write_output"]
+__all__ = ["OutputError", "check_output_path", "write_output", "json_text"]
 
 
 class OutputError(LmicError):
@@ -218,3 +219,84 @@ def write_output(
         _direct(target, data, binary, given)
     else:
         _atomic(target, data, binary, given)
+
+
+# -- JSON text ------------------------------------------------------------------------------------
+class _Unusual(Exception):
+    """A value :func:`json_text` leaves to :func:`json.dumps` (its output or its error)."""
+
+
+def json_text(obj: Any, indent: int = 2) -> str:
+    """``json.dumps(obj, indent=indent, allow_nan=False)``, character for character, faster.
+
+    With an indent, :func:`json.dumps` runs the pure-Python encoder: one generator step per
+    number, ~25-50 ms for the variables and certificate of a 40-state ``lmic solve --json``.
+    Here a list of plain floats (a matrix row) is one :meth:`str.join` over ``float.__repr__``
+    (what :mod:`json` writes for a finite float). Anything but dicts with string keys, lists,
+    tuples, strings, ints, finite floats, booleans and ``None`` (a non-finite float, another
+    key type, a numpy scalar, a cycle) is left to :func:`json.dumps` itself, which writes it
+    or raises exactly as before.
+
+    >>> json_text({"a": [1.5, 2.0], "b": {"c": None, "d": "é"}, "e": []})
+    '{\\n  "a": [\\n    1.5,\\n    2.0\\n  ],\\n  "b": {\\n    "c": null,\\n    "d": "\\\\u00e9"\\n  },\\n  "e": []\\n}'
+    """
+    import json
+
+    parts: list[str] = []
+    try:
+        _encode(obj, parts, "\n", " " * indent, 0)
+    except (_Unusual, RecursionError):
+        return json.dumps(obj, indent=indent, allow_nan=False)
+    return "".join(parts)
+
+
+def _encode(obj: Any, out: list[str], nl: str, step: str, depth: int) -> None:
+    """Append the indented JSON of ``obj`` (``nl``: newline plus the current indent)."""
+    from json.encoder import encode_basestring_ascii
+
+    if depth > 200:
+        raise _Unusual  # deep or cyclic: json.dumps decides
+    if isinstance(obj, str):
+        out.append(encode_basestring_ascii(obj))
+    elif obj is None:
+        out.append("null")
+    elif obj is True:
+        out.append("true")
+    elif obj is False:
+        out.append("false")
+    elif isinstance(obj, int):
+        out.append(int.__repr__(obj))
+    elif isinstance(obj, float):
+        if not math.isfinite(obj):
+            raise _Unusual
+        out.append(float.__repr__(obj))
+    elif isinstance(obj, list | tuple):
+        if not obj:
+            out.append("[]")
+            return
+        inner = nl + step
+        if all(type(v) is float for v in obj):
+            text = ("," + inner).join(map(float.__repr__, obj))
+            if "n" in text:  # 'nan' or 'inf': json.dumps raises
+                raise _Unusual
+            out += ("[", inner, text, nl, "]")
+            return
+        out.append("[")
+        for k, v in enumerate(obj):
+            out.append(inner if k == 0 else "," + inner)
+            _encode(v, out, inner, step, depth + 1)
+        out += (nl, "]")
+    elif isinstance(obj, dict):
+        if not obj:
+            out.append("{}")
+            return
+        inner = nl + step
+        out.append("{")
+        for k, (key, v) in enumerate(obj.items()):
+            if not isinstance(key, str):
+                raise _Unusual  # json.dumps converts numbers, booleans and None to strings
+            out += (inner if k == 0 else "," + inner, encode_basestring_ascii(key), ": ")
+            _encode(v, out, inner, step, depth + 1)
+        out += (nl, "}")
+    else:
+        raise _Unusual

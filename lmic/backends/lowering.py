@@ -189,7 +189,9 @@ def _split_const(
         ip = np.concatenate([[0], np.cumsum(mask)])[ip]
         rows, vals = rows[mask], vals[mask]
     moved = rows if row_of is None else row_of[rows]
-    vals = vals if scale is None else vals * scale[rows]
+    if scale is not None:
+        scaled = scale[rows]  # one new array, scaled in place (not a gather and a product)
+        vals = np.multiply(scaled, vals, out=scaled)
     s0, s1 = int(ip[0]), int(ip[1])
     return moved[s0:s1], vals[s0:s1], (ip[1:] - s1, moved[s1:], vals[s1:])
 

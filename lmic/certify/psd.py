@@ -33,7 +33,6 @@ from types import ModuleType
 from typing import Any
 
 import numpy as np
-import scipy.linalg as sla
 
 from lmic.errors import LmicError
 
@@ -101,6 +100,8 @@ def _inverse_cholesky(S: np.ndarray) -> np.ndarray | None:
     """
     d = S.shape[0]
     if d > 400:
+        import scipy.linalg as sla  # here only: ~50 ms of import in every one-shot process otherwise
+
         L, info = sla.lapack.dpotrf(S, lower=1, clean=1)
         if info != 0:
             return None

@@ -38,7 +38,7 @@ import scipy.sparse as sp
 
 from lmic.ir.svec import tril_unvec
 
-__all__ = ["block_spectrum", "term_scale", "perron_root", "prepared", "Prepared", "clear"]
+__all__ = ["block_matrix", "block_spectrum", "term_scale", "perron_root", "prepared", "Prepared", "clear"]
 
 #: unit round-off of float64
 _U = float(np.finfo(float).eps) / 2.0
@@ -109,21 +109,35 @@ def prepared(lmi: Any) -> Prepared:
     return prep
 
 
-def _entry(lmi: Any, x: np.ndarray) -> list[Any]:
-    """The cache entry ``[lmi, coeffs, xx, F, eig, T or None]`` of ``lmi`` at ``x``."""
+def _entry(lmi: Any, x: np.ndarray, spectrum: bool = True) -> list[Any]:
+    """The cache entry ``[lmi, coeffs, xx, F, eig or None, T or None]`` of ``lmi`` at ``x``
+    (``spectrum``: with the eigenvalues, computed now if the entry has none yet)."""
     xx = np.concatenate([[1.0], np.asarray(x, dtype=float).ravel()])
     key = (id(lmi), xx.tobytes())
-    hit = _CACHE.get(key)
-    if hit is not None and hit[0] is lmi and hit[1] is lmi.coeffs:
+    entry = _CACHE.get(key)
+    if entry is not None and entry[0] is lmi and entry[1] is lmi.coeffs:
         _CACHE.move_to_end(key)
-        return hit
-    F = tril_unvec(prepared(lmi).C @ xx, lmi.dim)
-    eig = np.linalg.eigvalsh(F) if lmi.dim and np.all(np.isfinite(F)) else np.full(lmi.dim, np.nan)
-    entry = [lmi, lmi.coeffs, xx, F, eig, None]
-    _CACHE[key] = entry
-    if len(_CACHE) > _CACHE_SIZE:
-        _CACHE.popitem(last=False)
+    else:
+        entry = [lmi, lmi.coeffs, xx, tril_unvec(prepared(lmi).C @ xx, lmi.dim), None, None]
+        _CACHE[key] = entry
+        if len(_CACHE) > _CACHE_SIZE:
+            _CACHE.popitem(last=False)
+    if spectrum and entry[4] is None:
+        F = entry[3]
+        entry[4] = np.linalg.eigvalsh(F) if lmi.dim and np.all(np.isfinite(F)) else np.full(lmi.dim, np.nan)
     return entry
+
+
+def block_matrix(lmi: Any, x: np.ndarray) -> np.ndarray:
+    """``F(x)`` of one LMI (dense, symmetric), kept for :func:`block_spectrum` at the same point
+    (a test of a solver's iterate factorises it first, the certifier then needs its spectrum).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI
+    >>> block_matrix(LMI("p > 0", 1, sp.csc_matrix([[1., 2.]])), np.array([3.0])).tolist()
+    [[7.0]]
+    """
+    return _entry(lmi, x, spectrum=False)[3]
 
 
 def block_spectrum(lmi: Any, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -9,7 +9,6 @@ Examples
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import sys
@@ -89,8 +88,9 @@ def add_param_option(parser: Any) -> None:
 def print_json(obj: Any) -> None:
     """Print one JSON object on stdout."""
     from lmic.jsonable import to_jsonable
+    from lmic.output import json_text  # json.dumps(indent=2, allow_nan=False), faster on matrices
 
-    sys.stdout.write(json.dumps(to_jsonable(obj), indent=2, allow_nan=False) + "\n")
+    sys.stdout.write(json_text(to_jsonable(obj)) + "\n")
 
 
 def write_atomic(path: str | os.PathLike[str], write: Callable[[Any], None], mode: str = "w") -> None:

@@ -345,7 +345,7 @@ class _Binder:
         indptr, indices, pos, nslots = structure
         data = np.bincount(pos, weights=v, minlength=nslots + 1)[:nslots]
         if lp.negated:
-            data = -data
+            np.negative(data, out=data)  # in place: no second array of every coefficient
         coeffs = sp.csc_matrix((data, indices.copy(), indptr.copy()), shape=shape)
         coeffs.has_sorted_indices = True
         coeffs.eliminate_zeros()

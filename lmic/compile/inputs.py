@@ -80,9 +80,19 @@ def _in_domain(value: float, domain: Any) -> bool:
     analysed plan's sympy set by :func:`lmic.template.decls.in_domain`."""
     if isinstance(domain, Domain):  # a frozen plan's
         return domain.contains_number(value)
-    from lmic.template.decls import in_domain
+    key = (float(value), domain)
+    hit = _DOMAIN_MEMO.get(key)
+    if hit is None:
+        from lmic.template.decls import in_domain
 
-    return in_domain(value, domain)
+        hit = _DOMAIN_MEMO[key] = bool(in_domain(value, domain))  # sympy: ~1-2 ms a call
+        if len(_DOMAIN_MEMO) > 4096:
+            _DOMAIN_MEMO.clear()
+    return hit
+
+
+#: answers of sympy's set membership for (value, domain) in this process (every bind asks again)
+_DOMAIN_MEMO: dict[tuple[float, Any], bool] = {}
 
 
 def resolve_inputs(plan: Plan | FrozenPlan, system: System, overrides: Mapping[str, Any] | None = None) -> Inputs:

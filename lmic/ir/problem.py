@@ -369,6 +369,19 @@ class Check:
             raise IRError(f"check '{self.name}': unknown kind '{self.kind}'")
 
 
+def _all_finite(a: np.ndarray) -> bool:
+    """``np.all(np.isfinite(a))`` without a boolean array of ``a``'s size: a finite sum means every
+    entry is finite (a NaN or an infinity makes the sum NaN or infinite); only a sum that
+    overflowed or is not finite is checked entry by entry.
+
+    >>> _all_finite(np.array([1.0, 1e308, 1e308])), _all_finite(np.array([1.0, np.nan]))
+    (True, False)
+    """
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = np.sum(a)
+    return bool(np.isfinite(total)) or bool(np.all(np.isfinite(a)))
+
+
 @dataclass
 class Problem:
     """A compiled LMI problem (see the module docstring).
@@ -415,11 +428,11 @@ class Problem:
         for lmi in self.lmis:
             if lmi.coeffs.shape[1] != 1 + n:
                 raise IRError(f"LMI '{lmi.name}' has {lmi.coeffs.shape[1]} coefficient columns, expected {1 + n}")
-            if not np.all(np.isfinite(lmi.coeffs.data)):
+            if not _all_finite(lmi.coeffs.data):
                 raise IRError(f"LMI '{lmi.name}' has a non-finite coefficient")
         if self.linear.A.shape[1] != 1 + n:
             raise IRError(f"linear constraints have {self.linear.A.shape[1]} columns, expected {1 + n}")
-        if not np.all(np.isfinite(self.linear.A.data)):
+        if not _all_finite(self.linear.A.data):
             raise IRError("linear constraints have a non-finite coefficient")
         if self.objective.c.shape != (1 + n,):
             raise IRError(f"objective has {self.objective.c.shape[0]} entries, expected {1 + n}")

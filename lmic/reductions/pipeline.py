@@ -117,8 +117,8 @@ def solve(backend: Backend, problem: Problem, options: SolveOptions | None = Non
     if backend.name == "auto":
         return _auto(backend, problem, options)
     options = backend.floor_options(options)
-    # used by the strict reductions and the elimination of dependent entries
-    failed = backend.import_native("scipy.linalg", "scipy.sparse.csgraph")
+    # the elimination of dependent entries (full-rank backends only) uses these
+    failed = backend.import_native(*(("scipy.linalg", "scipy.sparse.csgraph") if backend.full_rank else ()))
     if failed is not None:
         return failed
     t0 = time.perf_counter()

@@ -19,8 +19,9 @@ import numpy as np
 
 from lmic.backends.lowering import has_strict  # one definition; re-exported here for the passes
 from lmic.certify.check import Tolerances, lmi_report
+from lmic.certify.spectra import block_matrix
 from lmic.ir.problem import Problem
-from lmic.ir.svec import tril_size, tril_unvec
+from lmic.ir.svec import tril_size
 
 __all__ = ["StrictInverse", "has_strict", "is_scale_free", "verify_point", "point_test"]
 
@@ -159,10 +160,9 @@ def point_test(problem: Problem) -> Callable[[np.ndarray], bool]:
         x = np.asarray(x, dtype=float)
         if x.shape != (n,) or not np.all(np.isfinite(x)):
             return False
-        xx = np.concatenate([[1.0], x])
         for lmi in strict:
-            try:
-                np.linalg.cholesky(tril_unvec(lmi.coeffs @ xx, lmi.dim))
+            try:  # F(x) is kept for verify_point's spectrum at the same point (lmic.certify.spectra)
+                np.linalg.cholesky(block_matrix(lmi, x))
             except np.linalg.LinAlgError:
                 return False
         return verify_point(problem, x)[0]
