@@ -70,6 +70,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "lmic.routes",
             "lmic.route_rule",
             "lmic.backoff",
+            "lmic.upper_end",
+            "lmic.route_upper",
             "lmic.testing.*",
         ),
     ),
