@@ -12,9 +12,10 @@ without trusting the solver's point, in the minimisation form (``q`` the objecti
    by :func:`lmic.certify.enclosure.primal_end` (``delta_0`` in :data:`START_DELTAS`);
 2. **recentred solves**: from the last proved point ``x_0`` (``W_i = F_i(x_0) > 0``), with
    ``T_i`` the inverse Cholesky factor of ``W_i`` and the variables shifted and scaled,
-   ``x = x_0 + diag(d) w`` (``d_k = max(|x_0k|, 1e-3 ||x_0||_inf)``), the same problem is
-   solved in the local metric: ``max s`` s.t. ``T_i F_i(x_0 + diag(d) w) T_i^T >= s I``,
-   ``l_r(x) / l_r(x_0) >= s``, ``q(x) <= L + delta max(1, |L|)``, ``|w_k| <= 1``. At ``w = 0``
+   ``x = x_0 + diag(d) w`` (``1 / d_k`` the largest entry of the blocks ``T_i F_i^(k) T_i^T``:
+   a unit ``w_k`` moves them by about one), the same problem is solved in the local metric:
+   ``max s`` s.t. ``T_i F_i(x_0 + diag(d) w) T_i^T >= s I``, ``l_r(x) / l_r(x_0) >= s``,
+   ``q(x) <= L + delta max(1, |L|)``, ``|w_k| <= RADIUS``. At ``w = 0``
    every block is the identity, so the solver's error is relative to the current margins and
    not to the size of ``F_i``: where the slice at ``delta`` is ``1e-13`` thin relative to the
    entries (measured: ``n = 20`` near-unstable bounded-real lemma) a plain solve returns
@@ -59,6 +60,8 @@ __all__ = ["START_DELTAS", "STEP", "margin_problem", "recentred_problem", "upper
 START_DELTAS = (1e-4, 1e-3, 1e-2)
 #: the backoffs of the margin solves for a point that passes ``check`` (:func:`upper_from_lower`)
 CHECK_DELTAS = (1e-3, 1e-2, 1e-1)
+#: the box ``|w_k| <= RADIUS`` of the recentred solves (a unit ``w_k`` moves the blocks by about their margin)
+RADIUS = 10.0
 #: the factor ``delta`` shrinks by after each proved recentred point
 STEP = 30.0
 #: the recentred problem is built with a dense congruence: above this many coefficient
@@ -91,7 +94,7 @@ def margin_problem(problem: Problem, bound: float, radius: float) -> Problem:
 
 
 def recentred_problem(
-    problem: Problem, x0: np.ndarray, bound: float, radius: float = 1.0, *, local: bool = True
+    problem: Problem, x0: np.ndarray, bound: float, radius: float = 10.0, *, local: bool = True
 ) -> tuple[Problem, np.ndarray]:
     """Step 2 of the module docstring: the problem in ``(w, s)`` and the scaling ``d``
     (``x = x0 + d * w``). ``local=False``: no congruence, no scaling (``d = 1``), step 1.
@@ -106,22 +109,28 @@ def recentred_problem(
     n = problem.n
     x0 = np.asarray(x0, dtype=float)
     xx0 = np.concatenate([[1.0], x0])
-    big = float(np.max(np.abs(x0), initial=0.0))
-    d = np.maximum(np.abs(x0), 1e-3 * big) if local and big > 0 else np.ones(n)
-    lmis = []
+    d = np.ones(n)
+    blocks = []
     for lmi in problem.lmis:
         C = lmi.coeffs.tocsc().astype(float)
+        if local:
+            T = np.linalg.inv(np.linalg.cholesky(tril_unvec(np.asarray(C @ xx0).ravel(), lmi.dim)))
+            K = _congruence(T)
+            blocks.append((K @ np.asarray(C @ xx0).ravel(), K @ C[:, 1:].toarray()))
+        else:
+            blocks.append((None, None))
+    if local:
+        # every variable moves the congruent blocks by about one (the current margins are one)
+        size = np.max([np.max(np.abs(Fk), axis=0) for _, Fk in blocks], axis=0) if blocks else np.zeros(n)
+        d = np.where(size > 0, 1.0 / np.where(size > 0, size, 1.0), d)
+    lmis = []
+    for lmi, (F0, Fk) in zip(problem.lmis, blocks, strict=True):
         i, j = tril_rows_cols(lmi.dim)
         scol = np.where(i == j, -1.0, 0.0)
         if local:
-            W = tril_unvec(np.asarray(C @ xx0).ravel(), lmi.dim)
-            T = np.linalg.inv(np.linalg.cholesky(W))
-            K = _congruence(T)
-            F0 = K @ np.asarray(C @ xx0).ravel()
-            Fk = (K @ C[:, 1:].toarray()) * d[None, :]
-            coeffs = sp.csc_matrix(np.column_stack([F0, Fk, scol]))
+            coeffs = sp.csc_matrix(np.column_stack([F0, Fk * d[None, :], scol]))
         else:
-            coeffs = sp.hstack([C, sp.csc_matrix(scol[:, None])]).tocsc()
+            coeffs = sp.hstack([lmi.coeffs.tocsc().astype(float), sp.csc_matrix(scol[:, None])]).tocsc()
         lmis.append(LMI(lmi.name, lmi.dim, coeffs, False, lmi.relation, lmi.block_sizes))
     lin = problem.linear
     A = lin.A.tocsr().astype(float)
@@ -235,7 +244,7 @@ def upper_from_lower(
         if x0 is None:
             target_problem, d, base = margin_problem(problem, bound, radius), np.ones(problem.n), np.zeros(problem.n)
         else:
-            target_problem, d = recentred_problem(problem, x0, bound)
+            target_problem, d = recentred_problem(problem, x0, bound, RADIUS)
             base = x0
         step: dict[str, Any] = {"delta": delta, "recentred": x0 is not None}
         steps.append(step)
@@ -269,7 +278,7 @@ def upper_from_lower(
         if gap <= goal:
             break
         delta = max(gap / (STEP if failed == 0 else STEP**0.5), 0.5 * goal)
-        if attempt(delta, best["x"]):
+        if attempt(delta, best["x"]) and (sgn * best["value"] - low) / scale < 0.5 * gap:
             failed = 0
             continue
         failed += 1
