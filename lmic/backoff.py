@@ -177,14 +177,20 @@ def backoff(
         out["time_s"] = time.perf_counter() - t0
         return out
     out["status"] = sol.status
+    other = None
     if sol.x is None:
-        out.update(verdict="undecided", reason=f"backoff solve ended {sol.status} without a point ({sol.message})")
-        out["time_s"] = time.perf_counter() - t0
-        return out
-    x = np.asarray(sol.x, dtype=float)[: problem.n]
-    mine = Solution(status=sol.status, x=x, objective=problem.objective.value(x), backend=sol.backend)
-    cert = certify(problem, mine)
-    if cert.verdict != "certified":
+        other = _largest_margin(problem, out["bound"], be, options)
+        if other is None:
+            out.update(verdict="undecided", reason=f"backoff solve ended {sol.status} without a point ({sol.message})")
+            out["time_s"] = time.perf_counter() - t0
+            return out
+        x, mine, cert = other
+        out["method"] = "largest margin"
+    else:
+        x = np.asarray(sol.x, dtype=float)[: problem.n]
+        mine = Solution(status=sol.status, x=x, objective=problem.objective.value(x), backend=sol.backend)
+        cert = certify(problem, mine)
+    if cert.verdict != "certified" and other is None:
         # a slice too thin for the solver's accuracy (a near-singular optimum): its most interior
         # point instead (lmic.upper_end.margin_problem, box ten times the objective's size)
         other = _largest_margin(problem, out["bound"], be, options)

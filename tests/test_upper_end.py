@@ -101,3 +101,17 @@ def test_near_unstable_brl_undecided_alone_gets_an_upper_end() -> None:
     assert enc["upper"] is not None and enc["rel_gap"] <= 1e-6
     assert enc["lower"] <= b and a <= enc["upper"]
     assert audit_enclosure(r.problem, enc, r.certificate, r.backoff)["ok"]
+
+
+def test_near_unstable_brl_backed_off_point_is_certified() -> None:
+    # n = 8, seed 0: the backed-off solve's own point is rejected (main: 'rejected'); the most
+    # interior point within the bound replaces it
+    system, (a, b) = _near_unstable(8, 0)
+    r = solve("tutorial.bounded_real", system, backoff=1e-3)
+    back = r.backoff
+    assert back["verdict"] == "certified", back["reason"]
+    x = np.asarray(back["x"], dtype=float)
+    cert = certify(r.problem, Solution(status="optimal", x=x, objective=r.problem.objective.value(x)))
+    assert cert.verdict == "certified", cert.reason
+    assert a <= back["objective"] <= back["bound"] <= b * (1 + 1e-3) * (1 + 1e-6)
+    assert audit_enclosure(r.problem, r.enclosure, r.certificate, back)["ok"]
