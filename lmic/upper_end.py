@@ -248,8 +248,17 @@ def upper_from_lower(
             base = x0
         step: dict[str, Any] = {"delta": delta, "recentred": x0 is not None}
         steps.append(step)
+        opts = options
+        if deadline is not None:  # no solve runs past the deadline (SolveOptions.time_limit)
+            from dataclasses import replace
+
+            from lmic.options import SolveOptions
+
+            left = max(1.0, deadline - time.perf_counter())
+            given = options if options is not None else SolveOptions()
+            opts = replace(given, time_limit=min(left, given.time_limit or left))
         try:
-            sol = solve_with_reductions(be, target_problem, options)
+            sol = solve_with_reductions(be, target_problem, opts)
         except (LmicError, np.linalg.LinAlgError, ValueError, ArithmeticError) as exc:
             step.update(status="error", proven=False, reason=str(exc)[:200], time_s=time.perf_counter() - t1)
             return False
