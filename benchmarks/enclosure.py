@@ -31,8 +31,9 @@ abscissa -0.01: Clarabel alone stops at AlmostSolved or NumericalError on many s
 ``solver alone`` column gives its status, ``--default-route`` adds one run of the default
 policy; its ``primal`` says where the upper end comes from: a ``restored point`` is the
 point :mod:`lmic.upper_end` proves near the dual end when the solver's gives none).
-``inside`` says whether the enclosure is consistent with the H-infinity norm's ``[a, b]`` from a Hamiltonian bisection (``lower <= b``, ``a <= upper``); ``lower err``
-and ``upper err`` are ``(a - lower) / a`` and ``(upper - b) / b``.
+``inside`` says whether the enclosure is consistent with the H-infinity norm's bracket
+``[a, b]`` from a Hamiltonian bisection (``lower <= b``, ``a <= upper``); ``lower err`` and
+``upper err`` are ``(a - lower) / a`` and ``(upper - b) / b``.
 
 On a shared machine run it with ``OPENBLAS_NUM_THREADS=1``: the proof does many small dense
 solves (``n x n``), which multi-threaded BLAS slows down ten-fold when the cores are busy
