@@ -233,11 +233,13 @@ def rounded_products(C: sp.csr_matrix, xx: np.ndarray) -> np.ndarray | None:
     b = np.asarray(xx, dtype=float)[C.indices]
     if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
         return None
-    big = 2.0**500
+    # Veltkamp's split and Dekker's product are exact when no piece over- or underflows: every
+    # non-zero factor in [2^-400, 2^500] (the pieces' products are then above 2^-860)
     p = a * b
-    tiny = (p != 0) & (np.abs(p) < 2.0**-900)
-    if np.any(np.abs(a) > big) or np.any(np.abs(b) > big) or np.any(tiny):
-        return None
+    for v in (a, b):
+        m = np.abs(v[v != 0])
+        if m.size and (float(m.max()) > 2.0**500 or float(m.min()) < 2.0**-400):
+            return None
 
     def split(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         c = 134217729.0 * v  # 2^27 + 1
