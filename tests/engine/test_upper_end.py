@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-sys.path.insert(0, str(Path(__file__).parent / "certify"))
+sys.path.insert(0, str(Path(__file__).parents[1] / "certify"))
 from certify_helpers import hinf_norm, stable_system  # noqa: E402
 
 from lmic.api import solve  # noqa: E402
@@ -115,3 +115,23 @@ def test_near_unstable_brl_backed_off_point_is_certified() -> None:
     assert cert.verdict == "certified", cert.reason
     assert a <= back["objective"] <= back["bound"] <= b * (1 + 1e-3) * (1 + 1e-6)
     assert audit_enclosure(r.problem, r.enclosure, r.certificate, back)["ok"]
+
+
+def test_a_missing_primal_end_is_found_from_the_dual_end_without_escalating(monkeypatch) -> None:
+    import lmic.routes
+
+    system, (a, b) = _near_unstable(6, 1)
+    real = lmic.routes.enclosure_of
+
+    def without_upper(problem, sol, cert, exact, backend, options, budget_s=None, target=None):
+        enc, t = real(problem, sol, cert, exact, backend, options, budget_s, target)
+        return dict(enc, upper=None, rel_gap=None, gap=None, primal="no certified point"), t
+
+    monkeypatch.setattr(lmic.routes, "enclosure_of", without_upper)
+    r = solve("tutorial.bounded_real", system, backoff=0)
+    assert r.verdict == "certified" and r.certificate.verdict == "certified", r.certificate.reason
+    assert len(r.route["steps"]) == 1 and r.route["steps"][0]["upper"]["proven"]
+    enc = r.enclosure
+    assert enc["primal"] == "restored point" and enc["rel_gap"] <= 1e-6
+    assert enc["lower"] <= b and a <= enc["upper"]
+    assert audit_enclosure(r.problem, enc, r.certificate)["ok"]
