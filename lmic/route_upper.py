@@ -13,8 +13,8 @@ better enclosure.
 
 Examples
 --------
->>> upper_budget(0.5), upper_budget(10.0)
-(20.0, 100.0)
+>>> upper_budget(0.5), upper_budget(5.0), upper_budget(60.0)
+(20.0, 100.0, 150.0)
 """
 
 from __future__ import annotations
@@ -31,17 +31,22 @@ from lmic.outcome import Outcome
 __all__ = ["UPPER_FACTOR", "UPPER_MIN_S", "upper_budget", "upper_route"]
 
 #: the search of :func:`upper_route` may take this many times the step's solve ...
-UPPER_FACTOR = 10.0
+UPPER_FACTOR = 20.0
 #: ... and at least this many seconds (n = 20 near-unstable bounded-real lemma: 1.5 to 3 s)
 UPPER_MIN_S = 20.0
+#: ... and at most this many (every solve of the search is stopped at the deadline)
+UPPER_MAX_S = 150.0
 #: backends whose points are first-order accurate, and the interior point used in their place
 FIRST_ORDER = ("scs", "cosmo")
 INTERIOR_FALLBACK = "clarabel"
+#: the backends for a recentred (dense) solve the step's backend fails: SDPA solves the
+#: 50-state bounded-real lemma's where Clarabel stops at NumericalError (CVXOPT: over 10 min)
+ALTERNATIVES = ("sdpa", "clarabel")
 
 
 def upper_budget(solve_s: float) -> float:
-    """Seconds for :func:`upper_route` after a solve of ``solve_s`` seconds."""
-    return max(UPPER_MIN_S, UPPER_FACTOR * float(solve_s))
+    """Seconds for :func:`upper_route` after a solve of ``solve_s`` seconds (at most :data:`UPPER_MAX_S`)."""
+    return min(UPPER_MAX_S, max(UPPER_MIN_S, UPPER_FACTOR * float(solve_s)))
 
 
 def _ends(problem: Problem, enc: dict[str, Any]) -> tuple[float | None, float | None]:
@@ -109,7 +114,10 @@ def upper_route(
     def passes(x: np.ndarray) -> bool:  # the certifier's verdict, for the step's outcome
         return certify(problem, _solution(problem, sol, x, "")).verdict == "certified"
 
-    r = upper_from_lower(problem, dual_end, solver, options, x_hint=sol.x, deadline=deadline, check=passes)
+    others = tuple(b for b in ALTERNATIVES if b not in str(getattr(solver, "name", solver)).lower())
+    r = upper_from_lower(
+        problem, dual_end, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
+    )
     step["upper"] = {k: r[k] for k in ("proven", "rel_gap", "reason", "time_s")}
     sgn = -1.0 if problem.objective.sense == "max" else 1.0
     if not r["proven"] or (primal is not None and sgn * r["value"] >= sgn * primal):

@@ -62,6 +62,8 @@ START_DELTAS = (1e-4, 1e-3, 1e-2)
 CHECK_DELTAS = (1e-3, 1e-2, 1e-1)
 #: the box ``|w_k| <= RADIUS`` of the recentred solves (a unit ``w_k`` moves the blocks by about their margin)
 RADIUS = 10.0
+#: an LMI whose ``F(x0)`` has condition number at most this gets a diagonal congruence (sparse)
+DIAGONAL_COND = 1e4
 #: the factor ``delta`` shrinks by after each proved recentred point
 STEP = 30.0
 #: the recentred problem is built with a dense congruence: above this many coefficient
@@ -110,27 +112,37 @@ def recentred_problem(
     x0 = np.asarray(x0, dtype=float)
     xx0 = np.concatenate([[1.0], x0])
     d = np.ones(n)
-    blocks = []
+    blocks: list[tuple[Any, Any]] = []
     for lmi in problem.lmis:
         C = lmi.coeffs.tocsc().astype(float)
-        if local:
-            T = np.linalg.inv(np.linalg.cholesky(tril_unvec(np.asarray(C @ xx0).ravel(), lmi.dim)))
-            K = _congruence(T)
-            blocks.append((K @ np.asarray(C @ xx0).ravel(), K @ C[:, 1:].toarray()))
-        else:
+        if not local:
             blocks.append((None, None))
+            continue
+        w0 = np.asarray(C @ xx0).ravel()
+        W = tril_unvec(w0, lmi.dim)
+        ev = np.linalg.eigvalsh(W)
+        if ev[0] > 0 and ev[-1] <= DIAGONAL_COND * ev[0]:  # well conditioned: a diagonal congruence
+            g = 1.0 / np.sqrt(np.diag(W))
+            i, j = tril_rows_cols(lmi.dim)
+            k = g[i] * g[j]
+            blocks.append((k * w0, sp.csc_matrix(sp.diags(k) @ C[:, 1:])))
+        else:
+            K = _congruence(np.linalg.inv(np.linalg.cholesky(W)))
+            blocks.append((K @ w0, sp.csc_matrix(K @ C[:, 1:].toarray())))
     if local:
         # every variable moves the congruent blocks by about one (the current margins are one)
-        size = np.max([np.max(np.abs(Fk), axis=0) for _, Fk in blocks], axis=0) if blocks else np.zeros(n)
+        size = np.zeros(n)
+        for _, Fk in blocks:
+            size = np.maximum(size, np.asarray(abs(Fk).max(axis=0).todense()).ravel())
         d = np.where(size > 0, 1.0 / np.where(size > 0, size, 1.0), d)
     lmis = []
     for lmi, (F0, Fk) in zip(problem.lmis, blocks, strict=True):
         i, j = tril_rows_cols(lmi.dim)
-        scol = np.where(i == j, -1.0, 0.0)
+        scol = sp.csc_matrix(np.where(i == j, -1.0, 0.0)[:, None])
         if local:
-            coeffs = sp.csc_matrix(np.column_stack([F0, Fk * d[None, :], scol]))
+            coeffs = sp.hstack([sp.csc_matrix(F0[:, None]), Fk @ sp.diags(d), scol]).tocsc()
         else:
-            coeffs = sp.hstack([lmi.coeffs.tocsc().astype(float), sp.csc_matrix(scol[:, None])]).tocsc()
+            coeffs = sp.hstack([lmi.coeffs.tocsc().astype(float), scol]).tocsc()
         lmis.append(LMI(lmi.name, lmi.dim, coeffs, False, lmi.relation, lmi.block_sizes))
     lin = problem.linear
     A = lin.A.tocsr().astype(float)
@@ -186,6 +198,7 @@ def upper_from_lower(
     target: float | None = None,
     deadline: float | None = None,
     check: Callable[[np.ndarray], bool] | None = None,
+    alternatives: tuple[Any, ...] = (),
 ) -> dict[str, Any]:
     """A point proved feasible whose objective is near the proven dual end ``lower``.
 
@@ -209,6 +222,9 @@ def upper_from_lower(
         a larger margin than the proof): the best proved point that passes it is returned as
         ``checked_x`` / ``checked_value``, with margin solves at the larger backoffs of
         :data:`CHECK_DELTAS` when no point of the search passes.
+    alternatives : tuple of str or Backend
+        Backends for a recentred solve that ``backend`` ends without a point (tried in turn;
+        the first that gives one is used for the rest of the search).
 
     Returns
     -------
@@ -226,7 +242,7 @@ def upper_from_lower(
     sgn, q = _min_form(problem)
     low = sgn * float(lower)  # the dual end in the minimisation form
     scale = max(1.0, abs(low))
-    be = backend if not isinstance(backend, str) else get_backend(backend)
+    solvers = [b if not isinstance(b, str) else get_backend(b) for b in [backend, *alternatives]]
     hint = 0.0 if x_hint is None else float(np.max(np.abs(np.asarray(x_hint, dtype=float)), initial=0.0))
     # the box of the margin solve: ten times the objective's size, then the solver point's
     # (a loose box lets the solver drift to huge, less accurate points)
@@ -257,15 +273,24 @@ def upper_from_lower(
             left = max(1.0, deadline - time.perf_counter())
             given = options if options is not None else SolveOptions()
             opts = replace(given, time_limit=min(left, given.time_limit or left))
-        try:
-            sol = solve_with_reductions(be, target_problem, opts)
-        except (LmicError, np.linalg.LinAlgError, ValueError, ArithmeticError) as exc:
-            step.update(status="error", proven=False, reason=str(exc)[:200], time_s=time.perf_counter() - t1)
+        sol = None
+        # a recentred problem is dense: where the backend fails on it (Clarabel, NumericalError at
+        # 50 states), the alternatives in turn; the first that gives a point is kept for the rest
+        for k, solver in enumerate(solvers if x0 is not None else solvers[:1]):
+            try:
+                sol = solve_with_reductions(solver, target_problem, opts)
+            except (LmicError, np.linalg.LinAlgError, ValueError, ArithmeticError) as exc:
+                step.update(status="error", reason=str(exc)[:200])
+                continue
+            if sol.x is not None:
+                if k:
+                    solvers.insert(0, solvers.pop(k))
+                    step["backend"] = str(getattr(solver, "name", solver))
+                break
+        if sol is None or sol.x is None:
+            step.update(proven=False, status=getattr(sol, "status", "error"), time_s=time.perf_counter() - t1)
             return False
         step["status"] = sol.status
-        if sol.x is None:
-            step.update(proven=False, time_s=time.perf_counter() - t1)
-            return False
         x = base + d * np.asarray(sol.x, dtype=float)[: problem.n]
         pe = primal_end(problem, x)
         step.update(proven=bool(pe["proven"]), reason=pe["reason"], time_s=time.perf_counter() - t1)
