@@ -147,7 +147,8 @@ def upper_route(
     new = Outcome(
         "certified",
         evidence_of("certified", cert2),
-        f"{out.reason}; a point from the proven dual end certifies the optimum: {enc2['reason']}",
+        f"{cert2.reason} (the most interior point near the proven dual end; the solver's point: "
+        f"{out.verdict}); the enclosure proves the optimum: {enc2['reason']}",
         list(out.attempts),
         sol2,
         cert2,

@@ -8,6 +8,7 @@ independently (Hamiltonian bisection, ``certify_helpers.hinf_norm``) inside it.
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
@@ -18,7 +19,7 @@ sys.path.insert(0, str(Path(__file__).parents[1] / "certify"))
 from certify_helpers import hinf_norm, stable_system  # noqa: E402
 
 from lmic.api import solve  # noqa: E402
-from lmic.certify import certify  # noqa: E402
+from lmic.certify import audit_certificate, certify, write_certificate  # noqa: E402
 from lmic.certify.enclosure import primal_end  # noqa: E402
 from lmic.certify.enclosure_audit import audit_enclosure  # noqa: E402
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable  # noqa: E402
@@ -32,7 +33,7 @@ def _near_unstable(n: int, seed: int) -> tuple[dict, tuple[float, float]]:
     return system, hinf_norm(A, B, C)
 
 
-def test_near_unstable_brl_default_route_certified_with_gap_below_1e_6() -> None:
+def test_near_unstable_brl_default_route_certified_with_gap_below_1e_6(tmp_path: Path) -> None:
     system, (a, b) = _near_unstable(8, 6)
     alone = solve("tutorial.bounded_real", system, backend="clarabel", backoff=0)
     assert alone.verdict != "certified"  # the case the route must rescue
@@ -50,6 +51,21 @@ def test_near_unstable_brl_default_route_certified_with_gap_below_1e_6() -> None
     xo = np.asarray(r.solution.x, dtype=float)
     cert = certify(r.problem, Solution(status="optimal", x=xo, objective=r.problem.objective.value(xo)))
     assert cert.verdict == "certified", cert.reason
+    # the certificate file and `lmic audit` (audit_certificate), then a tampered restored point
+    from lmic.system import load_system
+
+    sys_path = tmp_path / "system.json"
+    sys_path.write_text(json.dumps(system))
+    path = tmp_path / "brl.json"
+    write_certificate(
+        path, r.problem, r.solution, r.certificate, system=load_system(str(sys_path)), enclosure=enc, backoff=r.backoff
+    )
+    ok = audit_certificate(path)
+    assert ok.ok and "enclosure" in ok.checked, ok.message
+    doc = json.loads(path.read_text())
+    doc["enclosure"]["restored_x"] = [v * (1 + 1e-3) for v in doc["enclosure"]["restored_x"]]
+    path.write_text(json.dumps(doc))
+    assert not audit_certificate(path).ok
     # a tampered upper end (below the point's objective), or a tampered point, is rejected
     lowered = dict(enc, upper=enc["upper"] - 1e-9 * abs(enc["upper"]))
     assert not audit_enclosure(r.problem, lowered, r.certificate)["ok"]
@@ -85,10 +101,13 @@ def test_upper_from_lower_with_a_wrong_dual_end_proves_nothing() -> None:
 
 def test_recentred_problem_is_the_identity_at_the_centre() -> None:
     p = _strict_pair()
-    q, d = recentred_problem(p, np.array([3.0]), 2.0)
-    F0 = q.lmis[0].coeffs.toarray()[:, 0]
-    assert np.allclose(F0, [1.0, 0.0, 1.0])  # T F(x0) T^T = I in the storage order
+    # ill-conditioned F(x0) = [[t, 1], [1, t]], t = 1 + 1e-6: the full congruence, T F(x0) T^T = I
+    q, d = recentred_problem(p, np.array([1.0 + 1e-6]), 1.0)
+    assert np.allclose(q.lmis[0].coeffs.toarray()[:, 0], [1.0, 0.0, 1.0], atol=1e-9)
     assert d.shape == (1,) and d[0] > 0
+    # well conditioned (t = 3): the diagonal congruence, unit diagonal, the sparsity kept
+    q, d = recentred_problem(p, np.array([3.0]), 2.0)
+    assert np.allclose(q.lmis[0].coeffs.toarray()[:, 0], [1.0, 1.0 / 3.0, 1.0])
 
 
 def test_near_unstable_brl_undecided_alone_gets_an_upper_end() -> None:
