@@ -99,15 +99,22 @@ def test_upper_from_lower_with_a_wrong_dual_end_proves_nothing() -> None:
     assert "no solve gave a point proved feasible" in r["reason"]
 
 
-def test_recentred_problem_is_the_identity_at_the_centre() -> None:
+def test_recentred_problem_is_the_identity_at_the_centre(monkeypatch) -> None:
+    import lmic.upper_end
+
     p = _strict_pair()
-    # ill-conditioned F(x0) = [[t, 1], [1, t]], t = 1 + 1e-6: the full congruence, T F(x0) T^T = I
-    q, d = recentred_problem(p, np.array([1.0 + 1e-6]), 1.0)
-    assert np.allclose(q.lmis[0].coeffs.toarray()[:, 0], [1.0, 0.0, 1.0], atol=1e-9)
-    assert d.shape == (1,) and d[0] > 0
-    # well conditioned (t = 3): the diagonal congruence, unit diagonal, the sparsity kept
+    # F(x0) = [[t, 1], [1, t]]: the full congruence, T F(x0) T^T = I
+    for t in (3.0, 1.0 + 1e-6):
+        q, d = recentred_problem(p, np.array([t]), 1.0)
+        assert np.allclose(q.lmis[0].coeffs.toarray()[:, 0], [1.0, 0.0, 1.0], atol=1e-9)
+        assert d.shape == (1,) and d[0] > 0
+    # a "large" problem: the well-conditioned block (t = 3) gets the diagonal congruence, unit
+    # diagonal, the ill-conditioned one (t = 1 + 1e-6) still the full one
+    monkeypatch.setattr(lmic.upper_end, "FULL_MAX", 0)
     q, d = recentred_problem(p, np.array([3.0]), 2.0)
     assert np.allclose(q.lmis[0].coeffs.toarray()[:, 0], [1.0, 1.0 / 3.0, 1.0])
+    q, d = recentred_problem(p, np.array([1.0 + 1e-6]), 1.0)
+    assert np.allclose(q.lmis[0].coeffs.toarray()[:, 0], [1.0, 0.0, 1.0], atol=1e-9)
 
 
 def test_near_unstable_brl_undecided_alone_gets_an_upper_end() -> None:
