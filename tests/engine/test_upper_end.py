@@ -161,3 +161,14 @@ def test_a_missing_primal_end_is_found_from_the_dual_end_without_escalating(monk
     assert enc["primal"] == "restored point" and enc["rel_gap"] <= 1e-6
     assert enc["lower"] <= b and a <= enc["upper"]
     assert audit_enclosure(r.problem, enc, r.certificate)["ok"]
+
+
+def test_upper_from_lower_on_a_maximisation_stays_below_the_dual_end() -> None:
+    from lmic.testing.conformance import CASES
+
+    p = CASES["max_sense"].build()
+    enc = solve(p, backend="clarabel", backoff=0).enclosure
+    r = upper_from_lower(p, enc["upper"], "clarabel")
+    assert r["proven"] and r["value"] <= enc["upper"] and r["rel_gap"] <= 1e-6
+    pe = primal_end(p, np.asarray(r["x"]))
+    assert pe["proven"] and pe["value"] == r["value"]
