@@ -258,6 +258,8 @@ def rounded_products(C: sp.csr_matrix, xx: np.ndarray) -> np.ndarray | None:
 
 #: the largest LMI :func:`exact_lmi` evaluates in rationals
 EXACT_LMI_MAX_DIM = 200
+#: ... with at most this many coefficients (rational products: about a second at the limit)
+EXACT_LMI_MAX_TERMS = 400_000
 
 
 def exact_lmi(C: sp.csr_matrix, xx: np.ndarray, dim: int, shift: float = 0.0) -> bool:
@@ -277,9 +279,9 @@ def exact_lmi(C: sp.csr_matrix, xx: np.ndarray, dim: int, shift: float = 0.0) ->
 
     from lmic.certify.psd import prove_pd
 
-    if dim > EXACT_LMI_MAX_DIM or not np.all(np.isfinite(xx)):
-        return False
     C = C.tocsr()
+    if dim > EXACT_LMI_MAX_DIM or C.nnz > EXACT_LMI_MAX_TERMS or not np.all(np.isfinite(xx)):
+        return False
     f = np.asarray(C @ xx).ravel()
     if float(np.linalg.eigvalsh(tril_unvec(f, dim))[0]) <= shift:
         return False
