@@ -34,7 +34,8 @@ __all__ = ["UPPER_FACTOR", "UPPER_MIN_S", "upper_budget", "upper_route"]
 UPPER_FACTOR = 20.0
 #: ... and at least this many seconds (n = 20 near-unstable bounded-real lemma: 1.5 to 3 s)
 UPPER_MIN_S = 20.0
-#: ... and at most this many (every solve of the search is stopped at the deadline)
+#: ... and at most this many, over all the steps of one route (every solve of the search is
+#: stopped at the deadline)
 UPPER_MAX_S = 150.0
 #: backends whose points are first-order accurate, and the interior point used in their place
 FIRST_ORDER = ("scs", "cosmo")
@@ -77,16 +78,19 @@ def upper_route(
     options: Any,
     exact: bool,
     gap: float,
-    step: dict[str, Any],
+    steps: list[dict[str, Any]],
 ) -> tuple[Outcome, dict[str, Any] | None, float]:
     """The step ``out`` (its enclosure ``enc``) with a primal end from its dual end, when it lacks one.
 
     Runs only for an optimisation problem whose step has a solution with a dual point and whose
     enclosure has no primal end or a relative gap above
     :data:`lmic.certify.enclosure.GAP_TARGET`. Returns the (possibly new) outcome, enclosure
-    and the seconds spent; ``step`` (the route's record) gets ``upper`` (what was tried) and
-    the new ``rel_gap`` / ``verdict``.
+    and the seconds spent; ``steps`` are the route's records so far, the last one this step's: it
+    gets ``upper`` (what was tried) and the new ``rel_gap`` / ``verdict``. The searches of one
+    route share :data:`UPPER_MAX_S` seconds (the earlier steps' ``upper.time_s``).
     """
+    step = steps[-1]
+    spent = sum(float((s.get("upper") or {}).get("time_s", 0.0)) for s in steps[:-1])
     sol = out.solution
     if problem.objective.sense == "feasibility" or sol is None:
         return out, enc, 0.0
@@ -100,7 +104,11 @@ def upper_route(
 
     t0 = time.perf_counter()
     solve_s = float(getattr(sol, "solve_s", 0.0) or 0.0)
-    deadline = t0 + upper_budget(solve_s)
+    left = UPPER_MAX_S - spent
+    if left <= 0.0:
+        step["upper"] = {"proven": False, "reason": f"the route's {UPPER_MAX_S:g} s for the primal end are spent"}
+        return out, enc, 0.0
+    deadline = t0 + min(upper_budget(solve_s), left)
     if enc is None:  # no certified point: the dual end alone (the face route needs no dual point)
         enc = enclosure(problem, sol.duals or None, None, exact=exact, budget_s=upper_budget(solve_s))
     dual_end, primal = _ends(problem, enc)
@@ -118,7 +126,8 @@ def upper_route(
     r = upper_from_lower(
         problem, dual_end, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
     )
-    step["upper"] = {k: r[k] for k in ("proven", "rel_gap", "reason", "time_s")}
+    step["upper"] = {k: r[k] for k in ("proven", "rel_gap", "reason")}
+    step["upper"]["time_s"] = time.perf_counter() - t0
     sgn = -1.0 if problem.objective.sense == "max" else 1.0
     if not r["proven"] or (primal is not None and sgn * r["value"] >= sgn * primal):
         return out, enc, time.perf_counter() - t0

@@ -438,7 +438,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
             step["rel_gap"] = rel
             if rel is None:
                 step["gap_note"] = _gap_note(enc)
-        out, enc, t_up = upper_route(problem, out, enc, name, opts, exact, options.gap, step)  # lmic.route_upper
+        out, enc, t_up = upper_route(problem, out, enc, name, opts, exact, options.gap, steps)  # lmic.route_upper
         enc_s += t_up
         if holds and enc is not None and enc.get("rel_gap") is not None and enc["rel_gap"] <= options.gap:
             out = _upgrade(out, enc)  # the enclosure proves the optimum whatever the solver's status
