@@ -8,16 +8,19 @@ without trusting the solver's point, in the minimisation form (``q`` the objecti
 
 1. **margin solve**: ``max s`` subject to ``F_i(x) >= s I`` on every LMI, ``l_r(x) >= s`` on
    every ``ge`` row (``eq`` rows kept), ``q(x) <= L + delta_0 max(1, |L|)`` and ``|x_k| <= R``
-   (``R`` ten times ``max(1, |L|)``, then ten times the solver's point): the most interior point of the slice, proved
-   by :func:`lmic.certify.enclosure.primal_end` (``delta_0`` in :data:`START_DELTAS`);
+   (``R`` ten times ``max(1, |L|)``, then ten times the solver's point): the most interior
+   point of the slice, proved by :func:`lmic.certify.enclosure.primal_end` (``delta_0`` in
+   :data:`START_DELTAS`);
 2. **recentred solves**: from the last proved point ``x_0`` (``W_i = F_i(x_0) > 0``), with
    ``T_i`` the inverse Cholesky factor of ``W_i`` and the variables shifted and scaled,
    ``x = x_0 + diag(d) w`` (``1 / d_k`` the largest entry of the blocks ``T_i F_i^(k) T_i^T``:
    a unit ``w_k`` moves them by about one), the same problem is solved in the local metric:
    ``max s`` s.t. ``T_i F_i(x_0 + diag(d) w) T_i^T >= s I``, ``l_r(x) / l_r(x_0) >= s``,
-   ``q(x) <= L + delta max(1, |L|)``, ``|w_k| <= RADIUS``. At ``w = 0``
-   every block is the identity, so the solver's error is relative to the current margins and
-   not to the size of ``F_i``: where the slice at ``delta`` is ``1e-13`` thin relative to the
+   ``q(x) <= L + delta max(1, |L|)``, ``|w_k| <= RADIUS`` (above :data:`FULL_MAX` dense
+   entries, a block whose ``W_i`` is well conditioned gets the diagonal congruence instead:
+   sparse; a recentred solve the backend ends without a point goes to the ``alternatives``).
+   At ``w = 0`` every block is the identity (its diagonal), so the solver's error is relative
+   to the current margins, not to the size of ``F_i``: where the slice at ``delta`` is ``1e-13`` thin relative to the
    entries (measured: ``n = 20`` near-unstable bounded-real lemma) a plain solve returns
    points violated by ``1e-8``, the recentred one points that hold. ``delta`` is divided by
    :data:`STEP` while the point is proved, by ``sqrt(STEP)`` once after a failure.
