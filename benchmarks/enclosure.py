@@ -29,9 +29,11 @@ the IR's coefficients ``A_aa + A_bb`` are rounded sums, so the face route of
 sums are exact, the IR itself has the structure: ``problem`` ``ir``) and ``near`` (spectral
 abscissa -0.01: Clarabel alone stops at AlmostSolved or NumericalError on many seeds; the
 ``solver alone`` column gives its status, ``--default-route`` adds one run of the default
-policy). ``inside`` says whether the enclosure is consistent with the H-infinity norm's
-bracket ``[a, b]`` from a Hamiltonian bisection (``lower <= b``, ``a <= upper``); ``lower err``
-and ``upper err`` are ``(a - lower) / a`` and ``(upper - b) / b``.
+policy; its ``primal`` says where the upper end comes from: a ``restored point`` is the
+point :mod:`lmic.upper_end` proves near the dual end when the solver's gives none).
+``inside`` says whether the enclosure is consistent with the H-infinity norm's bracket
+``[a, b]`` from a Hamiltonian bisection (``lower <= b``, ``a <= upper``); ``lower err`` and
+``upper err`` are ``(a - lower) / a`` and ``(upper - b) / b``.
 
 On a shared machine run it with ``OPENBLAS_NUM_THREADS=1``: the proof does many small dense
 solves (``n x n``), which multi-threaded BLAS slows down ten-fold when the cores are busy
@@ -197,6 +199,7 @@ def run_once(problem: Any, backend: str, method: str) -> dict[str, Any]:
         about=enc.get("problem"),
         backend=r.backend,
         route=dual.get("route") if dual.get("proven") else None,
+        primal=enc.get("primal"),
         conditional=(enc.get("conditional") or {}).get("value"),
         dual=dual.get("reason", ""),
         enclosure_s=r.timings.get("enclosure_s"),
@@ -282,7 +285,8 @@ def main(argv: list[str] | None = None) -> int:
                 try:
                     d = run_once(prob, None, "enclosure")
                     row["default_route"] = {
-                        k: d.get(k) for k in ("verdict", "backend", "lower", "upper", "rel_gap", "route", "time_s")
+                        k: d.get(k)
+                        for k in ("verdict", "backend", "lower", "upper", "rel_gap", "route", "primal", "time_s")
                     }
                 except Exception as exc:  # a benchmark cell, not a crash
                     row["default_route"] = f"{type(exc).__name__}: {exc}"

@@ -177,13 +177,26 @@ def backoff(
         out["time_s"] = time.perf_counter() - t0
         return out
     out["status"] = sol.status
+    other = None
     if sol.x is None:
-        out.update(verdict="undecided", reason=f"backoff solve ended {sol.status} without a point ({sol.message})")
-        out["time_s"] = time.perf_counter() - t0
-        return out
-    x = np.asarray(sol.x, dtype=float)[: problem.n]
-    mine = Solution(status=sol.status, x=x, objective=problem.objective.value(x), backend=sol.backend)
-    cert = certify(problem, mine)
+        other = _largest_margin(problem, out["bound"], be, options)
+        if other is None:
+            out.update(verdict="undecided", reason=f"backoff solve ended {sol.status} without a point ({sol.message})")
+            out["time_s"] = time.perf_counter() - t0
+            return out
+        x, mine, cert = other
+        out["method"] = "largest margin"
+    else:
+        x = np.asarray(sol.x, dtype=float)[: problem.n]
+        mine = Solution(status=sol.status, x=x, objective=problem.objective.value(x), backend=sol.backend)
+        cert = certify(problem, mine)
+    if cert.verdict != "certified" and other is None:
+        # a slice too thin for the solver's accuracy (a near-singular optimum): its most interior
+        # point instead (lmic.upper_end.margin_problem, box ten times the objective's size)
+        other = _largest_margin(problem, out["bound"], be, options)
+        if other is not None:
+            x, mine, cert = other
+            out["method"] = "largest margin"
     d = cert.to_dict()
     out.update(
         verdict=cert.verdict,
@@ -287,3 +300,23 @@ def restore(
         "objective": None if xr is None else problem.objective.value(xr),
         "time_s": time.perf_counter() - t0,
     }
+
+
+def _largest_margin(problem: Problem, bound: float, backend: Any, options: Any) -> tuple[np.ndarray, Any, Any] | None:
+    """``(x, solution, certificate)`` of the most interior point with objective within ``bound``
+    (:func:`lmic.upper_end.margin_problem`), when the certifier certifies it; else ``None``."""
+    from lmic.certify import certify
+    from lmic.solution import Solution
+    from lmic.upper_end import margin_problem
+
+    s = -1.0 if problem.objective.sense == "max" else 1.0
+    try:
+        sol = solve_with_reductions(backend, margin_problem(problem, s * bound, 10.0 * max(1.0, abs(bound))), options)
+    except LmicError:
+        return None
+    if sol.x is None:
+        return None
+    x = np.asarray(sol.x, dtype=float)[: problem.n]
+    mine = Solution(status=sol.status, x=x, objective=problem.objective.value(x), backend=sol.backend)
+    cert = certify(problem, mine)
+    return (x, mine, cert) if cert.verdict == "certified" else None

@@ -56,6 +56,7 @@ from lmic.route_rule import (
 )
 from lmic.route_unbounded import unbounded_checked as _unbounded_checked
 from lmic.route_unbounded import unbounded_outcome
+from lmic.route_upper import upper_route
 
 __all__ = [
     "RouteResult",
@@ -292,19 +293,16 @@ def tighten(
         return enc
     key = "upper" if problem.objective.sense == "min" else "lower"
     if gap is None and enc.get(key) is not None:
-        # the primal end is proven and the dual end is not: the dual search already tried its
-        # perturbed and centred routes; a tighter solve puts the dual nearer the boundary of its
-        # cone, not inside it (on the bounded-real lemma at n = 20 it doubled the time, 6.5 s of
-        # 12, and proved nothing), so there is nothing for a re-solve to tighten
+        # the primal end is proven, the dual end not (the dual search tried its perturbed and centred routes): a
+        # tighter solve puts the dual nearer its cone's boundary (BRL n = 20: twice the time, nothing proved)
         return enc
     base_tol = options.tol if options is not None else SolveOptions().tol
     out = enc
     for tol in [t for t in TIGHT_TOLS if t < base_tol]:
         if deadline is not None and time.perf_counter() + 2.0 * solve_s > deadline:
             break  # a tight re-solve (typically slower than the first) would not fit the budget
-        # the strict margin shrinks with the tolerance (never below what the solver resolves:
-        # strict.py keeps delta >= 10 tol): at the default 1e-7 the primal end of a problem
-        # whose multipliers have trace ~300 stays 3e-5 above the optimum at any tolerance
+        # the strict margin shrinks with the tolerance (strict.py keeps delta >= 10 tol): at the default 1e-7
+        # the primal end of a problem whose multipliers have trace ~300 stays 3e-5 above the optimum
         base = options if options is not None else SolveOptions()
         tight = replace(base, tol=tol, margin=min(base.margin, 10.0 * tol))
         out = _tighten_once(problem, out, x, exact, backend, tight, resolve, solve_point, deadline, key)
@@ -442,6 +440,8 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
             step["rel_gap"] = rel
             if rel is None:
                 step["gap_note"] = _gap_note(enc)
+        out, enc, t_up = upper_route(problem, out, enc, name, opts, exact, options.gap, steps)  # lmic.route_upper
+        enc_s += t_up
         if holds and enc is not None and enc.get("rel_gap") is not None and enc["rel_gap"] <= options.gap:
             out = _upgrade(out, enc)  # the enclosure proves the optimum whatever the solver's status
             step["verdict"] = out.verdict

@@ -71,6 +71,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "lmic.route_rule",
             "lmic.route_unbounded",
             "lmic.backoff",
+            "lmic.upper_end",
+            "lmic.route_upper",
             "lmic.testing.*",
         ),
     ),

@@ -26,7 +26,7 @@ import scipy.sparse as sp
 
 from lmic.certify.enclosure_repair import _pack
 from lmic.ir.problem import Problem
-from lmic.ir.svec import tril_unvec
+from lmic.ir.svec import tril_rows_cols, tril_unvec
 
 __all__ = [
     "lambda_min_lower",
@@ -91,6 +91,22 @@ def lambda_min_lower(A: np.ndarray) -> float:
         best = max(best, lb)
         if lb > 0 or est <= 0:
             break
+    if best <= 0 < est:
+        # a margin below the floor 4 (d + 1)^2 u ||A|| of the shifts above (a point near a
+        # singular optimum: 8e-9 on entries 4.5e4): shifts between 0 and the estimate, whose
+        # Cholesky may still succeed; the error bound is the same, whatever the shift
+        for f in (0.5, 0.8, 0.2, 0.95):
+            s = est * f
+            try:
+                R = np.linalg.cholesky(A - s * np.eye(d))
+            except np.linalg.LinAlgError:
+                continue
+            if not np.all(np.isfinite(R)):
+                continue
+            err = (g * float(np.sum(R * R)) + _U * float(np.max(np.abs(np.diag(A - s * np.eye(d)))))) * _SAFE
+            best = max(best, _down(s - err))
+            if best > 0:
+                break
     return best
 
 
@@ -200,6 +216,94 @@ def _prove_float(problem: Problem, J, ranges, q, mats, y, active: np.ndarray | N
     }
 
 
+def rounded_products(C: sp.csr_matrix, xx: np.ndarray) -> np.ndarray | None:
+    """``C @ xx`` with every entry the exact value rounded to nearest (error ``<= u |f| + 2^-1074``),
+    or ``None`` where the error-free products do not apply (overflow, underflow).
+
+    Each product is split exactly, ``a b = p + e`` (Dekker's TwoProduct with Veltkamp's
+    splitting; exact without overflow or underflow), and :func:`math.fsum` rounds the exact sum
+    of the pieces once.
+
+    >>> C = sp.csr_matrix(np.array([[1.0, 1e-16, -1.0]]))
+    >>> rounded_products(C, np.ones(3)).tolist(), (C @ np.ones(3)).tolist()
+    ([1e-16], [0.0])
+    """
+    C = C.tocsr()
+    a = C.data.astype(float)
+    b = np.asarray(xx, dtype=float)[C.indices]
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+        return None
+    # Veltkamp's split and Dekker's product are exact when no piece over- or underflows: every
+    # non-zero factor in [2^-400, 2^500] (the pieces' products are then above 2^-860)
+    p = a * b
+    for v in (a, b):
+        m = np.abs(v[v != 0])
+        if m.size and (float(m.max()) > 2.0**500 or float(m.min()) < 2.0**-400):
+            return None
+
+    def split(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        c = 134217729.0 * v  # 2^27 + 1
+        h = c - (c - v)
+        return h, v - h
+
+    ah, al = split(a)
+    bh, bl = split(b)
+    e = al * bl - (((p - ah * bh) - al * bh) - ah * bl)
+    out = np.empty(C.shape[0])
+    for r in range(C.shape[0]):
+        lo, hi = C.indptr[r], C.indptr[r + 1]
+        out[r] = math.fsum(np.concatenate([p[lo:hi], e[lo:hi]]).tolist())
+    return out
+
+
+#: the largest LMI :func:`exact_lmi` evaluates in rationals
+EXACT_LMI_MAX_DIM = 200
+#: ... with at most this many coefficients (rational products: about a second at the limit)
+EXACT_LMI_MAX_TERMS = 400_000
+
+
+def exact_lmi(C: sp.csr_matrix, xx: np.ndarray, dim: int, shift: float = 0.0) -> bool:
+    """Whether ``F(x) - shift I`` is proved positive definite in exact arithmetic.
+
+    ``F(x)`` (storage ``C``, ``xx = (1, x)``) is evaluated exactly (the floats are dyadic
+    rationals) and :func:`lmic.certify.psd.prove_pd` decides, without floating-point doubt:
+    the last resort of :func:`primal_end` for a margin below the floating-point bounds (a
+    point near a singular optimum). Only tried where the float estimate of ``lambda_min`` is
+    above ``shift`` and ``dim <= EXACT_LMI_MAX_DIM``.
+
+    >>> C = sp.csr_matrix(np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1e-10]]))
+    >>> exact_lmi(C, np.array([1.0, 1.0]), 2), exact_lmi(C, np.array([1.0, -1.0]), 2)
+    (True, False)
+    """
+    from fractions import Fraction
+
+    from lmic.certify.psd import prove_pd
+
+    C = C.tocsr()
+    if dim > EXACT_LMI_MAX_DIM or C.nnz > EXACT_LMI_MAX_TERMS or not np.all(np.isfinite(xx)):
+        return False
+    f = np.asarray(C @ xx).ravel()
+    if float(np.linalg.eigvalsh(tril_unvec(f, dim))[0]) <= shift:
+        return False
+    xq = [Fraction(float(v)) for v in xx]
+    vals = []
+    for r in range(C.shape[0]):
+        lo, hi = C.indptr[r], C.indptr[r + 1]
+        vals.append(
+            sum((Fraction(float(v)) * xq[k] for k, v in zip(C.indices[lo:hi], C.data[lo:hi], strict=True)), Fraction(0))
+        )
+    i, j = tril_rows_cols(dim)
+    t = Fraction(float(shift))
+    for p in np.flatnonzero(i == j).tolist():
+        vals[p] -= t
+    den = max((v.denominator for v in vals), default=1)  # powers of two: the largest is a multiple of all
+    M = [[0] * dim for _ in range(dim)]
+    for r, v in enumerate(vals):
+        a, b = int(i[r]), int(j[r])
+        M[a][b] = M[b][a] = int(v * den)
+    return bool(prove_pd(M)["proven"])
+
+
 def primal_end(problem: Problem, x: np.ndarray) -> dict[str, Any]:
     """Prove ``x`` feasible with rigorous rounding, and bound its objective outwards.
 
@@ -250,8 +354,15 @@ def primal_end(problem: Problem, x: np.ndarray) -> dict[str, Any]:
         F = tril_unvec(f, lmi.dim)
         E = tril_unvec(err, lmi.dim)
         lb = lambda_min_lower(0.5 * (F + F.T)) - float(np.linalg.norm(E)) * _SAFE
+        if not lb > 0:  # the evaluation's a priori bound may be what fails: evaluate exactly rounded
+            fe = rounded_products(C, xx)
+            if fe is not None:
+                Ee = tril_unvec(_U * np.abs(fe) + _ETA, lmi.dim)
+                lb = max(lb, _down(lambda_min_lower(tril_unvec(fe, lmi.dim)) - float(np.linalg.norm(Ee)) * _SAFE))
         if pl:  # the exact counterpart's difference, subtracted rounding down
             lb = _down(_down(lb) - pl[i_lmi])
+        if not (lb > 0 if lmi.strict else lb >= 0) and exact_lmi(C, xx, lmi.dim, pl[i_lmi] if pl else 0.0):
+            lb = 0.0 if not lmi.strict else math.ulp(0.0)  # proved exactly: F(x) - pl I > 0
         if not (lb > 0 if lmi.strict else lb >= 0):
             return {
                 "proven": False,

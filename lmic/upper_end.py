@@ -1,0 +1,346 @@
+"""A certified primal end from a proven dual end: points inside, closer and closer to it.
+
+When the solver's point at an optimum gives no rigorous primal end (a strict problem whose
+infimum is not attained, a near-singular optimum the solver resolves only to its tolerance:
+the bounded-real lemma of a system with spectral abscissa ``-0.01``), any point proved
+feasible whose objective is near the proven dual end ``L`` will do. This module finds one
+without trusting the solver's point, in the minimisation form (``q`` the objective):
+
+1. **margin solve**: ``max s`` subject to ``F_i(x) >= s I`` on every LMI, ``l_r(x) >= s`` on
+   every ``ge`` row (``eq`` rows kept), ``q(x) <= L + delta_0 max(1, |L|)`` and ``|x_k| <= R``
+   (``R`` ten times ``max(1, |L|)``, then ten times the solver's point): the most interior
+   point of the slice, proved by :func:`lmic.certify.enclosure.primal_end` (``delta_0`` in
+   :data:`START_DELTAS`);
+2. **recentred solves**: from the last proved point ``x_0`` (``W_i = F_i(x_0) > 0``), with
+   ``T_i`` the inverse Cholesky factor of ``W_i`` and the variables shifted and scaled,
+   ``x = x_0 + diag(d) w`` (``1 / d_k`` the largest entry of the blocks ``T_i F_i^(k) T_i^T``:
+   a unit ``w_k`` moves them by about one), the same problem is solved in the local metric:
+   ``max s`` s.t. ``T_i F_i(x_0 + diag(d) w) T_i^T >= s I``, ``l_r(x) / l_r(x_0) >= s``,
+   ``q(x) <= L + delta max(1, |L|)``, ``|w_k| <= RADIUS`` (above :data:`FULL_MAX` dense
+   entries, a block whose ``W_i`` is well conditioned gets the diagonal congruence instead:
+   sparse; a recentred solve the backend ends without a point goes to the ``alternatives``).
+   At ``w = 0`` every block is the identity (its diagonal), so the solver's error is relative
+   to the current margins, not to the size of ``F_i``: where the slice at ``delta`` is ``1e-13`` thin relative to the
+   entries (measured: ``n = 20`` near-unstable bounded-real lemma) a plain solve returns
+   points violated by ``1e-8``, the recentred one points that hold. ``delta`` is divided by
+   :data:`STEP` while the point is proved, by ``sqrt(STEP)`` once after a failure.
+
+Nothing here is trusted: every point is proved by :func:`~lmic.certify.enclosure.primal_end`
+on the ORIGINAL problem (the congruence and the scaling only shape the solve), and the caller
+records it as a ``restored point`` that ``lmic audit`` re-proves. The solves share a deadline;
+the search stops at the relative gap ``target`` (:data:`lmic.certify.enclosure.GAP_TARGET`).
+
+Examples
+--------
+>>> import numpy as np, scipy.sparse as sp
+>>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+>>> # inf t s.t. [[t, 1], [1, t]] > 0: infimum 1, not attained
+>>> C = sp.csc_matrix(np.array([[0.0, 1.0], [1.0, 0.0], [0.0, 1.0]]))
+>>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("M > 0", 2, C, strict=True)],
+...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+>>> r = upper_from_lower(p, 1.0, "clarabel", x_hint=np.array([1.0]))
+>>> r["proven"], 1.0 < r["value"] <= 1.0 + 1e-6
+(True, True)
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from lmic.errors import LmicError
+from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+from lmic.ir.svec import tril_rows_cols, tril_unvec
+from lmic.reductions.pipeline import solve as solve_with_reductions
+
+__all__ = ["START_DELTAS", "STEP", "margin_problem", "recentred_problem", "upper_from_lower"]
+
+#: the relative backoffs of the first (margin) solve, tried in turn until one point is proved
+START_DELTAS = (1e-4, 1e-3, 1e-2)
+#: the backoffs of the margin solves for a point that passes ``check`` (:func:`upper_from_lower`)
+CHECK_DELTAS = (1e-3, 1e-2, 1e-1)
+#: the box ``|w_k| <= RADIUS`` of the recentred solves (a unit ``w_k`` moves the blocks by about their margin)
+RADIUS = 10.0
+#: above this many dense coefficient entries, an LMI whose ``F(x0)`` has condition number at
+#: most :data:`DIAGONAL_COND` gets a diagonal congruence (sparse) instead of the full one (the
+#: full one everywhere is better where affordable: 20 states, 5e-7 where the diagonal one on
+#: ``P > 0`` stopped at 3.3e-6)
+FULL_MAX = 1_000_000
+DIAGONAL_COND = 1e4
+#: the factor ``delta`` shrinks by after each proved recentred point
+STEP = 30.0
+#: the recentred problem is built with a dense congruence: above this many coefficient
+#: entries (LMI storage rows times variables) only the margin solve runs
+MAX_DENSE = 4_000_000
+
+
+def _min_form(problem: Problem) -> tuple[float, np.ndarray]:
+    s = -1.0 if problem.objective.sense == "max" else 1.0
+    return s, s * np.asarray(problem.objective.c, dtype=float)
+
+
+def _bound_row(q: np.ndarray, bound: float, x0: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, float]:
+    """The row ``bound - q(x_0 + diag(d) w) >= 0`` (coefficients of ``(1, w)``), normalised."""
+    ob = bound - q[0] - float(q[1:] @ x0)
+    row = np.concatenate([[ob], -q[1:] * d])
+    return row / max(float(np.max(np.abs(row))), 1e-300), ob
+
+
+def margin_problem(problem: Problem, bound: float, radius: float) -> Problem:
+    """Step 1 of the module docstring (variables ``x`` then ``s``; ``bound`` in the minimisation form).
+
+    >>> import scipy.sparse as sp
+    >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t > 0", 1, sp.csc_matrix([[0.0, 1.0]]))],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+    >>> margin_problem(p, 2.0, 10.0).lmis[0].coeffs.toarray().tolist()
+    [[0.0, 1.0, -1.0]]
+    """
+    return recentred_problem(problem, np.zeros(problem.n), bound, radius, local=False)[0]
+
+
+def recentred_problem(
+    problem: Problem, x0: np.ndarray, bound: float, radius: float = 10.0, *, local: bool = True
+) -> tuple[Problem, np.ndarray]:
+    """Step 2 of the module docstring: the problem in ``(w, s)`` and the scaling ``d``
+    (``x = x0 + d * w``). ``local=False``: no congruence, no scaling (``d = 1``), step 1.
+
+    >>> import scipy.sparse as sp
+    >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t > 0", 1, sp.csc_matrix([[0.0, 1.0]]))],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+    >>> q, d = recentred_problem(p, np.array([4.0]), 3.0)
+    >>> q.lmis[0].coeffs.toarray().round(6).tolist(), d.tolist()
+    ([[1.0, 1.0, -1.0]], [4.0])
+    """
+    n = problem.n
+    x0 = np.asarray(x0, dtype=float)
+    xx0 = np.concatenate([[1.0], x0])
+    d = np.ones(n)
+    blocks: list[tuple[Any, Any]] = []
+    big = _dense_size(problem) > FULL_MAX  # only then the sparse diagonal congruence where it may do
+    for lmi in problem.lmis:
+        C = lmi.coeffs.tocsc().astype(float)
+        if not local:
+            blocks.append((None, None))
+            continue
+        w0 = np.asarray(C @ xx0).ravel()
+        W = tril_unvec(w0, lmi.dim)
+        ev = np.linalg.eigvalsh(W)
+        if big and ev[0] > 0 and ev[-1] <= DIAGONAL_COND * ev[0]:  # well conditioned: a diagonal congruence
+            g = 1.0 / np.sqrt(np.diag(W))
+            i, j = tril_rows_cols(lmi.dim)
+            k = g[i] * g[j]
+            blocks.append((k * w0, sp.csc_matrix(sp.diags(k) @ C[:, 1:])))
+        else:
+            K = _congruence(np.linalg.inv(np.linalg.cholesky(W)))
+            blocks.append((K @ w0, sp.csc_matrix(K @ C[:, 1:].toarray())))
+    if local:
+        # every variable moves the congruent blocks by about one (the current margins are one)
+        size = np.zeros(n)
+        for _, Fk in blocks:
+            size = np.maximum(size, np.asarray(abs(Fk).max(axis=0).todense()).ravel())
+        d = np.where(size > 0, 1.0 / np.where(size > 0, size, 1.0), d)
+    lmis = []
+    for lmi, (F0, Fk) in zip(problem.lmis, blocks, strict=True):
+        i, j = tril_rows_cols(lmi.dim)
+        scol = sp.csc_matrix(np.where(i == j, -1.0, 0.0)[:, None])
+        if local:
+            coeffs = sp.hstack([sp.csc_matrix(F0[:, None]), Fk @ sp.diags(d), scol]).tocsc()
+        else:
+            coeffs = sp.hstack([lmi.coeffs.tocsc().astype(float), scol]).tocsc()
+        lmis.append(LMI(lmi.name, lmi.dim, coeffs, False, lmi.relation, lmi.block_sizes))
+    lin = problem.linear
+    A = lin.A.tocsr().astype(float)
+    val = np.asarray(A @ xx0).ravel() if len(lin) else np.zeros(0)
+    ge = np.array([k == "ge" for k in lin.kinds], dtype=bool)
+    w = np.where(ge & local, np.maximum(np.abs(val), 1e-300), 1.0) if len(lin) else np.zeros(0)
+    if local:  # rows of (1, w): the value at x0 as the constant
+        body = sp.hstack([sp.csr_matrix(val[:, None]), A[:, 1:] @ sp.diags(d)]) if len(lin) else None
+    else:
+        body = A if len(lin) else None
+    parts = []
+    if body is not None:
+        parts.append(sp.hstack([sp.diags(1.0 / w) @ body, sp.csr_matrix(np.where(ge, -1.0, 0.0)[:, None])]))
+    _, q = _min_form(problem)
+    row, _ = _bound_row(q, bound, x0 if local else np.zeros(n), d)
+    parts.append(sp.csr_matrix(np.concatenate([row, [0.0]])[None, :]))
+    eye = sp.identity(n, format="csr")
+    rad = sp.csr_matrix(np.full((n, 1), float(radius)))
+    z = sp.csr_matrix((n, 1))
+    parts += [sp.hstack([rad, -eye, z]), sp.hstack([rad, eye, z])]
+    kinds = list(lin.kinds) + ["ge"] * (1 + 2 * n)
+    c = np.zeros(n + 2)
+    c[-1] = 1.0
+    out = Problem(
+        [Variable("__w", "full", (n, 1)), Variable("__s", "scalar", (1, 1), offset=n)],
+        lmis,
+        LinearConstraints(sp.vstack(parts).tocsr(), kinds, [False] * len(kinds), [f"r{k}" for k in range(len(kinds))]),
+        Objective("max", c),
+        meta={"upper_end_of": (problem.meta or {}).get("theorem")},
+    )
+    return out, d
+
+
+def _congruence(T: np.ndarray) -> np.ndarray:
+    """The matrix of ``vec(M) -> vec(T M T^T)`` on the lower-triangle storage."""
+    r, c = tril_rows_cols(T.shape[0])
+    K = T[r[:, None], r[None, :]] * T[c[:, None], c[None, :]] + T[r[:, None], c[None, :]] * T[c[:, None], r[None, :]]
+    K[:, r == c] *= 0.5
+    return K
+
+
+def _dense_size(problem: Problem) -> int:
+    return sum(lmi.coeffs.shape[0] for lmi in problem.lmis) * (problem.n + 1)
+
+
+def upper_from_lower(
+    problem: Problem,
+    lower: float,
+    backend: Any,
+    options: Any = None,
+    *,
+    x_hint: np.ndarray | None = None,
+    target: float | None = None,
+    deadline: float | None = None,
+    check: Callable[[np.ndarray], bool] | None = None,
+    alternatives: tuple[Any, ...] = (),
+) -> dict[str, Any]:
+    """A point proved feasible whose objective is near the proven dual end ``lower``.
+
+    Parameters
+    ----------
+    problem : Problem
+        An optimisation problem.
+    lower : float
+        The proven dual end in the problem's own sense (a lower bound of a minimum, an upper
+        bound of a maximum).
+    backend : str or Backend
+    options : SolveOptions, optional
+    x_hint : numpy.ndarray, optional
+        The solver's point (certified or not): its size sets the box of the margin solve.
+    target : float, optional
+        The relative gap to stop at (default :data:`lmic.certify.enclosure.GAP_TARGET`).
+    deadline : float, optional
+        A :func:`time.perf_counter` value: no solve starts after it.
+    check : callable, optional
+        A second test of a proved point (the certifier's, whose relative threshold may ask for
+        a larger margin than the proof): the best proved point that passes it is returned as
+        ``checked_x`` / ``checked_value``, with margin solves at the larger backoffs of
+        :data:`CHECK_DELTAS` when no point of the search passes.
+    alternatives : tuple of str or Backend
+        Backends for a recentred solve that ``backend`` ends without a point (tried in turn;
+        the first that gives one is used for the rest of the search).
+
+    Returns
+    -------
+    dict
+        ``proven``, ``x`` (the best proved point, a list), ``value`` (its objective rounded
+        outwards: the primal end), ``rel_gap`` (to ``lower``), ``checked_x``, ``checked_value``,
+        ``steps`` (``delta``, the solve's status, whether its point was proved, seconds),
+        ``reason``, ``time_s``.
+    """
+    from lmic.backends.registry import get_backend
+    from lmic.certify.enclosure import GAP_TARGET, primal_end
+
+    t0 = time.perf_counter()
+    goal = GAP_TARGET if target is None else float(target)
+    sgn, q = _min_form(problem)
+    low = sgn * float(lower)  # the dual end in the minimisation form
+    scale = max(1.0, abs(low))
+    solvers = [b if not isinstance(b, str) else get_backend(b) for b in [backend, *alternatives]]
+    hint = 0.0 if x_hint is None else float(np.max(np.abs(np.asarray(x_hint, dtype=float)), initial=0.0))
+    # the box of the margin solve: ten times the objective's size, then the solver point's
+    # (a loose box lets the solver drift to huge, less accurate points)
+    radii = [10.0 * scale] + ([10.0 * hint] if np.isfinite(hint) and hint > 3.0 * scale else [])
+    steps: list[dict[str, Any]] = []
+    best: dict[str, Any] = {"proven": False}
+    checked: dict[str, Any] = {}
+
+    def late() -> bool:
+        return deadline is not None and time.perf_counter() > deadline
+
+    def attempt(delta: float, x0: np.ndarray | None, radius: float = 1.0) -> bool:
+        t1 = time.perf_counter()
+        bound = low + delta * scale
+        if x0 is None:
+            target_problem, d, base = margin_problem(problem, bound, radius), np.ones(problem.n), np.zeros(problem.n)
+        else:
+            target_problem, d = recentred_problem(problem, x0, bound, RADIUS)
+            base = x0
+        step: dict[str, Any] = {"delta": delta, "recentred": x0 is not None}
+        steps.append(step)
+        opts = options
+        if deadline is not None:  # no solve runs past the deadline (SolveOptions.time_limit)
+            from dataclasses import replace
+
+            from lmic.options import SolveOptions
+
+            left = max(1.0, deadline - time.perf_counter())
+            given = options if options is not None else SolveOptions()
+            opts = replace(given, time_limit=min(left, given.time_limit or left))
+        sol = None
+        # a recentred problem is dense: where the backend fails on it (Clarabel, NumericalError at
+        # 50 states), the alternatives in turn; the first that gives a point is kept for the rest
+        for k, solver in enumerate(solvers if x0 is not None else solvers[:1]):
+            try:
+                sol = solve_with_reductions(solver, target_problem, opts)
+            except (LmicError, np.linalg.LinAlgError, ValueError, ArithmeticError) as exc:
+                step.update(status="error", reason=str(exc)[:200])
+                continue
+            if sol.x is not None:
+                if k:
+                    solvers.insert(0, solvers.pop(k))
+                    step["backend"] = str(getattr(solver, "name", solver))
+                break
+        if sol is None or sol.x is None:
+            step.update(proven=False, status=getattr(sol, "status", "error"), time_s=time.perf_counter() - t1)
+            return False
+        step["status"] = sol.status
+        x = base + d * np.asarray(sol.x, dtype=float)[: problem.n]
+        pe = primal_end(problem, x)
+        step.update(proven=bool(pe["proven"]), reason=pe["reason"], time_s=time.perf_counter() - t1)
+        if pe["proven"] and (not best.get("proven") or sgn * pe["value"] < sgn * best["value"]):
+            best.clear()
+            best.update(proven=True, x=x, value=pe["value"])
+        if pe["proven"] and check is not None and (not checked or sgn * pe["value"] < sgn * checked["value"]):
+            if check(x):
+                checked.update(x=x, value=pe["value"])
+        return bool(pe["proven"])
+
+    for delta in START_DELTAS:
+        if late() or any(attempt(delta, None, radius) for radius in radii):
+            break
+    local = _dense_size(problem) <= MAX_DENSE
+    failed = 0
+    while best.get("proven") and local and not late():
+        gap = (sgn * best["value"] - low) / scale
+        if gap <= goal:
+            break
+        delta = max(gap / (STEP if failed == 0 else STEP**0.5), 0.5 * goal)
+        if attempt(delta, best["x"]) and (sgn * best["value"] - low) / scale < 0.5 * gap:
+            failed = 0
+            continue
+        failed += 1
+        if failed >= 2:
+            break
+    for delta in CHECK_DELTAS if check is not None and best.get("proven") else ():
+        if checked or late():
+            break
+        for radius in radii:
+            if attempt(delta, None, radius) and checked:
+                break
+    out: dict[str, Any] = {"proven": bool(best.get("proven")), "steps": steps, "time_s": time.perf_counter() - t0}
+    out["checked_x"] = np.asarray(checked["x"]).tolist() if checked else None
+    out["checked_value"] = checked.get("value")
+    if best.get("proven"):
+        gap = max(0.0, (sgn * best["value"] - low) / scale)
+        out.update(x=np.asarray(best["x"]).tolist(), value=best["value"], rel_gap=gap)
+        out["reason"] = f"point proved feasible {gap:.2g} (relative) above the dual end after {len(steps)} solves"
+    else:
+        out.update(x=None, value=None, rel_gap=None)
+        why = "time budget spent" if late() else "no solve gave a point proved feasible"
+        out["reason"] = f"no primal end from the dual end: {why} ({len(steps)} solves)"
+    return out
