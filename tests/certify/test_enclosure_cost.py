@@ -137,9 +137,10 @@ def test_control3_gap_below_1e_6_and_published_optimum_inside() -> None:
 
 
 def test_a_spent_budget_is_reported_and_never_a_bound() -> None:
-    """With no time, the first shift alone is tried: it does not prove, the budget is recorded
-    as spent and no lower end is reported; with the default budget the same dual point proves
-    the closed-form optimum's lower end (min t s.t. [[t, 1], [1, t]] >= 0 is 1)."""
+    """With no time, the first shift alone is tried: on a slightly indefinite dual point
+    (eigenvalues 0.5 +- 0.51) it does not prove, the budget is recorded as spent and no lower
+    end is reported; with the default budget the same dual point is repaired and proves the
+    closed-form optimum's lower end (min t s.t. [[t, 1], [1, t]] >= 0 is 1)."""
     from lmic.certify.enclosure_audit import audit_enclosure
     from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 
@@ -150,7 +151,7 @@ def test_a_spent_budget_is_reported_and_never_a_bound() -> None:
         LinearConstraints.empty(1),
         Objective("min", [0.0, 1.0]),
     )
-    duals = {"lmis": [np.array([[0.5, -0.5], [-0.5, 0.5]])], "linear": []}
+    duals = {"lmis": [np.array([[0.5, -0.51], [-0.51, 0.5]])], "linear": []}
     t0 = time.perf_counter()
     spent = enclosure(p, duals, None, budget_s=0.0)
     assert time.perf_counter() - t0 < 5.0
