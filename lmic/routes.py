@@ -18,10 +18,9 @@ With no backend (or ``"auto"``) :func:`decide_route` runs:
   missing; at most :data:`MAX_GAP_ESCALATIONS`, within a time cap) and keeps the tightest
   certified enclosure. An enclosure within the gap but above
   :data:`lmic.certify.enclosure.GAP_TARGET` escalates once more while the route has run less
-  than :data:`lmic.route_rule.CHEAP_ESCALATION_S` (small problems: one more cheap solve). A
-  first-order step (``auto:first-order``) whose enclosure does not meet the gap is polished by
-  the interior points. The exact proofs of bounded rays share one
-  budget over the route's backends.
+  than :data:`lmic.route_rule.CHEAP_ESCALATION_S` (processor time: :mod:`lmic.route_escalation`).
+  A first-order step (``auto:first-order``) whose enclosure does not meet the gap is polished by
+  the interior points. The exact proofs of bounded rays share one budget over the route's backends.
 
 An explicit backend is that backend alone, as before. :func:`describe` gives the one line the
 CLI prints (``route: scs (first-order, n=40) -> certified``), also in the JSON (``route``).
@@ -46,6 +45,7 @@ import numpy as np
 from lmic.certify.enclosure import GAP_TARGET
 from lmic.ir.problem import Problem
 from lmic.outcome import Outcome, rank
+from lmic.route_escalation import RouteClock
 from lmic.route_rule import (
     CHEAP_ESCALATION_S,
     GAP_ESCALATION_FACTOR,
@@ -402,7 +402,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     steps: list[dict[str, Any]] = []
     bounded = 0
     escalated = 0
-    t_route, first_s = time.perf_counter(), 0.0
+    clock, first_s = RouteClock(), 0.0  # the route's cost, robust to load (route_escalation)
     k = -1
     while k + 1 < len(names):
         k += 1
@@ -448,7 +448,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
         if out.verdict == "certified":
             rel = step.get("rel_gap")
             if rel is not None and rel <= options.gap:
-                cheap = time.perf_counter() - t_route < CHEAP_ESCALATION_S
+                cheap = clock.elapsed() < CHEAP_ESCALATION_S
                 if first_order or rel <= GAP_TARGET or escalated > 0 or not cheap or k == len(names) - 1:
                     break  # the enclosure proves the optimum to the requested gap
                 # within --gap but above GAP_TARGET, and cheap: one more interior point may close it
@@ -457,8 +457,8 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
                 names = names[: k + 1] + [nm for nm in names[k + 1 :] if method_of(nm) != "first-order"]
                 continue
             if not first_order:
-                first_s = first_s or (time.perf_counter() - t_route)
-                late = time.perf_counter() - t_route > max(GAP_ESCALATION_FLOOR_S, GAP_ESCALATION_FACTOR * first_s)
+                first_s = first_s or clock.elapsed()
+                late = clock.elapsed() > max(GAP_ESCALATION_FLOOR_S, GAP_ESCALATION_FACTOR * first_s)
                 if escalated >= MAX_GAP_ESCALATIONS or late or not gap_escalates(problem, enc):
                     break  # a certified interior-point answer: its enclosure is what can be proved
                 # the gap is not met and another interior-point solver may close it (its point

@@ -69,6 +69,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "lmic.policy",
             "lmic.routes",
             "lmic.route_rule",
+            "lmic.route_escalation",
             "lmic.backoff",
             "lmic.testing.*",
         ),
