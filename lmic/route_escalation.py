@@ -10,6 +10,9 @@ and of its reaped children (solves run in forked children under a time limit,
 :mod:`lmic.backends.sandbox`), capped by the wall clock (a multi-threaded solver spends more
 processor than wall time, and the wall clock is then the better measure of the cost).
 
+Also the route's two small judgements of enclosures: :func:`tighter` (which certified answer
+the route keeps) and :func:`gap_note` (the route line's note on a missing end).
+
 Examples
 --------
 >>> clock = RouteClock()
@@ -21,8 +24,9 @@ from __future__ import annotations
 
 import os
 import time
+from typing import Any
 
-__all__ = ["RouteClock", "cpu_seconds"]
+__all__ = ["RouteClock", "cpu_seconds", "gap_note", "tighter"]
 
 
 def cpu_seconds() -> float:
@@ -54,3 +58,26 @@ class RouteClock:
     def elapsed(self) -> float:
         """The route's cost in seconds: ``min(processor, wall)`` since the start."""
         return min(cpu_seconds() - self.cpu0, self.wall())
+
+
+def tighter(enc: dict[str, Any] | None, best_enc: dict[str, Any] | None, out: Any, best: Any) -> bool:
+    """A later certified answer (a polish) replaces an earlier one unless the earlier one's
+    enclosure has a smaller relative gap."""
+    if out.verdict != "certified" or best.verdict != "certified":
+        return False
+    new, old = (enc or {}).get("rel_gap"), (best_enc or {}).get("rel_gap")
+    return old is None or (new is not None and new <= old)
+
+
+def gap_note(enc: dict[str, Any] | None) -> str:
+    """Which end of an enclosure without a relative gap is missing (the route line).
+
+    >>> gap_note(None), gap_note({"lower": 1.0, "upper": None})
+    ('no enclosure', 'no certified upper end')
+    """
+    if enc is None:
+        return "no enclosure"
+    lo, hi = enc.get("lower"), enc.get("upper")
+    if lo is None and hi is None:
+        return "no certified end"
+    return "no certified lower end" if lo is None else "no certified upper end"

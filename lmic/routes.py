@@ -45,7 +45,7 @@ import numpy as np
 from lmic.certify.enclosure import GAP_TARGET
 from lmic.ir.problem import Problem
 from lmic.outcome import Outcome, rank
-from lmic.route_escalation import RouteClock
+from lmic.route_escalation import RouteClock, gap_note, tighter
 from lmic.route_rule import (
     CHEAP_ESCALATION_S,
     GAP_ESCALATION_FACTOR,
@@ -389,8 +389,16 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     options = options or SolveOptions()
     if not is_auto(backend) or problem.objective.sense == "feasibility":
         out = _unbounded_checked(problem, decide(problem, backend, options, exact=exact), options)
-        done = _steps(out)
-        return RouteResult(out, None, 0.0, {"steps": done, "text": describe(done, problem)})
+        done, enc, enc_s = _steps(out), None, 0.0
+        if out.verdict == "undecided" and getattr(out.certificate, "verdict", None) == "certified":
+            # a point that holds from a solve the solver called inexact (SDPA's pFEAS): as on
+            # the default route, an enclosure that meets the gap proves the optimum
+            used = out.backend or str(getattr(backend, "label", backend))
+            enc, enc_s = enclosure_of(problem, out.solution, out.certificate, exact, used, options)
+            if enc is not None and enc.get("rel_gap") is not None and enc["rel_gap"] <= options.gap:
+                out = _upgrade(out, enc)
+                done[-1]["verdict"] = out.verdict
+        return RouteResult(out, enc, enc_s, {"steps": done, "text": describe(done, problem)})
     names = list(route(problem, backend))
     budgeted = options.time_limit is None
     last = len(names) - 1
@@ -439,11 +447,11 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
             rel = None if enc is None else enc.get("rel_gap")
             step["rel_gap"] = rel
             if rel is None:
-                step["gap_note"] = _gap_note(enc)
+                step["gap_note"] = gap_note(enc)
         if holds and enc is not None and enc.get("rel_gap") is not None and enc["rel_gap"] <= options.gap:
             out = _upgrade(out, enc)  # the enclosure proves the optimum whatever the solver's status
             step["verdict"] = out.verdict
-        if best is None or _score(out) > _score(best) or _tighter(enc, best_enc, out, best):
+        if best is None or _score(out) > _score(best) or tighter(enc, best_enc, out, best):
             best, best_enc = out, enc
         if out.verdict == "certified":
             rel = step.get("rel_gap")
@@ -483,15 +491,6 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     if best.solution is not None:
         best.solution.info["attempts"] = [a.to_dict() for a in attempts]
     return RouteResult(best, best_enc, enc_s, {"steps": steps, "text": describe(steps, problem), "gap": options.gap})
-
-
-def _tighter(enc: dict[str, Any] | None, best_enc: dict[str, Any] | None, out: Outcome, best: Outcome) -> bool:
-    """A later certified answer (a polish) replaces an earlier one unless the earlier one's
-    enclosure has a smaller relative gap."""
-    if out.verdict != "certified" or best.verdict != "certified":
-        return False
-    new, old = (enc or {}).get("rel_gap"), (best_enc or {}).get("rel_gap")
-    return old is None or (new is not None and new <= old)
 
 
 def unbounded_outcome(problem: Problem, best: Outcome, options: Any = None) -> Outcome:
@@ -584,17 +583,3 @@ def _upgrade(out: Outcome, enc: dict[str, Any]) -> Outcome:
         f"[{enc['lower']:.10g}, {enc['upper']:.10g}] (relative gap {enc['rel_gap']:.2g})"
     )
     return out
-
-
-def _gap_note(enc: dict[str, Any] | None) -> str:
-    """Which end of an enclosure without a relative gap is missing (the route line).
-
-    >>> _gap_note(None), _gap_note({"lower": 1.0, "upper": None})
-    ('no enclosure', 'no certified upper end')
-    """
-    if enc is None:
-        return "no enclosure"
-    lo, hi = enc.get("lower"), enc.get("upper")
-    if lo is None and hi is None:
-        return "no certified end"
-    return "no certified lower end" if lo is None else "no certified upper end"
