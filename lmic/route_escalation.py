@@ -26,7 +26,7 @@ import os
 import time
 from typing import Any
 
-__all__ = ["RouteClock", "cpu_seconds", "gap_note", "tighter"]
+__all__ = ["RouteClock", "cpu_seconds", "gap_note", "seconds_left", "tighter"]
 
 
 def cpu_seconds() -> float:
@@ -58,6 +58,16 @@ class RouteClock:
     def elapsed(self) -> float:
         """The route's cost in seconds: ``min(processor, wall)`` since the start."""
         return min(cpu_seconds() - self.cpu0, self.wall())
+
+
+def seconds_left(deadline: Any) -> float:
+    """Seconds left before ``deadline``: a :func:`time.perf_counter` value, or a callable that
+    returns the seconds left (a budget of processor time, :class:`RouteClock`).
+
+    >>> seconds_left(lambda: 2.5), seconds_left(time.perf_counter() + 60.0) > 59.0
+    (2.5, True)
+    """
+    return float(deadline()) if callable(deadline) else float(deadline) - time.perf_counter()
 
 
 def tighter(enc: dict[str, Any] | None, best_enc: dict[str, Any] | None, out: Any, best: Any) -> bool:

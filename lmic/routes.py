@@ -45,7 +45,7 @@ import numpy as np
 from lmic.certify.enclosure import GAP_TARGET
 from lmic.ir.problem import Problem
 from lmic.outcome import Outcome, rank
-from lmic.route_escalation import RouteClock, gap_note, tighter
+from lmic.route_escalation import RouteClock, gap_note, seconds_left, tighter
 from lmic.route_rule import (
     CHEAP_ESCALATION_S,
     GAP_ESCALATION_FACTOR,
@@ -191,7 +191,8 @@ def enclosure_of(
     :data:`TIGHT_TOLS` (:func:`tighten`). The whole enclosure has
     ``budget_s`` seconds (default :func:`enclosure_budget` of the solve's time): no step starts
     after it, the tight re-solve only when the rest of the budget can pay for it, and a budget
-    spent is recorded (``budget``), never turned into a bound.
+    spent is recorded (``budget``), never turned into a bound. The budget counts processor time
+    (:class:`lmic.route_escalation.RouteClock`): a loaded machine does not spend it.
 
     >>> from lmic.testing.conformance import lyapunov_problem
     >>> import numpy as np
@@ -204,23 +205,26 @@ def enclosure_of(
         return None, 0.0
     from lmic.certify.enclosure import enclosure
 
-    t0 = time.perf_counter()
+    clock = RouteClock()  # the budget counts processor time: a loaded machine does not spend it
     solve_s = float(getattr(sol, "solve_s", 0.0) or 0.0)
     budget = enclosure_budget(solve_s) if budget_s is None else float(budget_s)
-    deadline = t0 + budget
+
+    def deadline() -> float:
+        return budget - clock.elapsed()  # seconds left
+
     # the certified point (the certifier may have moved the solver's onto a face: lmic.certify.snap)
     x = None
     if getattr(cert, "verdict", None) == "certified":
         x = np.asarray(cert.x, dtype=float) if getattr(cert, "x", None) is not None else sol.x
 
     def resolve(perturbed: Problem) -> dict[str, Any] | None:
-        if time.perf_counter() + solve_s > deadline:
+        if deadline() < solve_s:
             return None  # the re-solve would not fit in the budget
         other = _solve_on(backend, perturbed, options)
         return other.duals if other is not None and other.status in ("optimal", "inaccurate") else None
 
     def solve_point(other_problem: Problem) -> np.ndarray | None:
-        if time.perf_counter() + solve_s > deadline:
+        if deadline() < solve_s:
             return None
         other = _solve_on(backend, other_problem, options)
         return other.x if other is not None and other.status in ("optimal", "inaccurate") else None
@@ -248,7 +252,7 @@ def enclosure_of(
         solve_s=solve_s,
         target=target,
     )
-    spent = time.perf_counter() - t0
+    spent = clock.elapsed()
     enc["budget"] = {"seconds": budget, "used": spent, "spent": spent > budget}
     if enc["budget"]["spent"] and enc.get("rel_gap") is None:
         enc["reason"] = f"{enc.get('reason')}; enclosure time budget {budget:.3g} s spent"
@@ -264,7 +268,7 @@ def tighten(
     options: Any,
     resolve: Any,
     solve_point: Any,
-    deadline: float | None = None,
+    deadline: Any = None,
     solve_s: float = 0.0,
     target: float | None = None,
 ) -> dict[str, Any]:
@@ -275,8 +279,9 @@ def tighten(
     When the tight point's primal end is met only to round-off, the end comes from a point
     polished toward it (``restored point``); without any proven end there, ``tight_x`` records
     the tight point for the restoration of :func:`lmic.api.solve`. With ``deadline`` (a
-    :func:`time.perf_counter` value), the re-solve runs only when about twice ``solve_s`` (the
-    first solve's time) is left before it, and its enclosure gets what is left.
+    :func:`time.perf_counter` value, or a callable giving the seconds left), the re-solve runs
+    only when about twice ``solve_s`` (the first solve's time) is left, and its enclosure gets
+    what is left.
     """
     from dataclasses import replace
 
@@ -298,7 +303,7 @@ def tighten(
     base_tol = options.tol if options is not None else SolveOptions().tol
     out = enc
     for tol in [t for t in TIGHT_TOLS if t < base_tol]:
-        if deadline is not None and time.perf_counter() + 2.0 * solve_s > deadline:
+        if deadline is not None and seconds_left(deadline) < 2.0 * solve_s:
             break  # a tight re-solve (typically slower than the first) would not fit the budget
         # the strict margin shrinks with the tolerance (never below what the solver resolves:
         # strict.py keeps delta >= 10 tol): at the default 1e-7 the primal end of a problem
@@ -325,7 +330,7 @@ def _tighten_once(
     tight: Any,
     resolve: Any,
     solve_point: Any,
-    deadline: float | None,
+    deadline: Any,
     key: str,
 ) -> dict[str, Any]:
     """One re-solve of :func:`tighten` at ``tight.tol`` and the better proven end of each."""
@@ -336,13 +341,13 @@ def _tighten_once(
     try:
         # the policy's strategies on this backend (an AlmostSolved solve is re-tried preconditioned
         # at its point: Clarabel at 1e-9 on SDPLIB control3)
-        left = None if deadline is None else max(0.0, deadline - time.perf_counter())
+        left = None if deadline is None else max(0.0, seconds_left(deadline))
         sol2 = decide(problem, backend, tight, rescue=False, budget_s=left).solution  # strategies within the budget
     except LmicError:
         return enc
     if sol2 is None or sol2.status not in ("optimal", "inaccurate") or sol2.x is None or not sol2.duals:
         return enc
-    left = None if deadline is None else max(0.0, deadline - time.perf_counter())
+    left = None if deadline is None else max(0.0, seconds_left(deadline))
     enc2 = enclosure(
         problem,
         sol2.duals,
