@@ -17,7 +17,12 @@ problem is unbounded. SDPA works in double precision and stalls ("primal < dual"
 gaps of a few 1e-7, so its gap tolerance is floored at :data:`TOL_FLOOR` (``pdFEAS``, a point
 short of the gap tolerance, is ``inaccurate``), except for a tolerance at or below
 :data:`TIGHT_TOL`: the tight re-solves of an enclosure (:func:`lmic.routes.tighten`), whose
-point and dual are used even when SDPA calls them inexact. SDPA has no time limit of its own: with
+point and dual are used even when SDPA calls them inexact. Where SDPA's dual itself stops
+about 1e-6 (relative) short of the optimum, the enclosure's gap stays there: on the random
+instances of ``benchmarks/theorem_enclosures.py`` at 9 and 12 states, up to 4e-5 on
+``uir.thm4_1`` and 7e-6 on ``sampled_euler.thm2/thm3`` (the re-solves at 1e-9 and 1e-10 end
+at ``pFEAS`` with no better dual: ``uir.thm4_1`` n = 6 seed 1, 1.1e-6, 1.1e-5 and 1.4e-6);
+Clarabel and CVXOPT meet 1e-6 there. SDPA has no time limit of its own: with
 ``SolveOptions.time_limit`` the solve runs in a child process.
 
 Examples
