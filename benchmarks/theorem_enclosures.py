@@ -17,8 +17,9 @@ Usage::
 ``--json`` writes every instance's row (theorem, backend, size, seed, verdict, ends, gap, inside,
 time) and the summary rows, so that several shorter runs can be merged.
 
-The times are wall-clock on whatever else the machine runs: the enclosure's re-solves are
-skipped when its (wall-clock) budget is spent, so a loaded machine can show larger gaps.
+The times are wall-clock on whatever else the machine runs. The enclosure's budgets count
+processor time (:class:`lmic.route_escalation.RouteClock`, the dual search's
+``time.process_time``), so a loaded machine shows longer times, not larger gaps.
 """
 
 from __future__ import annotations
