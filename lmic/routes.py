@@ -18,10 +18,9 @@ With no backend (or ``"auto"``) :func:`decide_route` runs:
   missing; at most :data:`MAX_GAP_ESCALATIONS`, within a time cap) and keeps the tightest
   certified enclosure. An enclosure within the gap but above
   :data:`lmic.certify.enclosure.GAP_TARGET` escalates once more while the route has run less
-  than :data:`lmic.route_rule.CHEAP_ESCALATION_S` (small problems: one more cheap solve). A
-  first-order step (``auto:first-order``) whose enclosure does not meet the gap is polished by
-  the interior points. The exact proofs of bounded rays share one
-  budget over the route's backends.
+  than :data:`lmic.route_rule.CHEAP_ESCALATION_S` (processor time: :mod:`lmic.route_escalation`).
+  A first-order step (``auto:first-order``) whose enclosure does not meet the gap is polished by
+  the interior points. The exact proofs of bounded rays share one budget over the route's backends.
 
 An explicit backend is that backend alone, as before. :func:`describe` gives the one line the
 CLI prints (``route: scs (first-order, n=40) -> certified``), also in the JSON (``route``).
@@ -46,6 +45,7 @@ import numpy as np
 from lmic.certify.enclosure import GAP_TARGET
 from lmic.ir.problem import Problem
 from lmic.outcome import Outcome, rank
+from lmic.route_escalation import RouteClock, gap_note, seconds_left, tighter
 from lmic.route_rule import (
     CHEAP_ESCALATION_S,
     GAP_ESCALATION_FACTOR,
@@ -194,7 +194,8 @@ def enclosure_of(
     :data:`TIGHT_TOLS` (:func:`tighten`). The whole enclosure has
     ``budget_s`` seconds (default :func:`enclosure_budget` of the solve's time): no step starts
     after it, the tight re-solve only when the rest of the budget can pay for it, and a budget
-    spent is recorded (``budget``), never turned into a bound.
+    spent is recorded (``budget``), never turned into a bound. The budget counts processor time
+    (:class:`lmic.route_escalation.RouteClock`): a loaded machine does not spend it.
 
     >>> from lmic.testing.conformance import lyapunov_problem
     >>> import numpy as np
@@ -207,23 +208,26 @@ def enclosure_of(
         return None, 0.0
     from lmic.certify.enclosure import enclosure
 
-    t0 = time.perf_counter()
+    clock = RouteClock()  # the budget counts processor time: a loaded machine does not spend it
     solve_s = float(getattr(sol, "solve_s", 0.0) or 0.0)
     budget = enclosure_budget(solve_s) if budget_s is None else float(budget_s)
-    deadline = t0 + budget
+
+    def deadline() -> float:
+        return budget - clock.elapsed()  # seconds left
+
     # the certified point (the certifier may have moved the solver's onto a face: lmic.certify.snap)
     x = None
     if getattr(cert, "verdict", None) == "certified":
         x = np.asarray(cert.x, dtype=float) if getattr(cert, "x", None) is not None else sol.x
 
     def resolve(perturbed: Problem) -> dict[str, Any] | None:
-        if time.perf_counter() + solve_s > deadline:
+        if deadline() < solve_s:
             return None  # the re-solve would not fit in the budget
         other = _solve_on(backend, perturbed, options)
         return other.duals if other is not None and other.status in ("optimal", "inaccurate") else None
 
     def solve_point(other_problem: Problem) -> np.ndarray | None:
-        if time.perf_counter() + solve_s > deadline:
+        if deadline() < solve_s:
             return None
         other = _solve_on(backend, other_problem, options)
         return other.x if other is not None and other.status in ("optimal", "inaccurate") else None
@@ -251,7 +255,7 @@ def enclosure_of(
         solve_s=solve_s,
         target=target,
     )
-    spent = time.perf_counter() - t0
+    spent = clock.elapsed()
     enc["budget"] = {"seconds": budget, "used": spent, "spent": spent > budget}
     if enc["budget"]["spent"] and enc.get("rel_gap") is None:
         enc["reason"] = f"{enc.get('reason')}; enclosure time budget {budget:.3g} s spent"
@@ -267,7 +271,7 @@ def tighten(
     options: Any,
     resolve: Any,
     solve_point: Any,
-    deadline: float | None = None,
+    deadline: Any = None,
     solve_s: float = 0.0,
     target: float | None = None,
 ) -> dict[str, Any]:
@@ -278,8 +282,9 @@ def tighten(
     When the tight point's primal end is met only to round-off, the end comes from a point
     polished toward it (``restored point``); without any proven end there, ``tight_x`` records
     the tight point for the restoration of :func:`lmic.api.solve`. With ``deadline`` (a
-    :func:`time.perf_counter` value), the re-solve runs only when about twice ``solve_s`` (the
-    first solve's time) is left before it, and its enclosure gets what is left.
+    :func:`time.perf_counter` value, or a callable giving the seconds left), the re-solve runs
+    only when about twice ``solve_s`` (the first solve's time) is left, and its enclosure gets
+    what is left.
     """
     from dataclasses import replace
 
@@ -299,7 +304,7 @@ def tighten(
     base_tol = options.tol if options is not None else SolveOptions().tol
     out = enc
     for tol in [t for t in TIGHT_TOLS if t < base_tol]:
-        if deadline is not None and time.perf_counter() + 2.0 * solve_s > deadline:
+        if deadline is not None and seconds_left(deadline) < 2.0 * solve_s:
             break  # a tight re-solve (typically slower than the first) would not fit the budget
         # the strict margin shrinks with the tolerance (strict.py keeps delta >= 10 tol): at the default 1e-7
         # the primal end of a problem whose multipliers have trace ~300 stays 3e-5 above the optimum
@@ -325,7 +330,7 @@ def _tighten_once(
     tight: Any,
     resolve: Any,
     solve_point: Any,
-    deadline: float | None,
+    deadline: Any,
     key: str,
 ) -> dict[str, Any]:
     """One re-solve of :func:`tighten` at ``tight.tol`` and the better proven end of each."""
@@ -336,13 +341,13 @@ def _tighten_once(
     try:
         # the policy's strategies on this backend (an AlmostSolved solve is re-tried preconditioned
         # at its point: Clarabel at 1e-9 on SDPLIB control3)
-        left = None if deadline is None else max(0.0, deadline - time.perf_counter())
+        left = None if deadline is None else max(0.0, seconds_left(deadline))
         sol2 = decide(problem, backend, tight, rescue=False, budget_s=left).solution  # strategies within the budget
     except LmicError:
         return enc
     if sol2 is None or sol2.status not in ("optimal", "inaccurate") or sol2.x is None or not sol2.duals:
         return enc
-    left = None if deadline is None else max(0.0, deadline - time.perf_counter())
+    left = None if deadline is None else max(0.0, seconds_left(deadline))
     enc2 = enclosure(
         problem,
         sol2.duals,
@@ -389,8 +394,16 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     options = options or SolveOptions()
     if not is_auto(backend) or problem.objective.sense == "feasibility":
         out = _unbounded_checked(problem, decide(problem, backend, options, exact=exact), options)
-        done = _steps(out)
-        return RouteResult(out, None, 0.0, {"steps": done, "text": describe(done, problem)})
+        done, enc, enc_s = _steps(out), None, 0.0
+        if out.verdict == "undecided" and getattr(out.certificate, "verdict", None) == "certified":
+            # a point that holds from a solve the solver called inexact (SDPA's pFEAS): as on
+            # the default route, an enclosure that meets the gap proves the optimum
+            used = out.backend or str(getattr(backend, "label", backend))
+            enc, enc_s = enclosure_of(problem, out.solution, out.certificate, exact, used, options)
+            if enc is not None and enc.get("rel_gap") is not None and enc["rel_gap"] <= options.gap:
+                out = _upgrade(out, enc)
+                done[-1]["verdict"] = out.verdict
+        return RouteResult(out, enc, enc_s, {"steps": done, "text": describe(done, problem)})
     names = list(route(problem, backend))
     budgeted = options.time_limit is None
     last = len(names) - 1
@@ -402,7 +415,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     steps: list[dict[str, Any]] = []
     bounded = 0
     escalated = 0
-    t_route, first_s = time.perf_counter(), 0.0
+    clock, first_s = RouteClock(), 0.0  # the route's cost, robust to load (route_escalation)
     k = -1
     while k + 1 < len(names):
         k += 1
@@ -439,18 +452,18 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
             rel = None if enc is None else enc.get("rel_gap")
             step["rel_gap"] = rel
             if rel is None:
-                step["gap_note"] = _gap_note(enc)
+                step["gap_note"] = gap_note(enc)
         out, enc, t_up = upper_route(problem, out, enc, name, opts, exact, options.gap, steps)  # lmic.route_upper
         enc_s += t_up
         if holds and enc is not None and enc.get("rel_gap") is not None and enc["rel_gap"] <= options.gap:
             out = _upgrade(out, enc)  # the enclosure proves the optimum whatever the solver's status
             step["verdict"] = out.verdict
-        if best is None or _score(out) > _score(best) or _tighter(enc, best_enc, out, best):
+        if best is None or _score(out) > _score(best) or tighter(enc, best_enc, out, best):
             best, best_enc = out, enc
         if out.verdict == "certified":
             rel = step.get("rel_gap")
             if rel is not None and rel <= options.gap:
-                cheap = time.perf_counter() - t_route < CHEAP_ESCALATION_S
+                cheap = clock.elapsed() < CHEAP_ESCALATION_S
                 if first_order or rel <= GAP_TARGET or escalated > 0 or not cheap or k == len(names) - 1:
                     break  # the enclosure proves the optimum to the requested gap
                 # within --gap but above GAP_TARGET, and cheap: one more interior point may close it
@@ -459,8 +472,8 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
                 names = names[: k + 1] + [nm for nm in names[k + 1 :] if method_of(nm) != "first-order"]
                 continue
             if not first_order:
-                first_s = first_s or (time.perf_counter() - t_route)
-                late = time.perf_counter() - t_route > max(GAP_ESCALATION_FLOOR_S, GAP_ESCALATION_FACTOR * first_s)
+                first_s = first_s or clock.elapsed()
+                late = clock.elapsed() > max(GAP_ESCALATION_FLOOR_S, GAP_ESCALATION_FACTOR * first_s)
                 if escalated >= MAX_GAP_ESCALATIONS or late or not gap_escalates(problem, enc):
                     break  # a certified interior-point answer: its enclosure is what can be proved
                 # the gap is not met and another interior-point solver may close it (its point
@@ -487,15 +500,6 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     return RouteResult(best, best_enc, enc_s, {"steps": steps, "text": describe(steps, problem), "gap": options.gap})
 
 
-def _tighter(enc: dict[str, Any] | None, best_enc: dict[str, Any] | None, out: Outcome, best: Outcome) -> bool:
-    """A later certified answer (a polish) replaces an earlier one unless the earlier one's
-    enclosure has a smaller relative gap."""
-    if out.verdict != "certified" or best.verdict != "certified":
-        return False
-    new, old = (enc or {}).get("rel_gap"), (best_enc or {}).get("rel_gap")
-    return old is None or (new is not None and new <= old)
-
-
 def _score(out: Outcome) -> float:
     """:func:`lmic.outcome.rank`, with a point that holds from an inexact solve (undecided)
     above a rejected point: its objective is a proven end of the enclosure.
@@ -520,17 +524,3 @@ def _upgrade(out: Outcome, enc: dict[str, Any]) -> Outcome:
         f"[{enc['lower']:.10g}, {enc['upper']:.10g}] (relative gap {enc['rel_gap']:.2g})"
     )
     return out
-
-
-def _gap_note(enc: dict[str, Any] | None) -> str:
-    """Which end of an enclosure without a relative gap is missing (the route line).
-
-    >>> _gap_note(None), _gap_note({"lower": 1.0, "upper": None})
-    ('no enclosure', 'no certified upper end')
-    """
-    if enc is None:
-        return "no enclosure"
-    lo, hi = enc.get("lower"), enc.get("upper")
-    if lo is None and hi is None:
-        return "no certified end"
-    return "no certified lower end" if lo is None else "no certified upper end"

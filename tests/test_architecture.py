@@ -70,6 +70,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "lmic.routes",
             "lmic.route_rule",
             "lmic.route_unbounded",
+            "lmic.route_escalation",
             "lmic.backoff",
             "lmic.upper_end",
             "lmic.route_upper",

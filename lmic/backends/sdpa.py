@@ -15,7 +15,14 @@ The phase value sdpa-python reports refers to the SeDuMi *primal* (the IR's dual
 ``pUNBD``/``pFEAS_dINF`` mean the LMIs are infeasible, ``dUNBD``/``pINF_dFEAS`` that the IR
 problem is unbounded. SDPA works in double precision and stalls ("primal < dual") at relative
 gaps of a few 1e-7, so its gap tolerance is floored at :data:`TOL_FLOOR` (``pdFEAS``, a point
-short of the gap tolerance, is ``inaccurate``). SDPA has no time limit of its own: with
+short of the gap tolerance, is ``inaccurate``), except for a tolerance at or below
+:data:`TIGHT_TOL`: the tight re-solves of an enclosure (:func:`lmic.routes.tighten`), whose
+point and dual are used even when SDPA calls them inexact. Where SDPA's dual itself stops
+about 1e-6 (relative) short of the optimum, the enclosure's gap stays there: on the random
+instances of ``benchmarks/theorem_enclosures.py`` at 9 and 12 states, up to 4e-5 on
+``uir.thm4_1`` and 7e-6 on ``sampled_euler.thm2/thm3`` (the re-solves at 1e-9 and 1e-10 end
+at ``pFEAS`` with no better dual: ``uir.thm4_1`` n = 6 seed 1, 1.1e-6, 1.1e-5 and 1.4e-6);
+Clarabel and CVXOPT meet 1e-6 there. SDPA has no time limit of its own: with
 ``SolveOptions.time_limit`` the solve runs in a child process.
 
 Examples
@@ -42,10 +49,27 @@ from lmic.backends.results import NativeResult
 from lmic.ir.problem import Problem
 from lmic.options import SolveOptions
 
-__all__ = ["SDPABackend", "sdpa_data", "TOL_FLOOR"]
+__all__ = ["SDPABackend", "sdpa_data", "TOL_FLOOR", "TIGHT_TOL"]
 
-#: SDPA's tolerances are never set below this (its double-precision limit)
+#: SDPA's tolerances are not set below this (its double-precision limit) ...
 TOL_FLOOR = 1e-6
+#: ... unless the tolerance asked is at most this: a tight re-solve of an enclosure
+#: (:data:`lmic.routes.TIGHT_TOLS`), passed through. Random ``delay_b.thm4_1`` n = 10 (seed 1):
+#: epsilonStar 1e-6 (the floor) gives an enclosure of relative gap 1.2e-6 at any tolerance
+#: asked, 1e-9 passed through 7.2e-7 (SDPA stops at ``pdFEAS``, its point and dual still prove
+#: both ends)
+TIGHT_TOL = 1e-9
+
+
+def _tolerances(tol: float) -> tuple[float, float]:
+    """SDPA's ``(epsilonStar, epsilonDash)`` for the uniform tolerance ``tol``.
+
+    >>> _tolerances(1e-8), _tolerances(1e-10)
+    ((1e-06, 1e-07), (1e-10, 1e-10))
+    """
+    if tol <= TIGHT_TOL:
+        return tol, tol
+    return max(tol, TOL_FLOOR), max(tol, 1e-7)
 
 
 def sdpa_data(problem: Problem) -> tuple[sp.csc_matrix, np.ndarray, np.ndarray, LMIData]:
@@ -124,9 +148,8 @@ class SDPABackend(Backend):
         """sdpa-python's option dictionary from the uniform options (``extra`` verbatim, last)."""
         opts: dict[str, Any] = {
             "print": "display" if options.verbose else "no",
-            "epsilonStar": max(float(options.tol), TOL_FLOOR),
-            "epsilonDash": max(float(options.tol), 1e-7),
         }
+        opts["epsilonStar"], opts["epsilonDash"] = _tolerances(float(options.tol))
         if options.max_iter is not None:
             opts["maxIteration"] = int(options.max_iter)
         opts.update(options.extra)
