@@ -43,6 +43,8 @@ __all__ = ["ray_problem", "prove_improving_ray", "audit_unbounded", "RAY_BITS"]
 
 #: the ray is rounded to a multiple of ``2^-RAY_BITS`` (relative to its largest entry)
 RAY_BITS = 30
+#: the longest entry of a recorded ray the audit reads (lmic writes about 20 characters)
+RAY_TEXT_MAX = 64
 
 
 def _q(problem: Problem) -> np.ndarray:
@@ -159,9 +161,12 @@ def _prove_rational_ray(problem: Problem, point: Any) -> dict[str, Any]:
 def audit_unbounded(problem: Problem, record: Any) -> dict[str, Any]:
     """Re-prove a certificate's ``unbounded`` section: its ray, exactly, on ``problem``.
 
-    The ray is read from fraction strings (``"-3/8"``; no evaluation of text), every condition
-    of an improving ray is proved again in rational arithmetic, and the recorded ``sense`` and
-    ``slope`` must match the problem and the exact ``q.d`` rounded to float.
+    The ray is read from fraction strings (``"-3/8"``; no evaluation of text): dyadic, as
+    :func:`prove_improving_ray` writes it (denominators powers of two, at most
+    :data:`RAY_TEXT_MAX` characters an entry, so that a forged file cannot make the exact proof
+    run on huge integers). Every condition of an improving ray is proved again in rational
+    arithmetic, and the recorded ``sense`` and ``slope`` must match the problem and the exact
+    ``q.d`` rounded to float.
 
     Returns
     -------
@@ -178,6 +183,8 @@ def audit_unbounded(problem: Problem, record: Any) -> dict[str, Any]:
     True
     >>> audit_unbounded(p, {"ray": ["-1"], "slope": 1.0, "sense": "min"})["field"]
     'unbounded.ray'
+    >>> audit_unbounded(p, {"ray": ["1/3"], "slope": -1 / 3, "sense": "min"})["message"]
+    'unbounded.ray entries must be dyadic (denominators powers of two), as lmic writes them'
     """
     import math
     import re
@@ -200,10 +207,16 @@ def audit_unbounded(problem: Problem, record: Any) -> dict[str, Any]:
         return fail("unbounded.ray", f"unbounded.ray needs {problem.n} entries")
     if not all(isinstance(v, str) and pattern.fullmatch(v) for v in ray):
         return fail("unbounded.ray", "unbounded.ray entries must be integers or fractions 'p/q'")
+    if any(len(v) > RAY_TEXT_MAX for v in ray):
+        return fail("unbounded.ray", f"unbounded.ray entries are at most {RAY_TEXT_MAX} characters")
     try:
         fracs = [Fraction(v) for v in ray]
     except ZeroDivisionError:
         return fail("unbounded.ray", "unbounded.ray has a zero denominator")
+    if any(f.denominator & (f.denominator - 1) for f in fracs):
+        return fail(
+            "unbounded.ray", "unbounded.ray entries must be dyadic (denominators powers of two), as lmic writes them"
+        )
     den = math.lcm(*(f.denominator for f in fracs)) if fracs else 1
     res = _prove_rational_ray(problem, ExactPoint([int(f * den) for f in fracs], den))
     if not res["proven"]:

@@ -130,8 +130,10 @@ def test_audit_unbounded_reads_fractions_only() -> None:
     from lmic.certify.farkas_unbounded import audit_unbounded
 
     p = _unbounded_problem()
-    assert audit_unbounded(p, {"ray": ["3/7"], "slope": -3 / 7, "sense": "min"})["ok"]
-    for ray in (["1e3"], ["__import__('os')"], ["1/0"], [1], ["1", "2"]):
+    assert audit_unbounded(p, {"ray": ["3/8"], "slope": -3 / 8, "sense": "min"})["ok"]
+    # not what lmic writes: scientific notation, code, a zero or non-dyadic denominator, a
+    # number, the wrong length, an entry of 65 characters (a forged file's huge integers)
+    for ray in (["1e3"], ["__import__('os')"], ["1/0"], ["3/7"], [1], ["1", "2"], ["1" * 65]):
         res = audit_unbounded(p, {"ray": ray, "slope": -1.0, "sense": "min"})
         assert not res["ok"] and res["field"] == "unbounded.ray", ray
 
