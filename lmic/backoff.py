@@ -162,8 +162,6 @@ def backoff(
         backed-off point), ``time_s``.
     """
     from lmic.backends.registry import get_backend
-    from lmic.certify import certify
-    from lmic.solution import Solution
 
     t0 = time.perf_counter()
     s = -1.0 if problem.objective.sense == "max" else 1.0
@@ -187,9 +185,7 @@ def backoff(
         x, mine, cert = other
         out["method"] = "largest margin"
     else:
-        x = np.asarray(sol.x, dtype=float)[: problem.n]
-        mine = Solution(status=sol.status, x=x, objective=problem.objective.value(x), backend=sol.backend)
-        cert = certify(problem, mine)
+        x, mine, cert = _certified(problem, sol)
     if cert.verdict != "certified" and other is None:
         # a slice too thin for the solver's accuracy (a near-singular optimum): its most interior
         # point instead (lmic.upper_end.margin_problem, box ten times the objective's size)
@@ -305,8 +301,6 @@ def restore(
 def _largest_margin(problem: Problem, bound: float, backend: Any, options: Any) -> tuple[np.ndarray, Any, Any] | None:
     """``(x, solution, certificate)`` of the most interior point with objective within ``bound``
     (:func:`lmic.upper_end.margin_problem`), when the certifier certifies it; else ``None``."""
-    from lmic.certify import certify
-    from lmic.solution import Solution
     from lmic.upper_end import margin_problem
 
     s = -1.0 if problem.objective.sense == "max" else 1.0
@@ -316,7 +310,16 @@ def _largest_margin(problem: Problem, bound: float, backend: Any, options: Any) 
         return None
     if sol.x is None:
         return None
+    x, mine, cert = _certified(problem, sol)
+    return (x, mine, cert) if cert.verdict == "certified" else None
+
+
+def _certified(problem: Problem, sol: Any) -> tuple[np.ndarray, Any, Any]:
+    """``(x, solution, certificate)``: a solve's point (its first ``problem.n`` entries: the
+    backed-off and margin problems append variables) certified against ``problem``."""
+    from lmic.certify import certify
+    from lmic.solution import Solution
+
     x = np.asarray(sol.x, dtype=float)[: problem.n]
     mine = Solution(status=sol.status, x=x, objective=problem.objective.value(x), backend=sol.backend)
-    cert = certify(problem, mine)
-    return (x, mine, cert) if cert.verdict == "certified" else None
+    return x, mine, certify(problem, mine)

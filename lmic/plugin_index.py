@@ -179,14 +179,11 @@ def group_entry_points(group: str) -> list[EntryPointRecord]:
     sig = _distribution_signature()
     records: list[EntryPointRecord] | None = None
     key = None if sig is None else {"python": list(sys.version_info[:3]), "signature": sig}
-    if records is None and key is not None:
-        payload = cache.load(EP_KIND, key)
+    payload = cache.load(EP_KIND, key) if key is not None else None
+    if isinstance(payload, dict) and isinstance(payload.get("records"), list):
         try:
-            if isinstance(payload, dict) and isinstance(payload.get("records"), list):
-                records = [EntryPointRecord(*(str(v) for v in rec)) for rec in payload["records"]]
-                if any(len(rec) != 6 for rec in payload["records"]):
-                    records = None
-        except TypeError:
+            records = [EntryPointRecord(*(str(v) for v in rec)) for rec in payload["records"]]
+        except TypeError:  # a record of another shape (not 6 fields, not a list): a full scan
             records = None
     if records is None:
         records = _scan_entry_points()

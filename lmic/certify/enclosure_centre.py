@@ -60,6 +60,9 @@ from lmic.certify.enclosure_repair import _least_norm, _pack, _repair, _unpack
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 from lmic.ir.svec import tril_rows_cols
 
+#: a proof attempt's ``(proof record, Z_i, y)``
+_Proof = tuple[dict[str, Any], list[np.ndarray], np.ndarray]
+
 __all__ = ["LOSSES", "THETAS", "centring_problem", "centred_bound"]
 
 #: relative losses ``delta / max(1, |L_0|)`` of dual objective tried, smallest first
@@ -153,7 +156,7 @@ def centred_bound(
     top: float,
     solve_point: Callable[[Problem], np.ndarray | None],
     deadline: Callable[[], bool],
-) -> tuple[dict[str, Any], list[np.ndarray], np.ndarray]:
+) -> _Proof:
     """Try the centred candidates (module docstring); returns ``(proof, Z_i, y)``.
 
     ``mats0``, ``y0``: the solver's dual projected onto the cone (inactive entries zero);
@@ -190,17 +193,19 @@ def centred_bound(
         t = float(x[-1])
         uc = np.zeros(u0.size)
         uc[idx] = x[:-1]
+
+        def combine(theta: float, uc: np.ndarray = uc, t: float = t) -> _Proof:
+            return _combined(problem, J, ranges, q, u0, uc, t, theta, active)
+
         for k, theta in enumerate(THETAS):
-            res, mats, y = _combined(problem, J, ranges, q, u0, uc, t, theta, active)
+            res, mats, y = combine(theta)
             if res["proven"]:
                 res.update(centring_loss=loss, centring_margin=t, theta=theta)
                 if k and not deadline():
                     # the bound loses about theta * delta: the weights between the last that
                     # failed and this one (geometric thirds, smallest first) may lose less
                     # (uir.thm4_1 n = 12, seed 1: theta 1e-2 at loss 1e-4 costs 1e-6 of the bound)
-                    res, mats, y = _refined(
-                        problem, J, ranges, q, u0, uc, t, THETAS[k - 1], theta, active, (res, mats, y)
-                    )
+                    res, mats, y = _refined(combine, THETAS[k - 1], theta, (res, mats, y))
                     res.update(centring_loss=loss, centring_margin=t)
                 return res, mats, y
             out = dict(res, reason=f"centred point (loss {loss:g}, margin {t:.3g}): {res['reason']}")
@@ -218,7 +223,7 @@ def _combined(
     t: float,
     theta: float,
     active: np.ndarray,
-) -> tuple[dict[str, Any], list[np.ndarray], np.ndarray]:
+) -> _Proof:
     """The combination ``(1 - theta) u0 + theta uc`` repaired and proved: ``(proof, Z_i, y)``."""
     u = (1.0 - theta) * u0 + theta * uc
     mats, y = _unpack(problem, u, ranges)
@@ -234,24 +239,18 @@ def _combined(
 
 
 def _refined(
-    problem: Problem,
-    J: sp.csr_matrix,
-    ranges: list[tuple[int, int]],
-    q: np.ndarray,
-    u0: np.ndarray,
-    uc: np.ndarray,
-    t: float,
+    combine: Callable[[float], _Proof],
     low: float,
     high: float,
-    active: np.ndarray,
-    found: tuple[dict[str, Any], list[np.ndarray], np.ndarray],
-) -> tuple[dict[str, Any], list[np.ndarray], np.ndarray]:
+    found: _Proof,
+) -> _Proof:
     """The smallest of two weights between a failing ``low`` and the proving ``high``
-    (geometric thirds) that proves a better bound than ``found``; else ``found``."""
+    (geometric thirds) that proves a better bound than ``found``; else ``found``.
+    ``combine(theta)`` is :func:`_combined` at that weight."""
     for f in (2.0 / 3.0, 1.0 / 3.0):
         theta = low**f * high ** (1.0 - f)
         try:
-            res, mats, y = _combined(problem, J, ranges, q, u0, uc, t, theta, active)
+            res, mats, y = combine(theta)
         except (np.linalg.LinAlgError, ValueError, FloatingPointError):
             continue
         if res["proven"] and res["lower"] > found[0]["lower"]:

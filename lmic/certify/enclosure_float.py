@@ -78,16 +78,9 @@ def lambda_min_lower(A: np.ndarray) -> float:
     g = _gamma(2 * (d + 1))
     best = -math.inf
     for f in (1e-9, 1e-6, 1e-3, 0.1, 0.5):
-        s = est - max(f * abs(est), 4.0 * (d + 1) * (d + 1) * _U * norm)
-        B = A - s * np.eye(d)
-        try:
-            R = np.linalg.cholesky(B)
-        except np.linalg.LinAlgError:
+        lb = _shifted_lower(A, est - max(f * abs(est), 4.0 * (d + 1) * (d + 1) * _U * norm), g)
+        if lb == -math.inf:  # A - s I did not factorise
             continue
-        if not np.all(np.isfinite(R)):
-            continue
-        err = (g * float(np.sum(R * R)) + _U * float(np.max(np.abs(np.diag(B))))) * _SAFE
-        lb = _down(s - err)
         best = max(best, lb)
         if lb > 0 or est <= 0:
             break
@@ -96,18 +89,24 @@ def lambda_min_lower(A: np.ndarray) -> float:
         # singular optimum: 8e-9 on entries 4.5e4): shifts between 0 and the estimate, whose
         # Cholesky may still succeed; the error bound is the same, whatever the shift
         for f in (0.5, 0.8, 0.2, 0.95):
-            s = est * f
-            try:
-                R = np.linalg.cholesky(A - s * np.eye(d))
-            except np.linalg.LinAlgError:
-                continue
-            if not np.all(np.isfinite(R)):
-                continue
-            err = (g * float(np.sum(R * R)) + _U * float(np.max(np.abs(np.diag(A - s * np.eye(d)))))) * _SAFE
-            best = max(best, _down(s - err))
+            best = max(best, _shifted_lower(A, est * f, g))
             if best > 0:
                 break
     return best
+
+
+def _shifted_lower(A: np.ndarray, s: float, g: float) -> float:
+    """``s`` minus Higham's bound on the Cholesky of ``A - s I`` (rounded down): a rigorous
+    lower bound of ``lambda_min(A)``; ``-inf`` when ``A - s I`` does not factorise."""
+    B = A - s * np.eye(A.shape[0])
+    try:
+        R = np.linalg.cholesky(B)
+    except np.linalg.LinAlgError:
+        return -math.inf
+    if not np.all(np.isfinite(R)):
+        return -math.inf
+    err = (g * float(np.sum(R * R)) + _U * float(np.max(np.abs(np.diag(B))))) * _SAFE
+    return _down(s - err)
 
 
 #: smallest positive subnormal: the absolute error a product may add by underflow

@@ -41,15 +41,22 @@ def _enclosure_checked(r, value: float, tol: float) -> dict:
     return enc
 
 
-@pytest.mark.parametrize("tid", ENCLOSED)
-@pytest.mark.parametrize(("seed", "backend"), [(0, "clarabel"), (1, "cvxopt")])
-def test_enclosure_contains_reference_with_small_gap(tid, seed, backend):
-    system = instance(tid, seed, 2)
+def _solved_with_reference(tid: str, seed: int, n: int, backend: str):
+    """The random instance solved on ``backend`` (no backoff) and its independent optimum:
+    ``(result, value, tol)``; the reference must be an optimum."""
+    system = instance(tid, seed, n)
     status, value, tol = reference(tid, system)
     assert status == "optimal" and value is not None
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         r = solve(tid, system, backend=backend, backoff=0)
+    return r, value, tol
+
+
+@pytest.mark.parametrize("tid", ENCLOSED)
+@pytest.mark.parametrize(("seed", "backend"), [(0, "clarabel"), (1, "cvxopt")])
+def test_enclosure_contains_reference_with_small_gap(tid, seed, backend):
+    r, value, tol = _solved_with_reference(tid, seed, 2, backend)
     enc = _enclosure_checked(r, value, tol)
     assert enc["lower"] is not None and enc["upper"] is not None, enc["reason"]
     assert enc["rel_gap"] <= GAP, enc["reason"]
@@ -124,13 +131,7 @@ def test_a_rejected_small_margin_point_still_gives_the_upper_end():
     certified point is the rescaled strategy's, 3e-4 above the optimum. The enclosure re-solves
     the strict problem and proves that point with rigorous rounding (``polish`` from the strict
     problem): the gap meets 1e-6, the independent optimum is inside, and the audit re-proves it."""
-    tid = "sampled_euler.thm2"
-    system = instance(tid, 0, 8)
-    status, value, tol = reference(tid, system)
-    assert status == "optimal" and value is not None
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        r = solve(tid, system, backend="clarabel", backoff=0)
+    r, value, tol = _solved_with_reference("sampled_euler.thm2", 0, 8, "clarabel")
     assert [a["reduction"] for a in r.attempts][-1] != "default/fixed-margin"  # the certified point is not it
     assert r.objective > value * (1 + 1e-5)  # ... and it keeps a large margin
     enc = _enclosure_checked(r, value, tol)
@@ -154,12 +155,7 @@ def test_a_rejected_small_margin_point_still_gives_the_upper_end():
     ],
 )
 def test_sdpa_enclosure_meets_the_target(tid, seed, n):
-    system = instance(tid, seed, n)
-    status, value, tol = reference(tid, system)
-    assert status == "optimal" and value is not None
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        r = solve(tid, system, backend="sdpa", backoff=0)
+    r, value, tol = _solved_with_reference(tid, seed, n, "sdpa")
     enc = _enclosure_checked(r, value, tol)
     assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
 
@@ -169,12 +165,6 @@ def test_centred_weight_refined_below_the_target():
     for an interior margin at a loss ``delta`` of objective, combined with weight ``theta``)
     proved at ``theta`` 1e-2 and lost ``theta delta`` = 1e-6 of the bound (gap 1.02e-6); the
     weight is now refined between the last failing and the proving one."""
-    tid = "uir.thm4_1"
-    system = instance(tid, 1, 12)
-    status, value, tol = reference(tid, system)
-    assert status == "optimal" and value is not None
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        r = solve(tid, system, backend="clarabel", backoff=0)
+    r, value, tol = _solved_with_reference("uir.thm4_1", 1, 12, "clarabel")
     enc = _enclosure_checked(r, value, tol)
     assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
