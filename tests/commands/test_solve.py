@@ -195,3 +195,20 @@ def test_unbounded_problem_exits_5_and_its_certificate_audits(ir_file, tmp_path,
     cert.write_text(json.dumps(doc))
     assert main(["audit", str(cert)]) == 1
     assert "unbounded.ray" in capsys.readouterr().out
+
+
+def test_a_malformed_unbounded_section_is_bad_input(ir_file, tmp_path, capsys):
+    """A certificate whose ``unbounded`` section is not what lmic writes (a ray of numbers, no
+    ray): ``lmic audit`` exits 2 with one line naming the field."""
+    cert = tmp_path / "unbounded.cert.json"
+    main(["solve", ir_file("unbounded"), "-o", str(cert)])
+    capsys.readouterr()
+    doc = json.loads(cert.read_text())
+    for section, needle in [
+        ({"ray": [1, 0], "slope": -1.0, "sense": "max"}, "unbounded.ray[0]"),
+        ({"slope": -1.0, "sense": "max"}, "'ray' is a required property"),
+    ]:
+        cert.write_text(json.dumps(dict(doc, unbounded=section)))
+        assert main(["audit", str(cert)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("lmic: error:") and needle in err[0], err
