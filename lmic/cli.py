@@ -205,10 +205,84 @@ class _LeanNumpyNames:
             numpy.__dir__, numpy.__all__ = full_dir, full_all  # the module's own functions and list
 
 
+class OutputLost(OSError):
+    """Standard output could not be written (a full disk, a lost terminal): the command's answer
+    did not reach the user, which :func:`main` reports as a failure (exit 1), never as a crash."""
+
+
+class _ClosedPipeSafeStdout:
+    """Standard output that a closed pipe cannot break (``lmic solve ... | head -1``).
+
+    When the reader has gone, the rest of the output is discarded (the stream's descriptor is
+    pointed at ``os.devnull``, the recipe of Python's ``signal`` documentation) and the command
+    finishes as it would have: its exit code is still its verdict's. Any other write error is
+    :class:`OutputLost`. Everything else is the wrapped stream's.
+
+    >>> import io
+    >>> out = _ClosedPipeSafeStdout(io.StringIO())
+    >>> out.write("certified"), out.closed_pipe
+    (9, False)
+    """
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+        self.closed_pipe = False
+
+    def write(self, text: str) -> int:
+        if not self.closed_pipe:
+            self._guarded(self._stream.write, text)
+        return len(text)
+
+    def flush(self) -> None:
+        if not self.closed_pipe:
+            self._guarded(self._stream.flush)
+
+    def _guarded(self, op: Any, *args: Any) -> None:
+        try:
+            op(*args)
+        except BrokenPipeError:
+            self._discard_the_rest()
+        except OSError as err:
+            raise OutputLost(err.errno, f"cannot write the output: {err.strerror or err}") from None
+
+    def _discard_the_rest(self) -> None:
+        import os
+
+        self.closed_pipe = True
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, self._stream.fileno())  # the buffered rest then flushes into it
+            os.close(devnull)
+        except (OSError, ValueError, AttributeError):  # no real descriptor (a captured stream)
+            pass
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; return the exit code."""
-    with _LeanNumpyNames():
-        return _main(argv)
+    """Run the command line; return the exit code.
+
+    Examples
+    --------
+    >>> main(["--version"])  # doctest: +SKIP
+    lmic 0.1.0
+    0
+    """
+    stdout = sys.stdout
+    safe = _ClosedPipeSafeStdout(stdout) if stdout is not None else None
+    if safe is not None:
+        sys.stdout = safe
+    try:
+        with _LeanNumpyNames():
+            return _main(argv)
+    finally:
+        if safe is not None and sys.stdout is safe:
+            try:
+                safe.flush()
+            except OutputLost:
+                pass  # already reported, or the answer was written and only the last flush failed
+            sys.stdout = stdout
 
 
 def _main(argv: Sequence[str] | None = None) -> int:
@@ -230,6 +304,9 @@ def _main(argv: Sequence[str] | None = None) -> int:
         msg = " ".join(str(err).split())
         sys.stderr.write(f"lmic: error: {msg}\n")
         return EXIT_USAGE
+    except OutputLost as err:
+        sys.stderr.write(f"lmic: error: {err.strerror}\n")
+        return EXIT_FAILED
     except Exception as err:  # a bug (lmic's or a plugin's): one line; the traceback with --debug
         if debug:
             traceback.print_exception(err)
