@@ -70,6 +70,17 @@ def _solution(problem: Problem, sol: Any, x: np.ndarray, message: str) -> Any:
     )
 
 
+def sgn_gap(problem: Problem, value: float, dual_end: float) -> float:
+    """The relative gap of a primal end ``value`` to the dual end (VSDP's normalisation).
+
+    >>> from lmic.testing.conformance import CASES
+    >>> round(sgn_gap(CASES["max_sense"].build(), 1.0, 2.0), 6)
+    0.666667
+    """
+    hi, lo = (value, dual_end) if problem.objective.sense == "min" else (dual_end, value)
+    return (hi - lo) / max(1.0, 0.5 * (abs(hi) + abs(lo)))
+
+
 def upper_route(
     problem: Problem,
     out: Outcome,
@@ -79,6 +90,8 @@ def upper_route(
     exact: bool,
     gap: float,
     steps: list[dict[str, Any]],
+    *,
+    boxes: bool = False,
 ) -> tuple[Outcome, dict[str, Any] | None, float]:
     """The step ``out`` (its enclosure ``enc``) with a primal end from its dual end, when it lacks one.
 
@@ -88,9 +101,14 @@ def upper_route(
     and the seconds spent; ``steps`` are the route's records so far, the last one this step's: it
     gets ``upper`` (what was tried) and the new ``rel_gap`` / ``verdict``. The searches of one
     route share :data:`UPPER_MAX_S` seconds (the earlier steps' ``upper.time_s``).
+
+    ``boxes=True`` (the route's last resort, once, on its best step): when the search from the
+    dual end proves nothing or there is no dual end, the boxed search of
+    :func:`lmic.upper_end.upper_from_boxes` (recorded as ``upper_boxed``).
     """
     step = steps[-1]
-    spent = sum(float((s.get("upper") or {}).get("time_s", 0.0)) for s in steps[:-1])
+    key = "upper_boxed" if boxes else "upper"
+    spent = sum(float((s.get(k) or {}).get("time_s", 0.0)) for s in steps[:-1] for k in ("upper", "upper_boxed"))
     sol = out.solution
     if problem.objective.sense == "feasibility" or sol is None:
         return out, enc, 0.0
@@ -100,19 +118,19 @@ def upper_route(
         return out, enc, 0.0
     from lmic.certify import certify
     from lmic.certify.enclosure import enclosure, with_primal
-    from lmic.upper_end import upper_from_lower
+    from lmic.upper_end import upper_from_boxes, upper_from_lower
 
     t0 = time.perf_counter()
     solve_s = float(getattr(sol, "solve_s", 0.0) or 0.0)
     left = UPPER_MAX_S - spent
     if left <= 0.0:
-        step["upper"] = {"proven": False, "reason": f"the route's {UPPER_MAX_S:g} s for the primal end are spent"}
+        step[key] = {"proven": False, "reason": f"the route's {UPPER_MAX_S:g} s for the primal end are spent"}
         return out, enc, 0.0
     deadline = t0 + min(upper_budget(solve_s), left)
     if enc is None:  # no certified point: the dual end alone (the face route needs no dual point)
         enc = enclosure(problem, sol.duals or None, None, exact=exact, budget_s=upper_budget(solve_s))
     dual_end, primal = _ends(problem, enc)
-    if dual_end is None:
+    if dual_end is None and not boxes:
         return out, enc, time.perf_counter() - t0
     # the solves want an interior point: a first-order step's backend gives points violated by
     # its tolerance, far above the margins of a near-singular slice
@@ -123,11 +141,19 @@ def upper_route(
         return certify(problem, _solution(problem, sol, x, "")).verdict == "certified"
 
     others = tuple(b for b in ALTERNATIVES if b not in str(getattr(solver, "name", solver)).lower())
-    r = upper_from_lower(
-        problem, dual_end, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
-    )
-    step["upper"] = {k: r[k] for k in ("proven", "rel_gap", "reason")}
-    step["upper"]["time_s"] = time.perf_counter() - t0
+    r: dict[str, Any] = {"proven": False}
+    if dual_end is not None and not boxes:
+        r = upper_from_lower(
+            problem, dual_end, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
+        )
+    if boxes:  # no dual end to aim at (or the search from it failed): box by box
+        r = upper_from_boxes(
+            problem, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
+        )
+        if dual_end is not None and r["proven"]:
+            r["rel_gap"] = max(0.0, sgn_gap(problem, r["value"], dual_end))
+    step[key] = {k: r.get(k) for k in ("proven", "rel_gap", "reason")}
+    step[key]["time_s"] = time.perf_counter() - t0
     sgn = -1.0 if problem.objective.sense == "max" else 1.0
     if not r["proven"] or (primal is not None and sgn * r["value"] >= sgn * primal):
         return out, enc, time.perf_counter() - t0
@@ -138,13 +164,16 @@ def upper_route(
     enc2.pop("polish", None)
     enc2["consistent"] = enc2.get("consistent", True)
     step["rel_gap"] = enc2.get("rel_gap")
-    step.pop("gap_note", None)
+    if step["rel_gap"] is None:
+        step["gap_note"] = "no certified lower end" if problem.objective.sense == "min" else "no certified upper end"
+    else:
+        step.pop("gap_note", None)
     if enc2.get("rel_gap") is None or enc2["rel_gap"] > gap or getattr(out.certificate, "verdict", None) == "certified":
         # a better enclosure; the step's point stands (a point that holds from an inexact solve
         # is upgraded by the route when the enclosure meets the gap)
         return out, enc2, time.perf_counter() - t0
     if r["checked_x"] is None:  # the rigorous proof holds; no point met the certifier's threshold
-        step["upper"]["certifier"] = "no point of the search met the certifier's threshold"
+        step[key]["certifier"] = "no point of the search met the certifier's threshold"
         return out, enc2, time.perf_counter() - t0
     from lmic.outcome import evidence_of
 

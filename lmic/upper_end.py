@@ -57,7 +57,18 @@ from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 from lmic.ir.svec import tril_rows_cols, tril_unvec
 from lmic.reductions.pipeline import solve as solve_with_reductions
 
-__all__ = ["START_DELTAS", "STEP", "margin_problem", "recentred_problem", "upper_from_lower"]
+__all__ = [
+    "BOX_GROWTH",
+    "BOX_MAX",
+    "BOX_START",
+    "START_DELTAS",
+    "STEP",
+    "boxed_problem",
+    "margin_problem",
+    "recentred_problem",
+    "upper_from_boxes",
+    "upper_from_lower",
+]
 
 #: the relative backoffs of the first (margin) solve, tried in turn until one point is proved
 START_DELTAS = (1e-4, 1e-3, 1e-2)
@@ -207,6 +218,7 @@ def upper_from_lower(
     deadline: float | None = None,
     check: Callable[[np.ndarray], bool] | None = None,
     alternatives: tuple[Any, ...] = (),
+    radii: tuple[float, ...] | None = None,
 ) -> dict[str, Any]:
     """A point proved feasible whose objective is near the proven dual end ``lower``.
 
@@ -233,6 +245,9 @@ def upper_from_lower(
     alternatives : tuple of str or Backend
         Backends for a recentred solve that ``backend`` ends without a point (tried in turn;
         the first that gives one is used for the rest of the search).
+    radii : tuple of float, optional
+        The boxes ``|x_k| <= R`` of the margin solves (default: ten times ``max(1, |lower|)``,
+        then ten times the largest entry of ``x_hint``).
 
     Returns
     -------
@@ -254,7 +269,8 @@ def upper_from_lower(
     hint = 0.0 if x_hint is None else float(np.max(np.abs(np.asarray(x_hint, dtype=float)), initial=0.0))
     # the box of the margin solve: ten times the objective's size, then the solver point's
     # (a loose box lets the solver drift to huge, less accurate points)
-    radii = [10.0 * scale] + ([10.0 * hint] if np.isfinite(hint) and hint > 3.0 * scale else [])
+    if radii is None:
+        radii = (10.0 * scale,) + ((10.0 * hint,) if np.isfinite(hint) and hint > 3.0 * scale else ())
     steps: list[dict[str, Any]] = []
     best: dict[str, Any] = {"proven": False}
     checked: dict[str, Any] = {}
@@ -343,4 +359,164 @@ def upper_from_lower(
         out.update(x=None, value=None, rel_gap=None)
         why = "time budget spent" if late() else "no solve gave a point proved feasible"
         out["reason"] = f"no primal end from the dual end: {why} ({len(steps)} solves)"
+    return out
+
+
+#: the boxes ``|x_k| <= R`` of :func:`upper_from_boxes`: from :data:`BOX_START`, times
+#: :data:`BOX_GROWTH` each, up to :data:`BOX_MAX` (or ten times the solver's point, if smaller)
+BOX_START = 100.0
+BOX_GROWTH = 10.0
+BOX_MAX = 1e10
+#: the boxes stop growing once the boxed optimum improves by less than this (relative) and a
+#: point is proved
+BOX_STALL = 1e-4
+
+
+def boxed_problem(problem: Problem, radius: float) -> Problem:
+    """``problem`` with the rows ``radius - x_k >= 0`` and ``radius + x_k >= 0`` added.
+
+    >>> import scipy.sparse as sp
+    >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t > 0", 1, sp.csc_matrix([[0.0, 1.0]]))],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+    >>> boxed_problem(p, 5.0).linear.A.toarray().tolist()
+    [[5.0, -1.0], [5.0, 1.0]]
+    """
+    n = problem.n
+    eye = sp.identity(n, format="csr")
+    rad = sp.csr_matrix(np.full((n, 1), float(radius)))
+    lin = problem.linear
+    parts = ([lin.A.tocsr().astype(float)] if len(lin) else []) + [sp.hstack([rad, -eye]), sp.hstack([rad, eye])]
+    kinds = list(lin.kinds) + ["ge"] * (2 * n)
+    strict = list(lin.strict) + [False] * (2 * n)
+    names = list(lin.names) + [f"|x[{k}]| <= {radius:g}" for k in range(n)] * 2
+    linear = LinearConstraints(sp.vstack(parts).tocsr(), kinds, strict, names)
+    return Problem(problem.variables, problem.lmis, linear, problem.objective, meta=problem.meta)
+
+
+def _boxed_values(problem: Problem, radius: float, solvers: list[Any], options: Any) -> list[tuple[float, int]]:
+    """The boxed problem's optimum in the minimisation form (a solver's, unproved) from each of
+    ``solvers`` that gives one, with the solver's index, lowest first (a solver stalled far
+    inside the box reports a value far above the others': SDPLIB hinf13, SDPA 911 where CVXOPT
+    has 55.6)."""
+    sgn, _ = _min_form(problem)
+    boxed = boxed_problem(problem, radius)
+    found: list[tuple[float, int]] = []
+    for k, solver in enumerate(solvers):
+        try:
+            sol = solve_with_reductions(solver, boxed, options)
+        except (LmicError, np.linalg.LinAlgError, ValueError, ArithmeticError):
+            continue
+        if sol.x is not None and sol.status in ("optimal", "inaccurate"):
+            val = problem.objective.value(np.asarray(sol.x, dtype=float))
+            if val is not None and np.isfinite(val):
+                found.append((sgn * float(val), k))
+    return sorted(found)
+
+
+def upper_from_boxes(
+    problem: Problem,
+    backend: Any,
+    options: Any = None,
+    *,
+    x_hint: np.ndarray | None = None,
+    target: float | None = None,
+    deadline: float | None = None,
+    check: Callable[[np.ndarray], bool] | None = None,
+    alternatives: tuple[Any, ...] = (),
+) -> dict[str, Any]:
+    """A point proved feasible near the optimum when there is no proven dual end to aim at.
+
+    An optimum approached only as ``|x|`` grows (SDPLIB hinf10: the solvers stop at
+    ``|x| ~ 1e20`` with an objective far below the optimum, and no point of theirs holds) is
+    found box by box: for ``R`` = :data:`BOX_START`, ``BOX_GROWTH * R``, ... the problem with
+    ``|x_k| <= R`` is solved (a bounded problem; its value ``v_R``, not trusted, only the
+    level to aim at), then :func:`upper_from_lower` looks for a point proved feasible near
+    ``v_R`` inside that box (margin and recentred solves, every point proved by
+    :func:`lmic.certify.enclosure.primal_end` on the original problem). The boxes grow while
+    ``v_R`` improves by more than :data:`BOX_STALL` and the points keep being proved.
+
+    Returns
+    -------
+    dict
+        As :func:`upper_from_lower` (``rel_gap`` is to the boxed value, not to a proven end),
+        with ``boxes``: one record per box (``radius``, ``value`` the boxed solve's, ``proven``,
+        ``upper``).
+
+    Examples
+    --------
+    >>> import scipy.sparse as sp
+    >>> # inf t s.t. [[t, 1], [1, s]] >= 0, s <= 4: optimum 1/4
+    >>> C = sp.csc_matrix(np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]))
+    >>> p = Problem([Variable("t", "scalar", (1, 1)), Variable("s", "scalar", (1, 1), offset=1)],
+    ...             [LMI("M >= 0", 2, C)],
+    ...             LinearConstraints(sp.csr_matrix([[4.0, 0.0, -1.0]]), ["ge"], [False], ["s <= 4"]),
+    ...             Objective("min", [0.0, 1.0, 0.0]))
+    >>> r = upper_from_boxes(p, "clarabel")
+    >>> r["proven"], 0.25 <= r["value"] <= 0.25 + 1e-5
+    (True, True)
+    """
+    from lmic.backends.registry import get_backend
+    from lmic.certify.enclosure import GAP_TARGET
+
+    t0 = time.perf_counter()
+    goal = GAP_TARGET if target is None else float(target)
+    sgn, _ = _min_form(problem)
+    solvers = [b if not isinstance(b, str) else get_backend(b) for b in [backend, *alternatives]]
+    hint = np.inf if x_hint is None else float(np.max(np.abs(np.asarray(x_hint, dtype=float)), initial=0.0))
+    top = BOX_MAX if not np.isfinite(hint) else min(BOX_MAX, max(BOX_START * BOX_GROWTH**2, 10.0 * hint))
+    boxes: list[dict[str, Any]] = []
+    best: dict[str, Any] = {"proven": False}
+    checked: dict[str, Any] = {}
+    lowest: float | None = None
+    misses = 0
+    radius = BOX_START
+    while radius <= top and not (deadline is not None and time.perf_counter() > deadline):
+        rec: dict[str, Any] = {"radius": radius, "value": None, "proven": False}
+        boxes.append(rec)
+        v = None
+        for v, k in _boxed_values(problem, radius, solvers, options):
+            # the boxed values, lowest first, until a point near one is proved (an inaccurate
+            # boxed solve may report a value far below the box's optimum: nothing is proved there)
+            others = tuple(s for j, s in enumerate(solvers) if j != k)
+            r = upper_from_lower(
+                problem,
+                sgn * v,
+                solvers[k],
+                options,
+                target=goal,
+                deadline=deadline,
+                check=check,
+                alternatives=others,
+                radii=(radius,),
+            )
+            rec.update(value=sgn * v, proven=r["proven"], upper=r["value"], backend=str(getattr(solvers[k], "name", k)))
+            if r["checked_x"] is not None and (not checked or sgn * r["checked_value"] < sgn * checked["value"]):
+                checked = {"x": r["checked_x"], "value": r["checked_value"]}
+            if r["proven"]:
+                if not best.get("proven") or sgn * r["value"] < sgn * best["value"]:
+                    best = {"proven": True, "x": r["x"], "value": r["value"], "radius": radius}
+                break
+            if deadline is not None and time.perf_counter() > deadline:
+                break
+        if rec["proven"] and v is not None:
+            stalled = lowest is not None and lowest - v <= BOX_STALL * max(1.0, abs(v))
+            lowest = v if lowest is None else min(lowest, v)
+            if stalled:
+                break
+        misses = 0 if rec["proven"] else misses + 1
+        if best.get("proven") and misses >= 2:
+            break  # two boxes in a row without a proved point: the solves have lost their accuracy
+        radius *= BOX_GROWTH
+    out: dict[str, Any] = {"proven": bool(best.get("proven")), "boxes": boxes, "time_s": time.perf_counter() - t0}
+    out["checked_x"] = checked.get("x")
+    out["checked_value"] = checked.get("value")
+    if best.get("proven"):
+        out.update(x=best["x"], value=best["value"], rel_gap=None, radius=best["radius"])
+        out["reason"] = (
+            f"point proved feasible in the box |x| <= {best['radius']:g} "
+            f"(boxed solves for |x| <= {boxes[0]['radius']:g} .. {boxes[-1]['radius']:g})"
+        )
+    else:
+        out.update(x=None, value=None, rel_gap=None)
+        out["reason"] = f"no point proved feasible in {len(boxes)} boxed solves (|x| <= {radius:g})"
     return out
