@@ -70,6 +70,46 @@ def _solution(problem: Problem, sol: Any, x: np.ndarray, message: str) -> Any:
     )
 
 
+#: the tightenings of :func:`restored_end`'s restoration solves, smallest first
+RESTORE_RELS = (1e-10, 1e-9, 1e-8)
+
+
+def restored_end(problem: Problem, x: Any, backend: Any, options: Any, outer: tuple[Any, ...] = ()) -> dict[str, Any]:
+    """A point proved feasible near the solver's point ``x`` (which gives no rigorous primal
+    end): the restoration solve of :func:`lmic.backoff.restore` at the smallest tightening of
+    :data:`RESTORE_RELS` that gives a provable point, then moved towards ``x`` and each of
+    ``outer`` as far as the proof allows (:func:`lmic.certify.enclosure.polish_primal`).
+
+    Returns
+    -------
+    dict
+        ``proven``, ``x`` (a list), ``value`` (the rigorous objective), ``reason``.
+
+    >>> from lmic.testing.conformance import CASES
+    >>> p = CASES["max_sense"].build()
+    >>> restored_end(p, None, "clarabel", None)["proven"]
+    False
+    """
+    from lmic.backoff import restore
+    from lmic.certify.enclosure import polish_primal, primal_end
+
+    if x is None:
+        return {"proven": False, "x": None, "value": None, "reason": "no solver point to restore"}
+    minimise = problem.objective.sense == "min"
+    for rel in RESTORE_RELS:  # the smallest tightening that gives a provable point
+        rest = restore(problem, x, backend, options, rel=rel)
+        pe = primal_end(problem, np.asarray(rest["x"], dtype=float)) if rest["x"] is not None else {}
+        if not pe.get("proven"):
+            continue
+        best = {"proven": True, "x": rest["x"], "value": pe["value"], "reason": f"restored point (tightening {rel:g})"}
+        for out in (x, *outer):  # as close to the solver's point as the proof allows
+            pol = polish_primal(problem, np.asarray(best["x"], dtype=float), np.asarray(out, dtype=float))
+            if pol["proven"] and (pol["value"] < best["value"]) == minimise:
+                best.update(x=pol["x"], value=pol["value"])
+        return best
+    return {"proven": False, "x": None, "value": None, "reason": "no restoration solve gave a provable point"}
+
+
 def sgn_gap(problem: Problem, value: float, dual_end: float) -> float:
     """The relative gap of a primal end ``value`` to the dual end (VSDP's normalisation).
 
@@ -146,7 +186,13 @@ def upper_route(
         r = upper_from_lower(
             problem, dual_end, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
         )
-    if boxes:  # no dual end to aim at (or the search from it failed): box by box
+    if boxes and sol.x is not None:  # first a point restored near the solver's (cheap: one or three solves)
+        r = restored_end(problem, sol.x, solver, options)
+        r["checked_x"] = r["x"] if r["proven"] and passes(np.asarray(r["x"], dtype=float)) else None
+        r["checked_value"] = r["value"] if r["checked_x"] is not None else None
+        if r["proven"] and dual_end is not None:
+            r["rel_gap"] = max(0.0, sgn_gap(problem, r["value"], dual_end))
+    if boxes and not r["proven"]:  # no dual end to aim at (or the search from it failed): box by box
         r = upper_from_boxes(
             problem, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
         )

@@ -203,6 +203,29 @@ def _congruence(T: np.ndarray) -> np.ndarray:
     return K
 
 
+#: the time limit of one solve of the search without a deadline: a time limit runs a solver
+#: without a native one in a forked child, so that a solver that ends the process (SDPA on
+#: SDPLIB hinf1 boxed at ``|x| <= 1e4``: exit code 0, no output) only ends the child
+SOLVE_LIMIT_S = 120.0
+
+
+def _limited(options: Any, deadline: float | None) -> Any:
+    """``options`` with a time limit: the time left before ``deadline`` (a
+    :func:`time.perf_counter` value; at least 1 s), else :data:`SOLVE_LIMIT_S`, never above
+    the given one.
+
+    >>> _limited(None, None).time_limit
+    120.0
+    """
+    from dataclasses import replace
+
+    from lmic.options import SolveOptions
+
+    left = SOLVE_LIMIT_S if deadline is None else max(1.0, deadline - time.perf_counter())
+    given = options if options is not None else SolveOptions()
+    return replace(given, time_limit=min(left, given.time_limit or left))
+
+
 def _dense_size(problem: Problem) -> int:
     return sum(lmi.coeffs.shape[0] for lmi in problem.lmis) * (problem.n + 1)
 
@@ -288,15 +311,7 @@ def upper_from_lower(
             base = x0
         step: dict[str, Any] = {"delta": delta, "recentred": x0 is not None}
         steps.append(step)
-        opts = options
-        if deadline is not None:  # no solve runs past the deadline (SolveOptions.time_limit)
-            from dataclasses import replace
-
-            from lmic.options import SolveOptions
-
-            left = max(1.0, deadline - time.perf_counter())
-            given = options if options is not None else SolveOptions()
-            opts = replace(given, time_limit=min(left, given.time_limit or left))
+        opts = _limited(options, deadline)
         sol = None
         # a recentred problem is dense: where the backend fails on it (Clarabel, NumericalError at
         # 50 states), the alternatives in turn; the first that gives a point is kept for the rest
@@ -393,7 +408,9 @@ def boxed_problem(problem: Problem, radius: float) -> Problem:
     return Problem(problem.variables, problem.lmis, linear, problem.objective, meta=problem.meta)
 
 
-def _boxed_values(problem: Problem, radius: float, solvers: list[Any], options: Any) -> list[tuple[float, int]]:
+def _boxed_values(
+    problem: Problem, radius: float, solvers: list[Any], options: Any, deadline: float | None = None
+) -> list[tuple[float, int]]:
     """The boxed problem's optimum in the minimisation form (a solver's, unproved) from each of
     ``solvers`` that gives one, with the solver's index, lowest first (a solver stalled far
     inside the box reports a value far above the others': SDPLIB hinf13, SDPA 911 where CVXOPT
@@ -403,7 +420,7 @@ def _boxed_values(problem: Problem, radius: float, solvers: list[Any], options: 
     found: list[tuple[float, int]] = []
     for k, solver in enumerate(solvers):
         try:
-            sol = solve_with_reductions(solver, boxed, options)
+            sol = solve_with_reductions(solver, boxed, _limited(options, deadline))
         except (LmicError, np.linalg.LinAlgError, ValueError, ArithmeticError):
             continue
         if sol.x is not None and sol.status in ("optimal", "inaccurate"):
@@ -474,7 +491,7 @@ def upper_from_boxes(
         rec: dict[str, Any] = {"radius": radius, "value": None, "proven": False}
         boxes.append(rec)
         v = None
-        for v, k in _boxed_values(problem, radius, solvers, options):
+        for v, k in _boxed_values(problem, radius, solvers, options, deadline):
             # the boxed values, lowest first, until a point near one is proved (an inaccurate
             # boxed solve may report a value far below the box's optimum: nothing is proved there)
             others = tuple(s for j, s in enumerate(solvers) if j != k)
