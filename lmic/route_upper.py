@@ -187,7 +187,7 @@ def upper_route(
             problem, dual_end, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
         )
     if boxes and sol.x is not None:  # first a point restored near the solver's (cheap: one or three solves)
-        r = restored_end(problem, sol.x, solver, options)
+        r = dict(restored_end(problem, sol.x, solver, options), what="point restored near the solver's")
         r["checked_x"] = r["x"] if r["proven"] and passes(np.asarray(r["x"], dtype=float)) else None
         r["checked_value"] = r["value"] if r["checked_x"] is not None else None
         if r["proven"] and dual_end is not None:
@@ -196,6 +196,7 @@ def upper_route(
         r = upper_from_boxes(
             problem, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
         )
+        r["what"] = "point proved in a box |x| <= R (lmic.upper_end.upper_from_boxes)"
         if dual_end is not None and r["proven"]:
             r["rel_gap"] = max(0.0, sgn_gap(problem, r["value"], dual_end))
     step[key] = {k: r.get(k) for k in ("proven", "rel_gap", "reason")}
@@ -214,7 +215,8 @@ def upper_route(
         step["gap_note"] = "no certified lower end" if problem.objective.sense == "min" else "no certified upper end"
     else:
         step.pop("gap_note", None)
-    if enc2.get("rel_gap") is None or enc2["rel_gap"] > gap or getattr(out.certificate, "verdict", None) == "certified":
+    holds = getattr(out.certificate, "verdict", None) == "certified"
+    if enc2.get("rel_gap") is None or enc2["rel_gap"] > gap or (holds and not boxes):
         # a better enclosure; the step's point stands (a point that holds from an inexact solve
         # is upgraded by the route when the enclosure meets the gap)
         return out, enc2, time.perf_counter() - t0
@@ -224,14 +226,13 @@ def upper_route(
     from lmic.outcome import evidence_of
 
     xc = np.asarray(r["checked_x"], dtype=float)
-    sol2 = _solution(
-        problem, sol, xc, f"the most interior point at objective {r['checked_value']:.10g} (lmic.upper_end)"
-    )
+    what = r.get("what", "most interior point near the proven dual end")
+    sol2 = _solution(problem, sol, xc, f"the {what} at objective {r['checked_value']:.10g} (lmic.upper_end)")
     cert2 = certify(problem, sol2)
     new = Outcome(
         "certified",
         evidence_of("certified", cert2),
-        f"{cert2.reason} (the most interior point near the proven dual end; the solver's point: "
+        f"{cert2.reason} (the {what}; the solver's point: "
         f"{out.verdict}); the enclosure proves the optimum: {enc2['reason']}",
         list(out.attempts),
         sol2,
