@@ -187,7 +187,8 @@ def upper_route(
             problem, dual_end, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
         )
     if boxes and sol.x is not None:  # first a point restored near the solver's (cheap: one or three solves)
-        r = dict(restored_end(problem, sol.x, solver, options), what="point restored near the solver's")
+        tight = () if enc.get("tight_x") is None else (enc["tight_x"],)  # the tight re-solve's point (tighten)
+        r = dict(restored_end(problem, sol.x, solver, options, outer=tight), what="point restored near the solver's")
         r["checked_x"] = r["x"] if r["proven"] and passes(np.asarray(r["x"], dtype=float)) else None
         r["checked_value"] = r["value"] if r["checked_x"] is not None else None
         if r["proven"] and dual_end is not None:
