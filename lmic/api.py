@@ -400,7 +400,9 @@ def solve(
             pe = primal_end(problem, np.asarray(back["x"], dtype=float))
             if pe["proven"]:
                 enc = with_primal(enc, pe["value"], "certified backed-off point")
-        if (enc["upper"] if problem.objective.sense == "min" else enc["lower"]) is None and sol.x is not None:
+        # the route's last resort (lmic.routes._boxed_upper) restores from the same point: not twice
+        tried = any("upper_boxed" in st for st in (routed.route or {}).get("steps", [])) or sol.x is None
+        if (enc["upper"] if problem.objective.sense == "min" else enc["lower"]) is None and not tried:
             from lmic.route_upper import restored_end
 
             rest = restored_end(problem, sol.x, used, options, outer=() if tight_x is None else (tight_x,))
