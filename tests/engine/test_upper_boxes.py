@@ -61,6 +61,18 @@ def test_upper_from_boxes_approaches_an_infimum_at_infinity() -> None:
     assert cert.verdict == "certified", cert.reason
 
 
+def test_upper_from_boxes_shaped_like_a_far_solver_point() -> None:
+    p = _infimum_at_infinity(np.eye(2))
+    # the solver's point went far out along s (t s ~ 1): the boxes shaped like it come first
+    r = upper_from_boxes(p, "clarabel", x_hint=np.array([1e-7, 1e7]), alternatives=("cvxopt",))
+    assert r["proven"], r["reason"]
+    shaped = [b for b in r["boxes"] if b["shaped"]]
+    assert shaped and r["boxes"][0]["shaped"] and any(b["proven"] for b in shaped)
+    t, s = (Fraction(float(v)) for v in r["x"])
+    assert positive_definite([[t, Fraction(1)], [Fraction(1), s]])
+    assert Fraction(r["value"]) >= t > 0 and r["value"] <= 1e-3
+
+
 def _without_primal_end(enclosure_of):  # the route's enclosures lose their primal end
     def patched(*args, **kwargs):
         enc, t = enclosure_of(*args, **kwargs)
