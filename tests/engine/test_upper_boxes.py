@@ -127,3 +127,28 @@ def test_direction_step_exposes_a_face_with_large_denominators() -> None:
     assert all(sum(W[i][k] * V[k][c] for k in range(2)) == 0 for i in range(2) for c in range(len(V[0])))
     # the null-space rounding alone (denominators <= 1e6) cannot find it
     assert b > fe.DENOMINATORS[-1]
+
+
+def test_sdpa_ending_the_process_is_an_error_solution(tmp_path: Path) -> None:
+    """sdpa-python ends the whole process (exit code 0, no output) on shipped hinf1 boxed at
+    ``|x_k| <= 1e4``; every SDPA solve runs in a forked child, so ``lmic solve`` reports it."""
+    import json
+    import os
+    import subprocess
+
+    from lmic.ir.io import load_problem, save_problem
+    from lmic.upper_end import boxed_problem
+
+    path = SDPLIB / "hinf1.dat-s"
+    if not path.is_file():
+        pytest.skip("the shipped SDPLIB files are not here")
+    boxed = tmp_path / "hinf1_boxed.dat-s"
+    save_problem(boxed_problem(load_problem(path), 1e4), boxed)
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1")
+    cmd = [sys.executable, "-m", "lmic.cli", "solve", str(boxed), "--backend", "sdpa", "--json"]
+    run = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=600)
+    assert run.stdout.strip(), f"no output (exit code {run.returncode}): the process was ended"
+    out = json.loads(run.stdout)
+    # the dead solve is an error (sdpa-python 0.2.3 ends the process on this input): undecided, exit 1
+    assert "solver process died" in out["message"], out["message"]
+    assert out["verdict"] == "undecided" and run.returncode == out["exit_code"] == 1
