@@ -394,27 +394,21 @@ def solve(
         # the certifier's tolerance, or a rejected point): the backed-off point, else a point
         # strictly inside from a solve with every constraint tightened (lmic.backoff.restore)
         t_rest = time.perf_counter()
-        from lmic.certify.enclosure import polish_primal, primal_end, with_primal
+        from lmic.certify.enclosure import primal_end, with_primal
 
         if back is not None and back.get("x") is not None:
             pe = primal_end(problem, np.asarray(back["x"], dtype=float))
             if pe["proven"]:
                 enc = with_primal(enc, pe["value"], "certified backed-off point")
-        if (enc["upper"] if problem.objective.sense == "min" else enc["lower"]) is None and sol.x is not None:
-            from lmic.backoff import restore
+        # the route's last resort (lmic.routes._boxed_upper) restores from the same point: not twice
+        tried = any("upper_boxed" in st for st in (routed.route or {}).get("steps", [])) or sol.x is None
+        if (enc["upper"] if problem.objective.sense == "min" else enc["lower"]) is None and not tried:
+            from lmic.route_upper import restored_end
 
-            for rel in (1e-10, 1e-9, 1e-8):  # the smallest tightening that gives a provable point
-                rest = restore(problem, sol.x, used, options, rel=rel)
-                pe = primal_end(problem, np.asarray(rest["x"], dtype=float)) if rest["x"] is not None else {}
-                if pe.get("proven"):
-                    # as close to the solver's point as the proof allows
-                    for outer in [sol.x] + ([tight_x] if tight_x is not None else []):
-                        pol = polish_primal(problem, np.asarray(rest["x"], dtype=float), np.asarray(outer, dtype=float))
-                        if pol["proven"] and (pol["value"] < pe["value"]) == (problem.objective.sense == "min"):
-                            pe, rest = pol, dict(rest, x=pol["x"])
-                    enc = with_primal(enc, pe["value"], "restored point")
-                    enc["restored_x"] = rest["x"]
-                    break
+            rest = restored_end(problem, sol.x, used, options, outer=() if tight_x is None else (tight_x,))
+            if rest["proven"]:
+                enc = with_primal(enc, rest["value"], "restored point")
+                enc["restored_x"] = rest["x"]
         enclosure_s += time.perf_counter() - t_rest
     timings = {
         "compile_s": compile_s,

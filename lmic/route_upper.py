@@ -70,6 +70,57 @@ def _solution(problem: Problem, sol: Any, x: np.ndarray, message: str) -> Any:
     )
 
 
+#: the tightenings of :func:`restored_end`'s restoration solves, smallest first
+RESTORE_RELS = (1e-10, 1e-9, 1e-8)
+
+
+def restored_end(problem: Problem, x: Any, backend: Any, options: Any, outer: tuple[Any, ...] = ()) -> dict[str, Any]:
+    """A point proved feasible near the solver's point ``x`` (which gives no rigorous primal
+    end): the restoration solve of :func:`lmic.backoff.restore` at the smallest tightening of
+    :data:`RESTORE_RELS` that gives a provable point, then moved towards ``x`` and each of
+    ``outer`` as far as the proof allows (:func:`lmic.certify.enclosure.polish_primal`).
+
+    Returns
+    -------
+    dict
+        ``proven``, ``x`` (a list), ``value`` (the rigorous objective), ``reason``.
+
+    >>> from lmic.testing.conformance import CASES
+    >>> p = CASES["max_sense"].build()
+    >>> restored_end(p, None, "clarabel", None)["proven"]
+    False
+    """
+    from lmic.backoff import restore
+    from lmic.certify.enclosure import polish_primal, primal_end
+
+    if x is None:
+        return {"proven": False, "x": None, "value": None, "reason": "no solver point to restore"}
+    minimise = problem.objective.sense == "min"
+    for rel in RESTORE_RELS:  # the smallest tightening that gives a provable point
+        rest = restore(problem, x, backend, options, rel=rel)
+        pe = primal_end(problem, np.asarray(rest["x"], dtype=float)) if rest["x"] is not None else {}
+        if not pe.get("proven"):
+            continue
+        best = {"proven": True, "x": rest["x"], "value": pe["value"], "reason": f"restored point (tightening {rel:g})"}
+        for out in (x, *outer):  # as close to the solver's point as the proof allows
+            pol = polish_primal(problem, np.asarray(best["x"], dtype=float), np.asarray(out, dtype=float))
+            if pol["proven"] and (pol["value"] < best["value"]) == minimise:
+                best.update(x=pol["x"], value=pol["value"])
+        return best
+    return {"proven": False, "x": None, "value": None, "reason": "no restoration solve gave a provable point"}
+
+
+def sgn_gap(problem: Problem, value: float, dual_end: float) -> float:
+    """The relative gap of a primal end ``value`` to the dual end (VSDP's normalisation).
+
+    >>> from lmic.testing.conformance import CASES
+    >>> round(sgn_gap(CASES["max_sense"].build(), 1.0, 2.0), 6)
+    0.666667
+    """
+    hi, lo = (value, dual_end) if problem.objective.sense == "min" else (dual_end, value)
+    return (hi - lo) / max(1.0, 0.5 * (abs(hi) + abs(lo)))
+
+
 def upper_route(
     problem: Problem,
     out: Outcome,
@@ -79,6 +130,8 @@ def upper_route(
     exact: bool,
     gap: float,
     steps: list[dict[str, Any]],
+    *,
+    boxes: bool = False,
 ) -> tuple[Outcome, dict[str, Any] | None, float]:
     """The step ``out`` (its enclosure ``enc``) with a primal end from its dual end, when it lacks one.
 
@@ -88,9 +141,14 @@ def upper_route(
     and the seconds spent; ``steps`` are the route's records so far, the last one this step's: it
     gets ``upper`` (what was tried) and the new ``rel_gap`` / ``verdict``. The searches of one
     route share :data:`UPPER_MAX_S` seconds (the earlier steps' ``upper.time_s``).
+
+    ``boxes=True`` (the route's last resort, once, on its best step): when the search from the
+    dual end proves nothing or there is no dual end, the boxed search of
+    :func:`lmic.upper_end.upper_from_boxes` (recorded as ``upper_boxed``).
     """
     step = steps[-1]
-    spent = sum(float((s.get("upper") or {}).get("time_s", 0.0)) for s in steps[:-1])
+    key = "upper_boxed" if boxes else "upper"
+    spent = sum(float((s.get(k) or {}).get("time_s", 0.0)) for s in steps[:-1] for k in ("upper", "upper_boxed"))
     sol = out.solution
     if problem.objective.sense == "feasibility" or sol is None:
         return out, enc, 0.0
@@ -100,19 +158,19 @@ def upper_route(
         return out, enc, 0.0
     from lmic.certify import certify
     from lmic.certify.enclosure import enclosure, with_primal
-    from lmic.upper_end import upper_from_lower
+    from lmic.upper_end import upper_from_boxes, upper_from_lower
 
     t0 = time.perf_counter()
     solve_s = float(getattr(sol, "solve_s", 0.0) or 0.0)
     left = UPPER_MAX_S - spent
     if left <= 0.0:
-        step["upper"] = {"proven": False, "reason": f"the route's {UPPER_MAX_S:g} s for the primal end are spent"}
+        step[key] = {"proven": False, "reason": f"the route's {UPPER_MAX_S:g} s for the primal end are spent"}
         return out, enc, 0.0
     deadline = t0 + min(upper_budget(solve_s), left)
     if enc is None:  # no certified point: the dual end alone (the face route needs no dual point)
         enc = enclosure(problem, sol.duals or None, None, exact=exact, budget_s=upper_budget(solve_s))
     dual_end, primal = _ends(problem, enc)
-    if dual_end is None:
+    if dual_end is None and not boxes:
         return out, enc, time.perf_counter() - t0
     # the solves want an interior point: a first-order step's backend gives points violated by
     # its tolerance, far above the margins of a near-singular slice
@@ -123,11 +181,27 @@ def upper_route(
         return certify(problem, _solution(problem, sol, x, "")).verdict == "certified"
 
     others = tuple(b for b in ALTERNATIVES if b not in str(getattr(solver, "name", solver)).lower())
-    r = upper_from_lower(
-        problem, dual_end, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
-    )
-    step["upper"] = {k: r[k] for k in ("proven", "rel_gap", "reason")}
-    step["upper"]["time_s"] = time.perf_counter() - t0
+    r: dict[str, Any] = {"proven": False}
+    if dual_end is not None and not boxes:
+        r = upper_from_lower(
+            problem, dual_end, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
+        )
+    if boxes and sol.x is not None:  # first a point restored near the solver's (cheap: one or three solves)
+        tight = () if enc.get("tight_x") is None else (enc["tight_x"],)  # the tight re-solve's point (tighten)
+        r = dict(restored_end(problem, sol.x, solver, options, outer=tight), what="point restored near the solver's")
+        r["checked_x"] = r["x"] if r["proven"] and passes(np.asarray(r["x"], dtype=float)) else None
+        r["checked_value"] = r["value"] if r["checked_x"] is not None else None
+        if r["proven"] and dual_end is not None:
+            r["rel_gap"] = max(0.0, sgn_gap(problem, r["value"], dual_end))
+    if boxes and not r["proven"]:  # no dual end to aim at (or the search from it failed): box by box
+        r = upper_from_boxes(
+            problem, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
+        )
+        r["what"] = "point proved in a box |x| <= R (lmic.upper_end.upper_from_boxes)"
+        if dual_end is not None and r["proven"]:
+            r["rel_gap"] = max(0.0, sgn_gap(problem, r["value"], dual_end))
+    step[key] = {k: r.get(k) for k in ("proven", "rel_gap", "reason")}
+    step[key]["time_s"] = time.perf_counter() - t0
     sgn = -1.0 if problem.objective.sense == "max" else 1.0
     if not r["proven"] or (primal is not None and sgn * r["value"] >= sgn * primal):
         return out, enc, time.perf_counter() - t0
@@ -138,25 +212,28 @@ def upper_route(
     enc2.pop("polish", None)
     enc2["consistent"] = enc2.get("consistent", True)
     step["rel_gap"] = enc2.get("rel_gap")
-    step.pop("gap_note", None)
-    if enc2.get("rel_gap") is None or enc2["rel_gap"] > gap or getattr(out.certificate, "verdict", None) == "certified":
+    if step["rel_gap"] is None:
+        step["gap_note"] = "no certified lower end" if problem.objective.sense == "min" else "no certified upper end"
+    else:
+        step.pop("gap_note", None)
+    holds = getattr(out.certificate, "verdict", None) == "certified"
+    if enc2.get("rel_gap") is None or enc2["rel_gap"] > gap or (holds and not boxes):
         # a better enclosure; the step's point stands (a point that holds from an inexact solve
         # is upgraded by the route when the enclosure meets the gap)
         return out, enc2, time.perf_counter() - t0
     if r["checked_x"] is None:  # the rigorous proof holds; no point met the certifier's threshold
-        step["upper"]["certifier"] = "no point of the search met the certifier's threshold"
+        step[key]["certifier"] = "no point of the search met the certifier's threshold"
         return out, enc2, time.perf_counter() - t0
     from lmic.outcome import evidence_of
 
     xc = np.asarray(r["checked_x"], dtype=float)
-    sol2 = _solution(
-        problem, sol, xc, f"the most interior point at objective {r['checked_value']:.10g} (lmic.upper_end)"
-    )
+    what = r.get("what", "most interior point near the proven dual end")
+    sol2 = _solution(problem, sol, xc, f"the {what} at objective {r['checked_value']:.10g} (lmic.upper_end)")
     cert2 = certify(problem, sol2)
     new = Outcome(
         "certified",
         evidence_of("certified", cert2),
-        f"{cert2.reason} (the most interior point near the proven dual end; the solver's point: "
+        f"{cert2.reason} (the {what}; the solver's point: "
         f"{out.verdict}); the enclosure proves the optimum: {enc2['reason']}",
         list(out.attempts),
         sol2,

@@ -57,7 +57,18 @@ from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 from lmic.ir.svec import tril_rows_cols, tril_unvec
 from lmic.reductions.pipeline import solve as solve_with_reductions
 
-__all__ = ["START_DELTAS", "STEP", "margin_problem", "recentred_problem", "upper_from_lower"]
+__all__ = [
+    "BOX_GROWTH",
+    "BOX_MAX",
+    "BOX_START",
+    "START_DELTAS",
+    "STEP",
+    "boxed_problem",
+    "margin_problem",
+    "recentred_problem",
+    "upper_from_boxes",
+    "upper_from_lower",
+]
 
 #: the relative backoffs of the first (margin) solve, tried in turn until one point is proved
 START_DELTAS = (1e-4, 1e-3, 1e-2)
@@ -90,7 +101,7 @@ def _bound_row(q: np.ndarray, bound: float, x0: np.ndarray, d: np.ndarray) -> tu
     return row / max(float(np.max(np.abs(row))), 1e-300), ob
 
 
-def margin_problem(problem: Problem, bound: float, radius: float) -> Problem:
+def margin_problem(problem: Problem, bound: float, radius: float | np.ndarray) -> Problem:
     """Step 1 of the module docstring (variables ``x`` then ``s``; ``bound`` in the minimisation form).
 
     >>> import scipy.sparse as sp
@@ -103,7 +114,7 @@ def margin_problem(problem: Problem, bound: float, radius: float) -> Problem:
 
 
 def recentred_problem(
-    problem: Problem, x0: np.ndarray, bound: float, radius: float = 10.0, *, local: bool = True
+    problem: Problem, x0: np.ndarray, bound: float, radius: float | np.ndarray = 10.0, *, local: bool = True
 ) -> tuple[Problem, np.ndarray]:
     """Step 2 of the module docstring: the problem in ``(w, s)`` and the scaling ``d``
     (``x = x0 + d * w``). ``local=False``: no congruence, no scaling (``d = 1``), step 1.
@@ -168,7 +179,7 @@ def recentred_problem(
     row, _ = _bound_row(q, bound, x0 if local else np.zeros(n), d)
     parts.append(sp.csr_matrix(np.concatenate([row, [0.0]])[None, :]))
     eye = sp.identity(n, format="csr")
-    rad = sp.csr_matrix(np.full((n, 1), float(radius)))
+    rad = sp.csr_matrix(np.broadcast_to(np.asarray(radius, dtype=float), (n,)).reshape(n, 1))
     z = sp.csr_matrix((n, 1))
     parts += [sp.hstack([rad, -eye, z]), sp.hstack([rad, eye, z])]
     kinds = list(lin.kinds) + ["ge"] * (1 + 2 * n)
@@ -192,6 +203,29 @@ def _congruence(T: np.ndarray) -> np.ndarray:
     return K
 
 
+#: the time limit of one solve of the search without a deadline: a time limit runs a solver
+#: without a native one in a forked child, so that a solver that ends the process (SDPA on
+#: SDPLIB hinf1 boxed at ``|x| <= 1e4``: exit code 0, no output) only ends the child
+SOLVE_LIMIT_S = 120.0
+
+
+def _limited(options: Any, deadline: float | None) -> Any:
+    """``options`` with a time limit: the time left before ``deadline`` (a
+    :func:`time.perf_counter` value; at least 1 s), else :data:`SOLVE_LIMIT_S`, never above
+    the given one.
+
+    >>> _limited(None, None).time_limit
+    120.0
+    """
+    from dataclasses import replace
+
+    from lmic.options import SolveOptions
+
+    left = SOLVE_LIMIT_S if deadline is None else max(1.0, deadline - time.perf_counter())
+    given = options if options is not None else SolveOptions()
+    return replace(given, time_limit=min(left, given.time_limit or left))
+
+
 def _dense_size(problem: Problem) -> int:
     return sum(lmi.coeffs.shape[0] for lmi in problem.lmis) * (problem.n + 1)
 
@@ -207,6 +241,7 @@ def upper_from_lower(
     deadline: float | None = None,
     check: Callable[[np.ndarray], bool] | None = None,
     alternatives: tuple[Any, ...] = (),
+    radii: tuple[float | np.ndarray, ...] | None = None,
 ) -> dict[str, Any]:
     """A point proved feasible whose objective is near the proven dual end ``lower``.
 
@@ -233,6 +268,9 @@ def upper_from_lower(
     alternatives : tuple of str or Backend
         Backends for a recentred solve that ``backend`` ends without a point (tried in turn;
         the first that gives one is used for the rest of the search).
+    radii : tuple of float, optional
+        The boxes ``|x_k| <= R`` of the margin solves (default: ten times ``max(1, |lower|)``,
+        then ten times the largest entry of ``x_hint``).
 
     Returns
     -------
@@ -254,7 +292,8 @@ def upper_from_lower(
     hint = 0.0 if x_hint is None else float(np.max(np.abs(np.asarray(x_hint, dtype=float)), initial=0.0))
     # the box of the margin solve: ten times the objective's size, then the solver point's
     # (a loose box lets the solver drift to huge, less accurate points)
-    radii = [10.0 * scale] + ([10.0 * hint] if np.isfinite(hint) and hint > 3.0 * scale else [])
+    if radii is None:
+        radii = (10.0 * scale,) + ((10.0 * hint,) if np.isfinite(hint) and hint > 3.0 * scale else ())
     steps: list[dict[str, Any]] = []
     best: dict[str, Any] = {"proven": False}
     checked: dict[str, Any] = {}
@@ -262,7 +301,7 @@ def upper_from_lower(
     def late() -> bool:
         return deadline is not None and time.perf_counter() > deadline
 
-    def attempt(delta: float, x0: np.ndarray | None, radius: float = 1.0) -> bool:
+    def attempt(delta: float, x0: np.ndarray | None, radius: float | np.ndarray = 1.0) -> bool:
         t1 = time.perf_counter()
         bound = low + delta * scale
         if x0 is None:
@@ -272,15 +311,7 @@ def upper_from_lower(
             base = x0
         step: dict[str, Any] = {"delta": delta, "recentred": x0 is not None}
         steps.append(step)
-        opts = options
-        if deadline is not None:  # no solve runs past the deadline (SolveOptions.time_limit)
-            from dataclasses import replace
-
-            from lmic.options import SolveOptions
-
-            left = max(1.0, deadline - time.perf_counter())
-            given = options if options is not None else SolveOptions()
-            opts = replace(given, time_limit=min(left, given.time_limit or left))
+        opts = _limited(options, deadline)
         sol = None
         # a recentred problem is dense: where the backend fails on it (Clarabel, NumericalError at
         # 50 states), the alternatives in turn; the first that gives a point is kept for the rest
@@ -343,4 +374,184 @@ def upper_from_lower(
         out.update(x=None, value=None, rel_gap=None)
         why = "time budget spent" if late() else "no solve gave a point proved feasible"
         out["reason"] = f"no primal end from the dual end: {why} ({len(steps)} solves)"
+    return out
+
+
+#: the boxes ``|x_k| <= R`` of :func:`upper_from_boxes`: from :data:`BOX_START`, times
+#: :data:`BOX_GROWTH` each, up to :data:`BOX_MAX` (or ten times the solver's point, if smaller)
+BOX_START = 100.0
+BOX_GROWTH = 10.0
+BOX_MAX = 1e10
+#: the boxes stop growing once the boxed optimum improves by less than this (relative) and a
+#: point is proved
+BOX_STALL = 1e-4
+#: the smallest half-width of a shaped box, relative to its largest (:func:`upper_from_boxes`)
+SHAPE_FLOOR = 1e-3
+
+
+def boxed_problem(problem: Problem, radius: float | np.ndarray) -> Problem:
+    """``problem`` with the rows ``radius - x_k >= 0`` and ``radius + x_k >= 0`` added.
+
+    >>> import scipy.sparse as sp
+    >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t > 0", 1, sp.csc_matrix([[0.0, 1.0]]))],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+    >>> boxed_problem(p, 5.0).linear.A.toarray().tolist()
+    [[5.0, -1.0], [5.0, 1.0]]
+    """
+    n = problem.n
+    eye = sp.identity(n, format="csr")
+    rad = sp.csr_matrix(np.broadcast_to(np.asarray(radius, dtype=float), (n,)).reshape(n, 1))
+    lin = problem.linear
+    parts = ([lin.A.tocsr().astype(float)] if len(lin) else []) + [sp.hstack([rad, -eye]), sp.hstack([rad, eye])]
+    kinds = list(lin.kinds) + ["ge"] * (2 * n)
+    strict = list(lin.strict) + [False] * (2 * n)
+    names = list(lin.names) + [f"|x[{k}]| <= {r:g}" for k, r in enumerate(rad.toarray().ravel())] * 2
+    linear = LinearConstraints(sp.vstack(parts).tocsr(), kinds, strict, names)
+    return Problem(problem.variables, problem.lmis, linear, problem.objective, meta=problem.meta)
+
+
+def _boxed_values(
+    problem: Problem, radius: float | np.ndarray, solvers: list[Any], options: Any, deadline: float | None = None
+) -> list[tuple[float, int]]:
+    """The boxed problem's optimum in the minimisation form (a solver's, unproved) from each of
+    ``solvers`` that gives one, with the solver's index, lowest first (a solver stalled far
+    inside the box reports a value far above the others': SDPLIB hinf13, SDPA 911 where CVXOPT
+    has 55.6)."""
+    sgn, _ = _min_form(problem)
+    boxed = boxed_problem(problem, radius)
+    found: list[tuple[float, int]] = []
+    for k, solver in enumerate(solvers):
+        try:
+            sol = solve_with_reductions(solver, boxed, _limited(options, deadline))
+        except (LmicError, np.linalg.LinAlgError, ValueError, ArithmeticError):
+            continue
+        if sol.x is not None and sol.status in ("optimal", "inaccurate"):
+            val = problem.objective.value(np.asarray(sol.x, dtype=float))
+            if val is not None and np.isfinite(val):
+                found.append((sgn * float(val), k))
+    return sorted(found)
+
+
+def upper_from_boxes(
+    problem: Problem,
+    backend: Any,
+    options: Any = None,
+    *,
+    x_hint: np.ndarray | None = None,
+    target: float | None = None,
+    deadline: float | None = None,
+    check: Callable[[np.ndarray], bool] | None = None,
+    alternatives: tuple[Any, ...] = (),
+) -> dict[str, Any]:
+    """A point proved feasible near the optimum when there is no proven dual end to aim at.
+
+    An optimum approached only as ``|x|`` grows (SDPLIB hinf10: the solvers stop at
+    ``|x| ~ 1e20`` with an objective far below the optimum, and no point of theirs holds) is
+    found box by box: for ``R`` = :data:`BOX_START`, ``BOX_GROWTH * R``, ... the problem with
+    ``|x_k| <= R`` is solved (a bounded problem; its value ``v_R``, not trusted, only the
+    level to aim at), then :func:`upper_from_lower` looks for a point proved feasible near
+    ``v_R`` inside that box (margin and recentred solves, every point proved by
+    :func:`lmic.certify.enclosure.primal_end` on the original problem). The boxes grow while
+    ``v_R`` improves by more than :data:`BOX_STALL` and the points keep being proved.
+
+    Returns
+    -------
+    dict
+        As :func:`upper_from_lower` (``rel_gap`` is to the boxed value, not to a proven end),
+        with ``boxes``: one record per box (``radius``, ``value`` the boxed solve's, ``proven``,
+        ``upper``).
+
+    Examples
+    --------
+    >>> import scipy.sparse as sp
+    >>> # inf t s.t. [[t, 1], [1, s]] >= 0, s <= 4: optimum 1/4
+    >>> C = sp.csc_matrix(np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]))
+    >>> p = Problem([Variable("t", "scalar", (1, 1)), Variable("s", "scalar", (1, 1), offset=1)],
+    ...             [LMI("M >= 0", 2, C)],
+    ...             LinearConstraints(sp.csr_matrix([[4.0, 0.0, -1.0]]), ["ge"], [False], ["s <= 4"]),
+    ...             Objective("min", [0.0, 1.0, 0.0]))
+    >>> r = upper_from_boxes(p, "clarabel")
+    >>> r["proven"], 0.25 <= r["value"] <= 0.25 + 1e-5
+    (True, True)
+    """
+    from lmic.backends.registry import get_backend
+    from lmic.certify.enclosure import GAP_TARGET
+
+    t0 = time.perf_counter()
+    goal = GAP_TARGET if target is None else float(target)
+    sgn, _ = _min_form(problem)
+    solvers = [b if not isinstance(b, str) else get_backend(b) for b in [backend, *alternatives]]
+    hint = np.inf if x_hint is None else float(np.max(np.abs(np.asarray(x_hint, dtype=float)), initial=0.0))
+    top = BOX_MAX if not np.isfinite(hint) else min(BOX_MAX, max(BOX_START * BOX_GROWTH**2, 10.0 * hint))
+    boxes: list[dict[str, Any]] = []
+    best: dict[str, Any] = {"proven": False}
+    checked: dict[str, Any] = {}
+    # the boxes: |x_k| <= R, and first (after a solver's point far out) shaped like that point,
+    # |x_k| <= R w_k with w = max(|x_hint|, SHAPE_FLOOR max|x_hint|) / max|x_hint| (SDPLIB hinf13:
+    # the solvers' point has entries 4e6 .. 1e9; the round boxes lose their accuracy from
+    # |x| <= 1e4, the shaped ones prove 44.56 where the round ones stop at 55.63)
+    shapes: list[np.ndarray | None] = [None]
+    if x_hint is not None and np.isfinite(hint) and hint > BOX_START:
+        w = np.maximum(np.abs(np.asarray(x_hint, dtype=float)), SHAPE_FLOOR * hint) / hint
+        shapes.insert(0, w)  # first: where the solver went is the likelier direction
+    for shape in shapes:
+        lowest: float | None = None
+        misses = 0
+        radius = BOX_START
+        while radius <= top and not (deadline is not None and time.perf_counter() > deadline):
+            box: float | np.ndarray = radius if shape is None else radius * shape
+            rec: dict[str, Any] = {"radius": radius, "shaped": shape is not None, "value": None, "proven": False}
+            boxes.append(rec)
+            v = None
+            for v, k in _boxed_values(problem, box, solvers, options, deadline):
+                # the boxed values, lowest first, until a point near one is proved (an inaccurate
+                # boxed solve may report a value far below the box's optimum: nothing is proved there)
+                others = tuple(b for j, b in enumerate(solvers) if j != k)
+                r = upper_from_lower(
+                    problem,
+                    sgn * v,
+                    solvers[k],
+                    options,
+                    target=goal,
+                    deadline=deadline,
+                    check=check,
+                    alternatives=others,
+                    radii=(box,),
+                )
+                rec.update(
+                    value=sgn * v, proven=r["proven"], upper=r["value"], backend=str(getattr(solvers[k], "name", k))
+                )
+                if r["checked_x"] is not None and (not checked or sgn * r["checked_value"] < sgn * checked["value"]):
+                    checked = {"x": r["checked_x"], "value": r["checked_value"]}
+                if r["proven"]:
+                    if not best.get("proven") or sgn * r["value"] < sgn * best["value"]:
+                        best = {
+                            "proven": True,
+                            "x": r["x"],
+                            "value": r["value"],
+                            "radius": radius,
+                            "shaped": rec["shaped"],
+                        }
+                    break
+                if deadline is not None and time.perf_counter() > deadline:
+                    break
+            if rec["proven"] and v is not None:
+                stalled = lowest is not None and lowest - v <= BOX_STALL * max(1.0, abs(v))
+                lowest = v if lowest is None else min(lowest, v)
+                if stalled:
+                    break
+            misses = 0 if rec["proven"] else misses + 1
+            if lowest is not None and misses >= 2:
+                break  # two boxes in a row without a proved point: the solves have lost their accuracy
+            radius *= BOX_GROWTH
+    out: dict[str, Any] = {"proven": bool(best.get("proven")), "boxes": boxes, "time_s": time.perf_counter() - t0}
+    out["checked_x"] = checked.get("x")
+    out["checked_value"] = checked.get("value")
+    if best.get("proven"):
+        out.update(x=best["x"], value=best["value"], rel_gap=None, radius=best["radius"])
+        shaped = " (shaped like the solver's point)" if best["shaped"] else ""
+        out["reason"] = f"point proved feasible in the box |x| <= {best['radius']:g}{shaped} ({len(boxes)} boxes)"
+    else:
+        out.update(x=None, value=None, rel_gap=None)
+        out["reason"] = f"no point proved feasible in {len(boxes)} boxes (|x| <= {top:g})"
     return out

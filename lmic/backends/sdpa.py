@@ -33,6 +33,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import warnings
 from collections.abc import Iterator
@@ -48,6 +49,7 @@ from lmic.backends.quiet import quiet_native
 from lmic.backends.results import NativeResult
 from lmic.ir.problem import Problem
 from lmic.options import SolveOptions
+from lmic.solution import Solution
 
 __all__ = ["SDPABackend", "sdpa_data", "TOL_FLOOR", "TIGHT_TOL"]
 
@@ -59,6 +61,9 @@ TOL_FLOOR = 1e-6
 #: asked, 1e-9 passed through 7.2e-7 (SDPA stops at ``pdFEAS``, its point and dual still prove
 #: both ends)
 TIGHT_TOL = 1e-9
+#: the time limit of an SDPA solve given none: every SDPA solve runs in a forked child
+#: (:meth:`SDPABackend._run`)
+CHILD_LIMIT_S = 7 * 24 * 3600.0
 
 
 def _tolerances(tol: float) -> tuple[float, float]:
@@ -143,6 +148,15 @@ class SDPABackend(Backend):
         "pdINF": "infeasible",
         "noINFO": "error",
     }
+
+    def _run(self, problem: Problem, options: SolveOptions, deadline: float | None = None) -> Solution:
+        """:meth:`Backend._run` always in a forked child (:mod:`lmic.backends.sandbox`), with
+        :data:`CHILD_LIMIT_S` when no time limit is given: sdpa-python ends the whole process
+        on some inputs (exit code 0, no output; SDPLIB hinf1 with ``|x_k| <= 1e4`` added), which
+        then ends only the child, reported as an ``error`` solution."""
+        if options.time_limit is None:
+            options = dataclasses.replace(options, time_limit=CHILD_LIMIT_S)
+        return super()._run(problem, options, deadline)
 
     def settings(self, options: SolveOptions) -> dict[str, Any]:
         """sdpa-python's option dictionary from the uniform options (``extra`` verbatim, last)."""

@@ -227,10 +227,11 @@ def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
             sv = np.linalg.svd(Ef, compute_uv=False)
             if sv[-1] > PRETEST * sv[0]:
                 last = (
-                    f"the solver's face is not rational: with its null spaces rounded to denominators <= {den}, "
-                    f"W(d) V = 0 and q . d = 0 leave only d = 0 (smallest singular value {sv[-1] / sv[0]:.2g}; an "
-                    "irrational face, e.g. spanned by eigenvectors of floating-point data, has no exposing "
-                    "certificate in rational arithmetic)"
+                    f"the solver's face has no rational description with denominators <= {den}: with its null "
+                    f"spaces rounded so, W(d) V = 0 and q . d = 0 leave only d = 0 (smallest singular value "
+                    f"{sv[-1] / sv[0]:.2g}; an irrational face, e.g. spanned by eigenvectors of floating-point "
+                    "data, has no exposing certificate in rational arithmetic: a lower end then needs algebraic "
+                    "arithmetic, or a bound on ||x|| (the conditional bound))"
                 )
                 continue
         for lmi, (B, _P) in zip(problem.lmis, bases, strict=True):
@@ -273,9 +274,10 @@ def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
         basis = _nullspace_int(eqs, n)
         if not basis:
             last = (
-                f"the solver's face is not rational: with its null spaces rounded to denominators <= {den}, "
-                "W(d) V = 0 and q . d = 0 leave only d = 0 (an irrational face, e.g. spanned by eigenvectors "
-                "of floating-point data, has no exposing certificate in rational arithmetic)"
+                f"the solver's face has no rational description with denominators <= {den}: with its null "
+                "spaces rounded so, W(d) V = 0 and q . d = 0 leave only d = 0 (an irrational face, e.g. spanned "
+                "by eigenvectors of floating-point data, has no exposing certificate in rational arithmetic: a "
+                "lower end then needs algebraic arithmetic, or a bound on ||x|| (the conditional bound))"
             )
             continue
         # columns scaled by 2^-s_j (their integers may exceed the float range)
@@ -316,6 +318,63 @@ def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
         if chk["ok"]:
             return dict(step, ok=True, reason=chk["reason"])
         last = f"denominators <= {den}: {chk['reason']}"
+    direct = _direction_step(problem, dfl)  # the direction rounded, its null spaces exact
+    if direct.get("ok"):
+        return direct
+    return {"ok": False, "reason": f"{last}; {direct['reason']}"}
+
+
+def _direction_step(problem: Problem, dfl: np.ndarray) -> dict[str, Any]:
+    """An exposing certificate from the solver's direction ``dfl`` (largest entry 1) rounded
+    to fractions of denominator at most each of :data:`DENOMINATORS` (entries below
+    :data:`NULL_TOL` to zero), with the null spaces of the exact ``W_i(d)`` computed exactly:
+    a face whose null spaces need larger denominators than the rounding of
+    :func:`exact_step` allows (a congruence by an integer matrix with entries ``~1e6``) is
+    exposed by a short direction all the same. Verified by :func:`verify_step`.
+
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> # inf x1 s.t. R^T [[x1, 1], [1, x2]] R >= 0 with R = [[1234567, -7654321], [7654321, 1234567]]
+    >>> R = np.array([[1234567.0, -7654321.0], [7654321.0, 1234567.0]])
+    >>> mats = [np.array([[0.0, 1.0], [1.0, 0.0]]), np.diag([1.0, 0.0]), np.diag([0.0, 1.0])]
+    >>> C = sp.csc_matrix(np.column_stack([(R.T @ M @ R)[[0, 1, 1], [0, 0, 1]] for M in mats]))
+    >>> p = Problem([Variable("x", "full", (2, 1))], [LMI("M", 2, C, strict=False)],
+    ...             LinearConstraints.empty(2), Objective("min", [0.0, 1.0, 0.0]))
+    >>> st = _direction_step(p, np.array([3e-13, 1.0]))
+    >>> st["ok"], st["d"], st["V"][0]
+    (True, ['0', '1'], [['1234567'], ['-7654321']])
+    """
+    last = "the rounded direction exposes no face"
+    tried: set[tuple[Fraction, ...]] = set()
+    for den in DENOMINATORS:
+        dq = tuple(Fraction(float(v)).limit_denominator(den) if abs(v) > NULL_TOL else Fraction(0) for v in dfl)
+        if dq in tried or not any(dq):
+            continue
+        tried.add(dq)
+        dint = _int_rows([list(dq)])[0]
+        g = 0
+        for v in dint:
+            g = math.gcd(g, v)
+        dint = [v // g for v in dint]
+        Vs: list[list[list[str]]] = []
+        for lmi in problem.lmis:
+            W = _block_exact(lmi, dint)
+            basis = _nullspace_int(_int_rows(W), lmi.dim) if lmi.dim else []
+            basis = _short(basis) if basis else []
+            Vs.append([[str(col[a]) for col in basis] for a in range(lmi.dim)])
+        drop = []
+        if len(problem.linear):
+            Af = sp.csr_matrix(problem.linear.A)
+            for r, kind in enumerate(problem.linear.kinds):
+                lo, hi = Af.indptr[r], Af.indptr[r + 1]
+                pairs = zip(Af.indices[lo:hi], Af.data[lo:hi], strict=True)
+                if kind == "ge" and sum((_fr(v) * dint[c - 1] for c, v in pairs if c), Fraction(0)) > 0:
+                    drop.append(r)
+        step = {"d": [str(v) for v in dint], "V": Vs, "drop": drop}
+        chk = verify_step(problem, step)
+        if chk["ok"]:
+            return dict(step, ok=True, reason=chk["reason"])
+        last = f"the direction rounded to denominators <= {den} (its null spaces exact): {chk['reason']}"
     return {"ok": False, "reason": last}
 
 

@@ -166,7 +166,7 @@ def test_escalation_only_when_another_solver_can_close_the_gap(monkeypatch):
 
     monkeypatch.setattr(lmic.routes, "enclosure_of", without("upper"))
     # the primal end from the dual end (lmic.route_upper) off: the missing end stays missing
-    monkeypatch.setattr(lmic.routes, "upper_route", lambda problem, out, enc, *a: (out, enc, 0.0))
+    monkeypatch.setattr(lmic.routes, "upper_route", lambda problem, out, enc, *a, **k: (out, enc, 0.0))
     r = lmic.api.solve("tutorial.bounded_real", system, backoff=0)
     assert r.verdict == "certified" and certify(r.problem, r.solution).verdict == "certified"
     assert len(r.route["steps"]) == 1 + lmic.routes.MAX_GAP_ESCALATIONS
