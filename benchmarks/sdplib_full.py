@@ -181,6 +181,80 @@ def run_one(path: Path, timeout: float) -> dict[str, Any]:
     return data
 
 
+def read_dats(text: str) -> tuple[Any, list[int], dict[tuple[int, int], dict[tuple[int, int], float]]]:
+    """A minimal SDPA sparse reader of its own (independent of :mod:`lmic.ir.sdpa`, for the
+    comparison): ``c``, the block sizes and ``{(matno, block): {(i, j): value}}`` (0-based
+    ``i <= j``).
+
+    Examples
+    --------
+    >>> c, sizes, F = read_dats('"x"\\n1\\n1\\n1\\n1.0\\n0 1 1 1 2.0\\n1 1 1 1 1.0\\n')
+    >>> c.tolist(), sizes, F[(0, 0)]
+    ([1.0], [1], {(0, 0): 2.0})
+    """
+    import numpy as np
+
+    lines = [ln for ln in text.splitlines() if ln.strip() and ln.lstrip()[0] not in '"*']
+    split = [re.sub(r"[,(){}]", " ", ln).split() for ln in lines]
+    m, nb = int(split[0][0]), int(split[1][0])
+    words = iter(w for row in split[2:] for w in row)
+    sizes = [int(float(next(words))) for _ in range(nb)]
+    c = np.array([float(next(words)) for _ in range(m)])
+    rest = list(words)
+    F: dict[tuple[int, int], dict[tuple[int, int], float]] = {}
+    for k in range(0, len(rest) - 4, 5):
+        mat, blk, i, j, v = (
+            int(rest[k]),
+            int(rest[k + 1]) - 1,
+            int(rest[k + 2]) - 1,
+            int(rest[k + 3]) - 1,
+            float(rest[k + 4]),
+        )
+        F.setdefault((mat, blk), {})[(min(i, j), max(i, j))] = v
+    return c, sizes, F
+
+
+def cvxpy_clarabel(path: Path) -> dict[str, Any]:
+    """``min c'x`` s.t. ``sum x_i F_i - F_0 >= 0`` through CVXPY + Clarabel (default
+    tolerances): status, objective and wall time (model building included, the file read not)."""
+    import cvxpy as cp
+    import numpy as np
+    import scipy.sparse as sp
+
+    c, sizes, F = read_dats(path.read_text())
+    t0 = time.perf_counter()
+    x = cp.Variable(len(c))
+    cons = []
+    for b, d in enumerate(sizes):
+        size = abs(d)
+        rows, cols, vals, const = [], [], [], np.zeros(size * size)
+        for (mat, blk), entries in F.items():
+            if blk != b:
+                continue
+            for (i, j), v in entries.items():
+                pairs = {(i, j), (j, i)} if d > 0 else {(i, i)}
+                for a, e in pairs:
+                    if mat == 0:
+                        const[a + e * size] -= v
+                    else:
+                        rows.append(a + e * size)
+                        cols.append(mat - 1)
+                        vals.append(v)
+        A = sp.csc_matrix((vals, (rows, cols)), shape=(size * size, len(c)))
+        if d < 0:
+            diag = [k * size + k for k in range(size)]
+            cons.append(A[diag] @ x + const[diag] >= 0)
+        else:
+            cons.append(cp.reshape(A @ x + const, (size, size), order="F") >> 0)
+    prob = cp.Problem(cp.Minimize(c @ x), cons)
+    try:
+        prob.solve(solver="CLARABEL")
+        status, value = prob.status, prob.value
+    except cp.error.SolverError as exc:
+        status, value = f"error: {exc}"[:80], None
+    return {"status": status, "objective": value, "time_s": time.perf_counter() - t0}
+
+
 def _row(name: str, published: str | None, out: dict[str, Any]) -> dict[str, Any]:
     enc = out.get("enclosure") or {}
     route = out.get("route") or {}
@@ -242,6 +316,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", help="comma-separated problem names (default: every file)")
     ap.add_argument("--timeout", type=float, default=600.0, help="seconds per problem (default 600)")
     ap.add_argument("--json", help="write the rows here (rewritten after every problem)")
+    ap.add_argument("--compare", action="store_true", help="also time CVXPY + Clarabel (in this process) after each")
     args = ap.parse_args(argv)
     where = Path(args.dir)
     readme = where / "README.md"
@@ -276,6 +351,11 @@ def main(argv: list[str] | None = None) -> int:
             print(f"    {_short(row['route'])}"[:300], flush=True)
         if row["reason"]:
             print(f"    {row['reason']}"[:300], flush=True)
+        if args.compare:
+            cmp = cvxpy_clarabel(path)
+            row["cvxpy_clarabel"] = cmp
+            obj = "-" if cmp["objective"] is None else f"{cmp['objective']:.9g}"
+            print(f"    cvxpy+clarabel: {cmp['status']} {obj} {cmp['time_s']:.1f}s", flush=True)
         if args.json:
             Path(args.json).write_text(json.dumps(rows, indent=1))
     return 1 if any(r["inside"] is False for r in rows) else 0
