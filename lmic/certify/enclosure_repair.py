@@ -97,6 +97,13 @@ def _target(problem: Problem) -> tuple[float, np.ndarray]:
 CHUNK_ENTRIES = 4_000_000
 
 
+#: a block's dense gradient (``n x r (r + 1) / 2``) from this many entries on is replaced by the
+#: matrix-free form of :mod:`lmic.certify.enclosure_gram` where that is cheaper; below it the
+#: dense form's one ``G G^T`` beats the per-block overhead (SDPLIB truss6: 151 blocks of order
+#: 3, 172 rows: 1.0e3 entries each)
+FREE_MIN_ENTRIES = 1_000_000
+
+
 #: the support form's cost unit (a gathered entry) against the congruence form's (a BLAS flop),
 #: measured: ``uncertain_dt.thm1`` n = 8, 58 x 58 block, rank 58, 91 rows: support 13.4 ms for
 #: 4.0e6 units, congruence 2.6 ms for 3.6e7 flops; its 33 x 33 block: 0.43 ms for 2.6e5 units
@@ -229,8 +236,9 @@ def _repair(
                 factors.append(None)
                 continue
             ia, ib = np.triu_indices(r)
-            ent = entries_of(a, b, lmi.dim)
-            if free_cost(ent, r) < dense_cost(Jx.shape[0], r):
+            big = Jx.shape[0] * len(ia) >= FREE_MIN_ENTRIES
+            ent = entries_of(a, b, lmi.dim) if big else None
+            if ent is not None and free_cost(ent, r) < dense_cost(Jx.shape[0], r):
                 # a large block with sparse coefficients: G G^T and G^T lambda without G (enclosure_gram)
                 factors.append((U, ia, ib, ent))
                 continue

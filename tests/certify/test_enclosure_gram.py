@@ -52,17 +52,18 @@ def test_gram_and_step_match_the_dense_gradient(seed):
 
 
 def test_free_form_is_chosen_on_a_large_sparse_block_only():
-    p = read_sdpa(_mcp_cycle_text(41))
+    p = read_sdpa(_mcp_cycle_text(151))
     J, ranges = jacobian(p)
-    ent = entries(J[1:, ranges[0][0] : ranges[0][1]], 41)
-    assert free_cost(ent, 41) < dense_cost(p.n, 41)
+    ent = entries(J[1:, ranges[0][0] : ranges[0][1]], 151)
+    assert p.n * 151 * 152 // 2 >= er.FREE_MIN_ENTRIES
+    assert free_cost(ent, 151) < dense_cost(p.n, 151)
     # a dense coefficient block (every entry in every row) keeps the dense form
     dense = entries(sp.csc_matrix(np.ones((3, 6))), 3)
     assert free_cost(dense, 3) > dense_cost(3, 3)
 
 
 def test_mcp_cycle_enclosure_holds_the_closed_form(monkeypatch):
-    n = 41
+    n = 151
     p = read_sdpa(_mcp_cycle_text(n))
     calls = []
     real = er.gram
