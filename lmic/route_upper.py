@@ -37,6 +37,9 @@ UPPER_MIN_S = 20.0
 #: ... and at most this many, over all the steps of one route (every solve of the search is
 #: stopped at the deadline)
 UPPER_MAX_S = 150.0
+#: the first backoff of the margin solve, as a fraction of the route's gap
+#: (:func:`lmic.upper_end.upper_from_lower`'s ``start``)
+START_WITHIN = 0.9
 #: backends whose points are first-order accurate, and the interior point used in their place
 FIRST_ORDER = ("scs", "cosmo")
 INTERIOR_FALLBACK = "clarabel"
@@ -123,8 +126,17 @@ def upper_route(
         return certify(problem, _solution(problem, sol, x, "")).verdict == "certified"
 
     others = tuple(b for b in ALTERNATIVES if b not in str(getattr(solver, "name", solver)).lower())
+    # the first margin solve just inside the route's gap: a point proved there meets it
     r = upper_from_lower(
-        problem, dual_end, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
+        problem,
+        dual_end,
+        solver,
+        options,
+        x_hint=sol.x,
+        deadline=deadline,
+        check=passes,
+        alternatives=others,
+        start=START_WITHIN * gap,
     )
     step["upper"] = {k: r[k] for k in ("proven", "rel_gap", "reason")}
     step["upper"]["time_s"] = time.perf_counter() - t0

@@ -207,6 +207,7 @@ def upper_from_lower(
     deadline: float | None = None,
     check: Callable[[np.ndarray], bool] | None = None,
     alternatives: tuple[Any, ...] = (),
+    start: float | None = None,
 ) -> dict[str, Any]:
     """A point proved feasible whose objective is near the proven dual end ``lower``.
 
@@ -233,6 +234,10 @@ def upper_from_lower(
     alternatives : tuple of str or Backend
         Backends for a recentred solve that ``backend`` ends without a point (tried in turn;
         the first that gives one is used for the rest of the search).
+    start : float, optional
+        A first backoff of the margin solve, tried before :data:`START_DELTAS` when below them
+        (the caller's gap: a point proved there meets it; SDPLIB qap6, whose recentred solves
+        fail, stopped at 1.00005e-4 against the default ``--gap`` 1e-4 from ``1e-4``).
 
     Returns
     -------
@@ -310,7 +315,8 @@ def upper_from_lower(
                 checked.update(x=x, value=pe["value"])
         return bool(pe["proven"])
 
-    for delta in START_DELTAS:
+    firsts = START_DELTAS if start is None or not 0.0 < start < START_DELTAS[0] else (float(start), *START_DELTAS)
+    for delta in firsts:
         if late() or any(attempt(delta, None, radius) for radius in radii):
             break
     local = _dense_size(problem) <= MAX_DENSE
