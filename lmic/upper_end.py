@@ -18,7 +18,7 @@ without trusting the solver's point, in the minimisation form (``q`` the objecti
    ``max s`` s.t. ``T_i F_i(x_0 + diag(d) w) T_i^T >= s I``, ``l_r(x) / l_r(x_0) >= s``,
    ``q(x) <= L + delta max(1, |L|)``, ``|w_k| <= RADIUS`` (above :data:`FULL_MAX` dense
    entries, a block whose ``W_i`` is well conditioned gets the diagonal congruence instead:
-   sparse; a recentred solve the backend ends without a point goes to the ``alternatives``).
+   sparse; a margin or recentred solve the backend ends without a point goes to the ``alternatives``).
    At ``w = 0`` every block is the identity (its diagonal), so the solver's error is relative
    to the current margins, not to the size of ``F_i``: where the slice at ``delta`` is ``1e-13`` thin relative to the
    entries (measured: ``n = 20`` near-unstable bounded-real lemma) a plain solve returns
@@ -232,8 +232,8 @@ def upper_from_lower(
         ``checked_x`` / ``checked_value``, with margin solves at the larger backoffs of
         :data:`CHECK_DELTAS` when no point of the search passes.
     alternatives : tuple of str or Backend
-        Backends for a recentred solve that ``backend`` ends without a point (tried in turn;
-        the first that gives one is used for the rest of the search).
+        Backends for a margin or recentred solve that ``backend`` ends without a point (tried
+        in turn; the first that gives one is used for the rest of the search).
     start : float, optional
         A first backoff of the margin solve, tried before :data:`START_DELTAS` when below them
         (the caller's gap: a point proved there meets it; SDPLIB qap6, whose recentred solves
@@ -288,8 +288,9 @@ def upper_from_lower(
             opts = replace(given, time_limit=min(left, given.time_limit or left))
         sol = None
         # a recentred problem is dense: where the backend fails on it (Clarabel, NumericalError at
-        # 50 states), the alternatives in turn; the first that gives a point is kept for the rest
-        for k, solver in enumerate(solvers if x0 is not None else solvers[:1]):
+        # 50 states), the alternatives in turn; the first that gives a point is kept for the rest.
+        # So is a margin solve (SDPA ends SDPLIB qap6's with noINFO at once)
+        for k, solver in enumerate(solvers):
             try:
                 sol = solve_with_reductions(solver, target_problem, opts)
             except (LmicError, np.linalg.LinAlgError, ValueError, ArithmeticError) as exc:

@@ -41,3 +41,26 @@ def test_start_above_the_ladder_changes_nothing():
     p = _two_by_two()
     r = upper_from_lower(p, 1.0, "clarabel", x_hint=np.array([1.0]), target=1e-3, start=0.5)
     assert r["steps"][0]["delta"] == START_DELTAS[0]
+
+
+def test_margin_solve_goes_to_the_alternatives_when_the_backend_gives_no_point():
+    from lmic.backends.clarabel import ClarabelBackend
+    from lmic.errors import BackendError
+
+    class Broken(ClarabelBackend):
+        """A backend that ends every solve without a point (as SDPA's noINFO on SDPLIB qap6's
+        margin problem)."""
+
+        def call(self, problem, settings):
+            raise BackendError("broken on purpose")
+
+    p = _two_by_two()
+    r = upper_from_lower(p, 1.0, Broken(), x_hint=np.array([1.0]), target=1e-3, alternatives=("clarabel",))
+    assert r["proven"]
+    assert r["steps"][0].get("backend") == "clarabel"
+    assert 1.0 <= r["value"] <= 1.0 + START_DELTAS[0] * (1 + 1e-9)
+    x = np.asarray(r["x"], dtype=float)
+    sol = Solution(status="optimal", x=x, objective=float(x[0]), duals=None, backend="clarabel", message="")
+    assert certify(p, sol).verdict == "certified"
+    # without the alternative, no point at all
+    assert not upper_from_lower(p, 1.0, Broken(), x_hint=np.array([1.0]), target=1e-3)["proven"]
