@@ -37,6 +37,9 @@ UPPER_MIN_S = 20.0
 #: ... and at most this many, over all the steps of one route (every solve of the search is
 #: stopped at the deadline)
 UPPER_MAX_S = 150.0
+#: the first backoff of the margin solve, as a fraction of the route's gap
+#: (:func:`lmic.upper_end.upper_from_lower`'s ``start``)
+START_WITHIN = 0.9
 #: backends whose points are first-order accurate, and the interior point used in their place
 FIRST_ORDER = ("scs", "cosmo")
 INTERIOR_FALLBACK = "clarabel"
@@ -184,7 +187,15 @@ def upper_route(
     r: dict[str, Any] = {"proven": False}
     if dual_end is not None and not boxes:
         r = upper_from_lower(
-            problem, dual_end, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
+            problem,
+            dual_end,
+            solver,
+            options,
+            x_hint=sol.x,
+            deadline=deadline,
+            check=passes,
+            alternatives=others,
+            start=START_WITHIN * gap,  # the first margin solve just inside the route's gap
         )
     if boxes and sol.x is not None:  # first a point restored near the solver's (cheap: one or three solves)
         tight = () if enc.get("tight_x") is None else (enc["tight_x"],)  # the tight re-solve's point (tighten)

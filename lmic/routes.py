@@ -310,10 +310,26 @@ def tighten(
         # the primal end of a problem whose multipliers have trace ~300 stays 3e-5 above the optimum
         base = options if options is not None else SolveOptions()
         tight = replace(base, tol=tol, margin=min(base.margin, 10.0 * tol))
+        before = out
         out = _tighten_once(problem, out, x, exact, backend, tight, resolve, solve_point, deadline, key)
         if out.get("rel_gap") is not None and out["rel_gap"] <= goal:
             break
+        if out is not before and _no_progress(before, out):
+            # a tight solve that ran and did not halve the gap: the gap is not the solver's
+            # tolerance (SDPLIB qap: a primal end limited by the problem), a tighter one will not
+            break
     return out
+
+
+def _no_progress(before: dict[str, Any], after: dict[str, Any]) -> bool:
+    """Whether a re-solve's enclosure ``after`` failed to halve the relative gap of ``before``
+    (both gaps known).
+
+    >>> _no_progress({"rel_gap": 1e-4}, {"rel_gap": 0.9e-4}), _no_progress({"rel_gap": 1e-4}, {"rel_gap": 1e-6})
+    (True, False)
+    """
+    g0, g1 = before.get("rel_gap"), after.get("rel_gap")
+    return g0 is not None and g1 is not None and g1 > 0.5 * g0
 
 
 #: the tolerances of :func:`tighten`'s re-solves, loosest first: Clarabel stops at

@@ -18,7 +18,7 @@ without trusting the solver's point, in the minimisation form (``q`` the objecti
    ``max s`` s.t. ``T_i F_i(x_0 + diag(d) w) T_i^T >= s I``, ``l_r(x) / l_r(x_0) >= s``,
    ``q(x) <= L + delta max(1, |L|)``, ``|w_k| <= RADIUS`` (above :data:`FULL_MAX` dense
    entries, a block whose ``W_i`` is well conditioned gets the diagonal congruence instead:
-   sparse; a recentred solve the backend ends without a point goes to the ``alternatives``).
+   sparse; a margin or recentred solve the backend ends without a point goes to the ``alternatives``).
    At ``w = 0`` every block is the identity (its diagonal), so the solver's error is relative
    to the current margins, not to the size of ``F_i``: where the slice at ``delta`` is ``1e-13`` thin relative to the
    entries (measured: ``n = 20`` near-unstable bounded-real lemma) a plain solve returns
@@ -242,6 +242,7 @@ def upper_from_lower(
     check: Callable[[np.ndarray], bool] | None = None,
     alternatives: tuple[Any, ...] = (),
     radii: tuple[float | np.ndarray, ...] | None = None,
+    start: float | None = None,
 ) -> dict[str, Any]:
     """A point proved feasible whose objective is near the proven dual end ``lower``.
 
@@ -266,8 +267,12 @@ def upper_from_lower(
         ``checked_x`` / ``checked_value``, with margin solves at the larger backoffs of
         :data:`CHECK_DELTAS` when no point of the search passes.
     alternatives : tuple of str or Backend
-        Backends for a recentred solve that ``backend`` ends without a point (tried in turn;
-        the first that gives one is used for the rest of the search).
+        Backends for a margin or recentred solve that ``backend`` ends without a point (tried
+        in turn; the first that gives one is used for the rest of the search).
+    start : float, optional
+        A first backoff of the margin solve, tried before :data:`START_DELTAS` when below them
+        (the caller's gap: a point proved there meets it; SDPLIB qap6, whose recentred solves
+        fail, stopped at 1.00005e-4 against the default ``--gap`` 1e-4 from ``1e-4``).
     radii : tuple of float, optional
         The boxes ``|x_k| <= R`` of the margin solves (default: ten times ``max(1, |lower|)``,
         then ten times the largest entry of ``x_hint``).
@@ -314,8 +319,9 @@ def upper_from_lower(
         opts = _limited(options, deadline)
         sol = None
         # a recentred problem is dense: where the backend fails on it (Clarabel, NumericalError at
-        # 50 states), the alternatives in turn; the first that gives a point is kept for the rest
-        for k, solver in enumerate(solvers if x0 is not None else solvers[:1]):
+        # 50 states), the alternatives in turn; the first that gives a point is kept for the rest.
+        # So is a margin solve (SDPA ends SDPLIB qap6's with noINFO at once)
+        for k, solver in enumerate(solvers):
             try:
                 sol = solve_with_reductions(solver, target_problem, opts)
             except (LmicError, np.linalg.LinAlgError, ValueError, ArithmeticError) as exc:
@@ -341,7 +347,8 @@ def upper_from_lower(
                 checked.update(x=x, value=pe["value"])
         return bool(pe["proven"])
 
-    for delta in START_DELTAS:
+    firsts = START_DELTAS if start is None or not 0.0 < start < START_DELTAS[0] else (float(start), *START_DELTAS)
+    for delta in firsts:
         if late() or any(attempt(delta, None, radius) for radius in radii):
             break
     local = _dense_size(problem) <= MAX_DENSE

@@ -116,7 +116,7 @@ from lmic.certify.enclosure_conditional import RADIUS_FACTOR, best_box_bound, bo
 from lmic.certify.enclosure_dual import dual_bound, verify_dual_bound
 from lmic.certify.enclosure_exact import EXACT_MAX_N
 from lmic.certify.enclosure_face import face_bound
-from lmic.certify.enclosure_facial import facial_or
+from lmic.certify.enclosure_facial import facial_or, obvious_face
 from lmic.certify.enclosure_float import lambda_min_lower, polish_primal, primal_end
 from lmic.certify.enclosure_repair import PERTURBATIONS, SHIFTS, perturbed_problem
 from lmic.certify.snap import exact_primal_end
@@ -224,21 +224,32 @@ def enclosure(
         if not dual.get("proven"):
             dual = {"proven": False, "reason": "the solver returned no dual point"}
     else:
-        try:
-            search = search_budget(solve_s) if budget_s is None else min(search_budget(solve_s), float(budget_s))
-            dual = dual_bound(
-                problem,
-                duals,
-                exact=exact,
-                resolve=resolve,
-                solve_point=solve_point,
-                budget_s=search,
-                solve_s=solve_s,
-            )
-        except CertificateError as exc:
-            dual = {"proven": False, "reason": str(exc)}
-        # no strictly feasible dual point: the face it lives on (lmic.certify.enclosure_facial)
-        dual = facial_or(problem, duals, dual, solve_point, exact=exact, resolve=resolve, deadline=deadline)
+        # a variable that exposes a face on its own (SDPLIB gpp: <J, Y> = 0): no shifted repair
+        # can prove, so the facial route (lmic.certify.enclosure_facial) goes first
+        face = obvious_face(problem) if solve_point is not None else None
+        dual = {"proven": False, "reason": f"the dual has no strictly feasible point ({face})"}
+        if face:
+            dual = facial_or(problem, duals, dual, solve_point, exact=exact, resolve=resolve, deadline=deadline)
+        if not dual.get("proven"):
+            tried = dual.get("reason") if face else None
+            try:
+                search = search_budget(solve_s) if budget_s is None else min(search_budget(solve_s), float(budget_s))
+                dual = dual_bound(
+                    problem,
+                    duals,
+                    exact=exact,
+                    resolve=resolve,
+                    solve_point=solve_point,
+                    budget_s=search,
+                    solve_s=solve_s,
+                )
+            except CertificateError as exc:
+                dual = {"proven": False, "reason": str(exc)}
+            if face is None:
+                # no strictly feasible dual point: the face it lives on (lmic.certify.enclosure_facial)
+                dual = facial_or(problem, duals, dual, solve_point, exact=exact, resolve=resolve, deadline=deadline)
+            elif not dual.get("proven"):
+                dual["reason"] = f"{dual.get('reason')}; {tried}"
     out["dual"] = dual
     upper_value = None
     if x is None:

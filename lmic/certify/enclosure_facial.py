@@ -79,7 +79,7 @@ from lmic.certify.enclosure_facial_exact import (
 from lmic.certify.enclosure_repair import _target
 from lmic.errors import CertificateError
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
-from lmic.ir.svec import tril_rows_cols
+from lmic.ir.svec import tril_rows_cols, tril_unvec
 
 __all__ = [
     "MAX_STEPS",
@@ -281,6 +281,69 @@ def verify_facial(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
     }
     v = verify_dual_bound(cur, inner)
     return dict(v, reason=f"facial reduction ({len(d['steps'])} step(s)) verified; {v['reason']}")
+
+
+def obvious_face(problem: Problem) -> str | None:
+    """A variable that exposes a face of the dual on its own, or ``None``: ``q_k = 0`` (the
+    minimisation form's objective), every LMI's coefficient ``F_i^(k)`` positive semidefinite
+    (or every one negative semidefinite), not all zero, ``a_rk`` of the same sign on ``ge`` rows
+    and ``0`` on ``eq`` rows. Then ``d = +-e_k`` is an exposing direction (module docstring):
+    the dual has no strictly feasible point, and the shifted repairs of
+    :func:`~lmic.certify.enclosure_dual.dual_bound` cannot prove (SDPLIB gpp: ``<J, Y> = 0``).
+
+    A routing test in floating point (eigenvalues of the coefficient on its support, after the
+    2 x 2 minor test: an off-diagonal entry needs both diagonal entries of its sign); the facial
+    route verifies its own exposing certificate exactly.
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> # min x2 s.t. [[x1, x1 + 1], [x1 + 1, x1 + x2]] >= 0: x1's coefficient J >= 0, q_1 = 0
+    >>> C = sp.csc_matrix([[0.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 1.0]])
+    >>> p = Problem([Variable("x", "full", (2, 1))], [LMI("M", 2, C, strict=False)],
+    ...             LinearConstraints.empty(2), Objective("min", [0.0, 0.0, 1.0]))
+    >>> obvious_face(p)
+    'variable 1: a semidefinite coefficient of cost 0'
+    """
+    _, q = _target(problem)
+    lin = problem.linear
+    A = sp.csc_matrix(lin.A) if len(lin) else None
+    ge = np.array([k == "ge" for k in lin.kinds], dtype=bool)
+    cols = [sp.csc_matrix(lmi.coeffs) for lmi in problem.lmis]
+    for k in np.flatnonzero(q[1:] == 0.0):
+        signs: set[int] = set()
+        if A is not None:
+            a = A[:, 1 + k].toarray().ravel()
+            if np.any(a[~ge] != 0.0):
+                continue
+            signs |= {int(v) for v in np.sign(a[ge & (a != 0.0)])}
+            if len(signs) > 1:
+                continue
+        nonzero = False
+        for lmi, C in zip(problem.lmis, cols, strict=True):
+            col = C[:, 1 + k]
+            if not col.nnz:
+                continue
+            nonzero = True
+            i, j = tril_rows_cols(lmi.dim)
+            rows, vals = col.indices, col.data
+            diag = {int(i[r]): float(v) for r, v in zip(rows, vals, strict=True) if i[r] == j[r]}
+            dsign = {int(np.sign(v)) for v in diag.values() if v != 0.0}
+            signs |= dsign
+            if len(signs) != 1:
+                break
+            sg = next(iter(signs))
+            off = [(int(i[r]), int(j[r])) for r in rows if i[r] != j[r]]
+            if any(sg * diag.get(a, 0.0) <= 0.0 or sg * diag.get(b, 0.0) <= 0.0 for a, b in off):
+                break  # a 2 x 2 principal minor is negative
+            sup = sorted(diag)
+            M = tril_unvec(col.toarray().ravel(), lmi.dim)[np.ix_(sup, sup)]
+            w = np.linalg.eigvalsh(sg * M)
+            if w[0] < -1e-12 * max(1.0, float(w[-1])):
+                break
+        else:
+            if nonzero and len(signs) == 1:
+                return f"variable {k + 1}: a semidefinite coefficient of cost 0"
+    return None
 
 
 def facial_or(

@@ -135,7 +135,18 @@ def _is_zero_product(M: np.ndarray, L: np.ndarray) -> bool:
     fast &= (np.abs(np.where(np.isfinite(N), N, 0.0)) @ np.abs(L)).max(axis=1, initial=0.0) < EXACT_INT
     if np.any((N[fast] @ L) != 0):
         return False
-    for r in np.flatnonzero(~fast):
+    slow = np.flatnonzero(~fast)
+    whole = slow[np.all(np.isfinite(N[slow]), axis=1)]
+    if whole.size:
+        # the scaled rows are integers held exactly in floats: one exact integer product (flint)
+        from lmic.certify.psd import load_flint
+
+        flint = load_flint()
+        A = flint.fmpz_mat(int(whole.size), int(M.shape[1]), [int(v) for v in N[whole].ravel().tolist()])
+        B = flint.fmpz_mat(int(L.shape[0]), int(L.shape[1]), [int(v) for v in np.asarray(L).ravel().tolist()])
+        if not (A * B).is_zero():
+            return False
+    for r in np.setdiff1d(slow, whole):
         for c in range(L.shape[1]):
             if sum((_fr(v) * int(L[k, c]) for k, v in enumerate(M[r]) if v and L[k, c]), Fraction(0)):
                 return False

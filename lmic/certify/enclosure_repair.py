@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from lmic.certify.enclosure_gram import dense_cost, entries, free_cost, gram, step_matrix
 from lmic.certify.multipliers import parse_multipliers
 from lmic.ir.problem import Problem
 from lmic.ir.svec import tril_rows_cols, tril_unvec
@@ -94,6 +95,13 @@ def _target(problem: Problem) -> tuple[float, np.ndarray]:
 
 #: entries of one chunk of the dense factor of :func:`_block_gradient` (bounds its memory)
 CHUNK_ENTRIES = 4_000_000
+
+
+#: a block's dense gradient (``n x r (r + 1) / 2``) from this many entries on is replaced by the
+#: matrix-free form of :mod:`lmic.certify.enclosure_gram` where that is cheaper; below it the
+#: dense form's one ``G G^T`` beats the per-block overhead (SDPLIB truss6: 151 blocks of order
+#: 3, 172 rows: 1.0e3 entries each)
+FREE_MIN_ENTRIES = 1_000_000
 
 
 #: the support form's cost unit (a gathered entry) against the congruence form's (a BLAS flop),
@@ -198,6 +206,13 @@ def _repair(
     qn = q[1:] if objective is None else np.concatenate([[objective], q[1:]])
     scale = float(np.max(np.abs(qn), initial=0.0)) + 1e-300
     history: list[float] = []
+    cache: dict[tuple[int, int], Any] = {}
+
+    def entries_of(a: int, b: int, dim: int) -> Any:
+        if (a, b) not in cache:
+            cache[(a, b)] = entries(Jx[:, a:b], dim)
+        return cache[(a, b)]
+
     for _ in range(steps):
         u = _pack(problem, mats, y)
         rho = qn - Jx @ u
@@ -207,7 +222,7 @@ def _repair(
         if deadline is not None and history and time.perf_counter() > deadline:
             break  # the caller's time budget is spent: the proof decides on what is there
         history.append(now)
-        blocks: list[Any] = []
+        blocks: list[Any] = []  # dense gradient blocks (n x r(r+1)/2): G's columns
         factors: list[Any] = []
         for lmi, Z, (a, b) in zip(problem.lmis, mats, ranges, strict=True):
             if not lmi.dim:
@@ -221,39 +236,56 @@ def _repair(
                 factors.append(None)
                 continue
             ia, ib = np.triu_indices(r)
+            big = Jx.shape[0] * len(ia) >= FREE_MIN_ENTRIES
+            ent = entries_of(a, b, lmi.dim) if big else None
+            if ent is not None and free_cost(ent, r) < dense_cost(Jx.shape[0], r):
+                # a large block with sparse coefficients: G G^T and G^T lambda without G (enclosure_gram)
+                factors.append((U, ia, ib, ent))
+                continue
             # d svec(Z) / d E_ab, mapped by J's columns of this LMI (:func:`_block_gradient`)
             blocks.append(_block_gradient(Jx[:, a:b], U, lmi.dim, ia, ib))
-            factors.append((U, ia, ib))
+            factors.append((U, ia, ib, None))
         off = ranges[-1][1] if ranges else 0
         rows = [r for r in range(len(y)) if (not ge[r]) or y[r] > floor]
         top = max([float(np.max(np.abs(y), initial=0.0))] + [float(np.max(np.abs(Z), initial=0.0)) for Z in mats])
         srow = np.array([y[r] - floor if ge[r] else max(abs(y[r]), 1e-3 * top, 1e-300) for r in rows])
         if rows:
             blocks.append(Jx[:, [off + r for r in rows]].toarray() * srow[None, :])
-        if not blocks:
+        free = [f for f in factors if f is not None and f[3] is not None]
+        if not blocks and not free:
             break
-        G = np.hstack(blocks)
+        G = np.hstack(blocks) if blocks else np.zeros((Jx.shape[0], 0))
         # least-norm step through the Gram matrix (n x n, cheap for the wide G of a face)
         Gm = G @ G.T
+        for f in free:
+            Gm += gram(f[3], f[0])
         Gm[np.diag_indices_from(Gm)] += 1e-14 * float(np.trace(Gm)) / max(1, Gm.shape[0]) + 1e-300
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)
-                e = G.T @ np.linalg.solve(Gm, rho)
+                lam = np.linalg.solve(Gm, rho)
+            e = G.T @ lam
         except (np.linalg.LinAlgError, ValueError):
-            e = scipy.linalg.lstsq(G, rho, lapack_driver="gelsy", check_finite=False)[0]
+            if free:
+                lam = scipy.linalg.lstsq(Gm, rho, lapack_driver="gelsy", check_finite=False)[0]
+                e = G.T @ lam
+            else:
+                e = scipy.linalg.lstsq(G, rho, lapack_driver="gelsy", check_finite=False)[0]
         k, norms = 0, [0.0]
         Es: list[Any] = []
         for f in factors:
             if f is None:
                 Es.append(None)
                 continue
-            U, ia, ib = f
-            r = U.shape[1]
-            E = np.zeros((r, r))
-            E[ia, ib] = e[k : k + len(ia)]
-            E[ib, ia] = e[k : k + len(ia)]
-            k += len(ia)
+            U, ia, ib, ent = f
+            if ent is not None:
+                E = step_matrix(ent, U, lam)
+            else:
+                r = U.shape[1]
+                E = np.zeros((r, r))
+                E[ia, ib] = e[k : k + len(ia)]
+                E[ib, ia] = e[k : k + len(ia)]
+                k += len(ia)
             Es.append(E)
             norms.append(float(np.max(np.abs(np.linalg.eigvalsh(E)))))
         ey = e[k:]

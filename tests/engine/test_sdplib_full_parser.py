@@ -1,0 +1,47 @@
+"""The README parser of benchmarks/sdplib_full.py (published optima, note corrections, rounding
+intervals) on small strings in SDPLIB's two table layouts."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+_spec = importlib.util.spec_from_file_location("lmic_bench_sdplib_full", ROOT / "benchmarks" / "sdplib_full.py")
+assert _spec is not None and _spec.loader is not None
+bench = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(bench)
+
+FULL = """| Problem   |    m |    n | Optimal Objective Value | Notes |
+| --------- | ---: | ---: | ----------------------: | :---: |
+| arch0     |  174 |  335 |  5.66517e-01            |     1 |
+| infd1     |   10 |   30 |  dual infeasible        |     6 |
+| qap10     | 1021 |  101 | -1.093e+01              | 9, 14 |
+
+14. The optimal objective value for `qap10` was found to be `-1.093e+03`
+    by at least three indepentend experiments
+"""
+
+SHARED = """| problem | m | n | optimal value |
+|---|---:|---:|---:|
+| truss1 | 6 | 13 | -8.999996e+00 |
+| infp1 | 10 | 30 | primal infeasible |
+"""
+
+
+def test_full_layout_with_the_note_correction():
+    pub = bench.published_optima(FULL)
+    assert pub == {"arch0": "5.66517e-01", "infd1": "dual infeasible", "qap10": "-1.093e+03"}
+
+
+def test_shared_layout():
+    assert bench.published_optima(SHARED) == {"truss1": "-8.999996e+00", "infp1": "primal infeasible"}
+
+
+def test_rounding_interval_and_meets():
+    lo, hi = bench.rounding_interval("5.66517e-01")
+    assert abs(lo - 0.5665165) < 1e-15 and abs(hi - 0.5665175) < 1e-15
+    assert bench.meets((0.56651, 0.566517), "5.66517e-01")
+    assert not bench.meets((0.5665176, 0.57), "5.66517e-01")
+    assert bench.meets((None, 1.0), "5.66517e-01") is None
+    assert bench.meets((0.0, 1.0), "primal infeasible") is None
