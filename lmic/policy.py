@@ -468,6 +468,12 @@ def decide(
                     # an optimisation solve that failed: the feasibility problem can still prove
                     # infeasibility (a Farkas ray does not depend on the objective)
                     plan.append(("feasibility", feasibility_problem(solve_as), None))
+            elif tag == "feasibility" and last_x is not None and np.all(np.isfinite(last_x)) and np.any(last_x):
+                # the optimisation solve failed without a point, its feasibility problem has one:
+                # the optimisation problem preconditioned there (CVXOPT's ZeroDivisionError on
+                # random sampled_euler.thm2, 9 states, decided by the rescaled solve)
+                if solve_as.lmis and not any(t == "rescaled" for t, _, _ in plan):
+                    plan.append(("rescaled", solve_as, last_x))
         if decided:
             break
         if run.best is not None and run.best.verdict == "infeasible-bounded":

@@ -190,3 +190,13 @@ def test_primal_end_from_the_backed_off_point_is_improved_to_the_target():
     assert audit_enclosure(r.problem, enc, r.certificate, r.backoff)["ok"]
     assert contains(enc, value, tol), (enc["lower"], value, enc["upper"])
     assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
+
+
+def test_failed_optimisation_solve_is_rescaled_at_the_feasibility_point():
+    """sampled_euler.thm2 at 9 states (seed 4) on CVXOPT: the default solve fails without a point
+    (ZeroDivisionError inside CVXOPT) and the feasibility problem's point decided nothing; the
+    optimisation problem is now preconditioned at that point (``rescaled``), whose point holds
+    and whose enclosure proves the optimum: certified, within 1e-6, the optimum inside."""
+    r, value, tol = _solved_with_reference("sampled_euler.thm2", 4, 9, "cvxopt")
+    enc = _enclosure_checked(r, value, tol)
+    assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
