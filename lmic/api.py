@@ -394,6 +394,10 @@ def solve(
         # one from the backed-off point, a point polished toward the solver's, a restored point
         t_rest = time.perf_counter()
         enc = _better_primal(problem, enc, back, sol, tight_x, used, options)
+        upgraded = _decided_by_enclosure(problem, outcome, enc, options)
+        if upgraded is not None:  # the restored point passes the certifier and the gap is met
+            outcome, sol, cert = upgraded, upgraded.solution, upgraded.certificate
+            variables, derived = _values(problem, sol.x, cert)
         enclosure_s += time.perf_counter() - t_rest
     timings = {
         "compile_s": compile_s,
@@ -537,6 +541,48 @@ def _better_primal(
                 enc = take(pol["value"], "restored point", xp)
             break
     return enc
+
+
+def _decided_by_enclosure(
+    problem: Problem, outcome: Any, enc: dict[str, Any] | None, options: SolveOptions | None
+) -> Any | None:
+    """A ``rejected`` or ``undecided`` optimisation outcome whose enclosure has both ends proven
+    within ``options.gap`` from a restored point (``restored_x``): ``certified`` with that point
+    when the certifier certifies it (its evidence: the certifier's and the enclosure's, both
+    proofs); ``None`` otherwise (the outcome stands)."""
+    from lmic.options import SolveOptions as _Options
+
+    gap = (options or _Options()).gap
+    if outcome.verdict not in ("rejected", "undecided") or enc is None or outcome.solution is None:
+        return None
+    if enc.get("restored_x") is None or enc.get("rel_gap") is None or enc["rel_gap"] > gap:
+        return None
+    from lmic.certify import certify
+    from lmic.outcome import Outcome, evidence_of
+
+    x = np.asarray(enc["restored_x"], dtype=float)
+    old = outcome.solution
+    sol2 = Solution(
+        status=old.status,
+        x=x,
+        objective=problem.objective.value(x),
+        duals=old.duals,
+        backend=old.backend,
+        message="the restored point of the enclosure (lmic.api)",
+    )
+    cert2 = certify(problem, sol2)
+    if cert2.verdict != "certified":
+        return None
+    return Outcome(
+        "certified",
+        evidence_of("certified", cert2),
+        f"{cert2.reason} (the enclosure's restored point; the solver's point: {outcome.verdict}); "
+        f"the enclosure proves the optimum: {enc['reason']}",
+        list(outcome.attempts),
+        sol2,
+        cert2,
+        outcome.backend,
+    )
 
 
 def _backoff(
