@@ -199,3 +199,15 @@ def test_failed_optimisation_solve_is_rescaled_at_the_feasibility_point():
     r, value, tol = _solved_with_reference("sampled_euler.thm2", 4, 9, "cvxopt")
     enc = _enclosure_checked(r, value, tol)
     assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
+
+
+def test_certified_point_with_margin_gets_a_restored_primal_end():
+    """sampled_euler.thm3 at 12 states (seed 3) on Clarabel: the certified point (rescaled
+    strategy, fixed margin) is 2e-4 above the optimum and the tight re-solves left the primal
+    end 1.9e-6 above the proven lower end. The restoration now also runs on an existing primal
+    end that misses 1e-6, and its last solve keeps the rows (``epsilon > 0``, which vanishes at
+    the optimum) at a larger margin than the solver's accuracy: a restored point 4e-7 above."""
+    r, value, tol = _solved_with_reference("sampled_euler.thm3", 3, 12, "clarabel")
+    enc = _enclosure_checked(r, value, tol)
+    assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
+    assert enc["primal"] == "restored point"
