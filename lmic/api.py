@@ -389,26 +389,19 @@ def solve(
         enc, enclosure_s = _enclosure(problem, sol, cert, exact, used, options)
     tight_x = enc.pop("tight_x", None) if enc is not None else None
     back = _backoff(problem, enc, backoff, used, options, sol.objective)
-    if enc is not None and (enc["upper"] if problem.objective.sense == "min" else enc["lower"]) is None:
-        # no rigorous primal end at the solver's point (a non-strict constraint met only to
-        # the certifier's tolerance, or a rejected point): the backed-off point, else a point
-        # strictly inside from a solve with every constraint tightened (lmic.backoff.restore)
+    if enc is not None:
+        # no rigorous primal end at the solver's point, or one that misses GAP_TARGET: a better
+        # one from the backed-off point, a point polished toward the solver's, a restored point
         t_rest = time.perf_counter()
-        from lmic.certify.enclosure import primal_end, with_primal
+        from lmic.route_primal import better_primal, decided_by_enclosure
 
-        if back is not None and back.get("x") is not None:
-            pe = primal_end(problem, np.asarray(back["x"], dtype=float))
-            if pe["proven"]:
-                enc = with_primal(enc, pe["value"], "certified backed-off point")
-        # the route's last resort (lmic.routes._boxed_upper) restores from the same point: not twice
-        tried = any("upper_boxed" in st for st in (routed.route or {}).get("steps", [])) or sol.x is None
-        if (enc["upper"] if problem.objective.sense == "min" else enc["lower"]) is None and not tried:
-            from lmic.route_upper import restored_end
-
-            rest = restored_end(problem, sol.x, used, options, outer=() if tight_x is None else (tight_x,))
-            if rest["proven"]:
-                enc = with_primal(enc, rest["value"], "restored point")
-                enc["restored_x"] = rest["x"]
+        # the route's last resort (lmic.routes._boxed_upper) restored from the same point: not twice
+        tried = any("upper_boxed" in st for st in (routed.route or {}).get("steps", []))
+        enc = better_primal(problem, enc, back, sol, tight_x, used, options, restore_tried=tried)
+        upgraded = decided_by_enclosure(problem, outcome, enc, options)
+        if upgraded is not None:  # the restored point passes the certifier and the gap is met
+            outcome, sol, cert = upgraded, upgraded.solution, upgraded.certificate
+            variables, derived = _values(problem, sol.x, cert)
         enclosure_s += time.perf_counter() - t_rest
     timings = {
         "compile_s": compile_s,

@@ -233,13 +233,17 @@ def describe(record: dict[str, Any] | None, original_norm: float | None = None) 
     return lines
 
 
-def restore_problem(problem: Problem, x: np.ndarray, rel: float = RESTORE_MARGIN) -> Problem:
+def restore_problem(
+    problem: Problem, x: np.ndarray, rel: float = RESTORE_MARGIN, row_rel: float | None = None
+) -> Problem:
     """The problem with every constraint tightened by a margin, for a point strictly inside.
 
     Every LMI becomes ``F_i(x) >= delta_i I`` and every ``ge`` row ``>= delta_r`` (closed), with
     ``delta = rel * max(1, scale at x)`` (the largest entry of ``|F_i|`` at ``x``; the size of
     the row's terms): the solver's optimum of it, within its accuracy, is then strictly
     feasible for ``problem`` and :func:`lmic.certify.enclosure.primal_end` can prove it.
+    ``row_rel`` (default ``rel``) is the rows' own relative margin: a scalar row ``epsilon > 0``
+    whose value vanishes at the optimum needs more than the solver's accuracy.
 
     >>> import scipy.sparse as sp
     >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t >= 0", 1, sp.csc_matrix([[0.0, 1.0]]), strict=False)],
@@ -266,7 +270,7 @@ def restore_problem(problem: Problem, x: np.ndarray, rel: float = RESTORE_MARGIN
         sizes = np.asarray(abs(lin.A) @ np.abs(xx)).ravel()
         for r, kind in enumerate(lin.kinds):
             if kind == "ge":
-                A[r, 0] = A[r, 0] - rel * max(1.0, float(sizes[r]))
+                A[r, 0] = A[r, 0] - (rel if row_rel is None else row_rel) * max(1.0, float(sizes[r]))
     return Problem(
         list(problem.variables),
         lmis,
@@ -277,7 +281,12 @@ def restore_problem(problem: Problem, x: np.ndarray, rel: float = RESTORE_MARGIN
 
 
 def restore(
-    problem: Problem, x: np.ndarray, backend: Any, options: Any = None, rel: float = RESTORE_MARGIN
+    problem: Problem,
+    x: np.ndarray,
+    backend: Any,
+    options: Any = None,
+    rel: float = RESTORE_MARGIN,
+    row_rel: float | None = None,
 ) -> dict[str, Any]:
     """Solve :func:`restore_problem` and return ``x`` (``None`` without a point), ``status``,
     ``objective`` and ``time_s``; the caller proves the point (nothing here is trusted)."""
@@ -286,7 +295,7 @@ def restore(
     t0 = time.perf_counter()
     be = backend if not isinstance(backend, str) else get_backend(backend)
     try:
-        sol = solve_with_reductions(be, restore_problem(problem, x, rel), options)
+        sol = solve_with_reductions(be, restore_problem(problem, x, rel, row_rel), options)
     except LmicError as exc:
         return {"x": None, "status": "error", "reason": str(exc), "time_s": time.perf_counter() - t0}
     xr = None if sol.x is None else np.asarray(sol.x, dtype=float)

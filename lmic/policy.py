@@ -20,9 +20,10 @@ certified point, or a GLOBAL infeasibility proof, :mod:`lmic.outcome`):
    proof counts from it, a point is no optimum);
 4. the first ``infeasible-bounded`` answer ("no solution with ``||x||_inf <= R``") is
    immediately tried for an exact rational proof (:func:`lmic.certify.farkas.prove_infeasible`),
-   which makes it global when it holds (up to :data:`MAX_RAY_PROOFS` rays per decision, one
-   face threshold each: a proof attempt costs seconds; another strategy's ray, e.g. the
-   fixed-margin one, is often the one that proves).
+   which makes it global when it holds (up to :data:`MAX_RAY_PROOFS` rays per backend, one
+   face threshold each, within :data:`RAY_PROOF_BUDGET_S` CPU seconds per decision: a proof
+   attempt costs seconds; another strategy's or backend's ray, e.g. the fixed-margin one, is
+   often the one that proves).
 
 Then the next backend of the route. After the route: the exact rescue of the best rejected
 point whose float eigenvalues are all positive (margins below the float error bound, e.g. near a
@@ -93,8 +94,9 @@ FIRST_ORDER_TOL = 1e-3
 #: stop escalating once this many backends gave bounded rays that no exact proof upgraded
 MAX_BOUNDED = 2
 
-#: bounded rays per decision tried for an exact (global) proof: on obs_control.thm3_2 in
-#: z-coordinates (eps = 0.8) CVXOPT's max-margin ray fails and its fixed-margin ray proves
+#: bounded rays per backend of a decision tried for an exact (global) proof: on obs_control.thm3_2
+#: in z-coordinates (eps = 0.8) CVXOPT's max-margin ray fails and its fixed-margin ray proves; on
+#: random obs_control.thm3_2 instances Clarabel's three rays fail and CVXOPT's rescaled one proves
 MAX_RAY_PROOFS = 3
 #: ... while the proofs so far took less than this many CPU seconds (the first is always tried)
 RAY_PROOF_BUDGET_S = 15.0
@@ -276,6 +278,7 @@ class _Run:
         self.rejected: list[tuple[Solution, Any, str]] = []
         self.holding: list[Outcome] = []  # optimisation points that hold, from 'inaccurate' solves
         self.rays_tried = 0
+        self.rays_by: dict[str, int] = {}  # proof attempts per backend
         self.ray_s = 0.0
 
     def record(self, backend: str, label: str, sol: Solution, t0: float, infeasibility_only: bool = False) -> Outcome:
@@ -286,12 +289,16 @@ class _Run:
         if infeasibility_only and verdict in ("certified", "rejected"):
             # a point of the feasibility problem is no optimum: it decides nothing here
             verdict, note = "undecided", "the feasibility problem has a point; the optimum was not reached"
+        mine = self.rays_by.get(backend, 0)
         if self.ray_budget_s is None:
-            more = self.rays_tried < MAX_RAY_PROOFS and (not self.rays_tried or self.ray_s < RAY_PROOF_BUDGET_S)
+            more = mine < MAX_RAY_PROOFS and (not self.rays_tried or self.ray_s < RAY_PROOF_BUDGET_S)
         else:
-            more = self.rays_tried < MAX_RAY_PROOFS and self.ray_s < self.ray_budget_s
+            more = mine < MAX_RAY_PROOFS and self.ray_s < self.ray_budget_s
         if verdict == "infeasible-bounded" and self.rescue and not self.exact and more:
-            self.rays_tried += 1  # an exact proof costs seconds: a few rays per decision, one face
+            # an exact proof costs seconds: a few rays per backend, one face each, within one
+            # CPU budget per decision (another backend's ray often proves where the first's fail)
+            self.rays_tried += 1
+            self.rays_by[backend] = mine + 1
             t_ray = time.process_time()  # CPU time: the same on a busy machine
             proved = _prove_ray(self.problem, sol, cert)
             self.ray_s += time.process_time() - t_ray
@@ -468,6 +475,12 @@ def decide(
                     # an optimisation solve that failed: the feasibility problem can still prove
                     # infeasibility (a Farkas ray does not depend on the objective)
                     plan.append(("feasibility", feasibility_problem(solve_as), None))
+            elif tag == "feasibility" and last_x is not None and np.all(np.isfinite(last_x)) and np.any(last_x):
+                # the optimisation solve failed without a point, its feasibility problem has one:
+                # the optimisation problem preconditioned there (CVXOPT's ZeroDivisionError on
+                # random sampled_euler.thm2, 9 states, decided by the rescaled solve)
+                if solve_as.lmis and not any(t == "rescaled" for t, _, _ in plan):
+                    plan.append(("rescaled", solve_as, last_x))
         if decided:
             break
         if run.best is not None and run.best.verdict == "infeasible-bounded":

@@ -74,6 +74,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "lmic.backoff",
             "lmic.upper_end",
             "lmic.route_upper",
+            "lmic.route_primal",
             "lmic.testing.*",
         ),
     ),

@@ -211,3 +211,16 @@ def test_bad_input():
         compile_theorem("obs_control.thm3_1", _system(d, c_variant="typo", **ok))
     with pytest.raises(DataError, match=r"obs_control\.thm3_2.*missing parameter 'eps'"):
         compile_theorem("obs_control.thm3_2", _system({k: d[k] for k in "ABCDE"}, **ok))
+
+
+def test_thm3_2_another_backends_ray_proves_infeasibility():
+    """Random plant (seed 1000, alpha = eps = 1): the LMIs are infeasible (CVXPY's largest margin
+    is -1.48). On the default route Clarabel's three rays fail the exact proof; the proof
+    attempts were counted per decision, so CVXOPT's rays were never tried. They are now counted
+    per backend (within the decision's CPU budget): CVXOPT's rescaled ray proves it exactly."""
+    d = {k: v for k, v in _random_plant(1000).items() if k not in ("K", "L")}
+    t_ref = _cvx_thm3_2(d, 0.1, 1.0, 1.0)
+    assert t_ref is not None and t_ref < -1e-5
+    r = solve("obs_control.thm3_2", _system(d, gamma=0.1, alpha=1.0, eps=1.0, **SCALARS))
+    assert r.verdict == "infeasible-certified", r.outcome.reason
+    assert r.certificate.exact["proven"] and "exact rational Farkas" in r.certificate.reason

@@ -168,3 +168,46 @@ def test_centred_weight_refined_below_the_target():
     r, value, tol = _solved_with_reference("uir.thm4_1", 1, 12, "clarabel")
     enc = _enclosure_checked(r, value, tol)
     assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
+
+
+def test_primal_end_from_the_backed_off_point_is_improved_to_the_target():
+    """sampled_euler.thm3 at 12 states (seed 0) on Clarabel: every strategy's point fails the
+    certifier (margin -9e-9), so the primal end came from the backed-off point alone, 1.9e-5
+    above the optimum (the restoration ran only without any primal end), and the answer was
+    ``rejected``. A primal end that misses 1e-6 is now improved too (the backed-off point
+    polished toward the solver's, else a restored point), and the restored point, certified by
+    the certifier with the enclosure within the gap, is the answer: certified, the gap meets
+    1e-6, the independent optimum is inside, the audit re-proves both ends."""
+    tid = "sampled_euler.thm3"
+    system = instance(tid, 0, 12)
+    status, value, tol = reference(tid, system)
+    assert status == "optimal" and value is not None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = solve(tid, system, backend="clarabel")  # the default backoff (the theorem derives gains)
+    assert r.backoff is not None and r.backoff["verdict"] == "certified"
+    enc = _enclosure_checked(r, value, tol)
+    assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
+    assert enc["primal"] == "restored point" and r.solution.x.tolist() == enc["restored_x"]
+
+
+def test_failed_optimisation_solve_is_rescaled_at_the_feasibility_point():
+    """sampled_euler.thm2 at 9 states (seed 4) on CVXOPT: the default solve fails without a point
+    (ZeroDivisionError inside CVXOPT) and the feasibility problem's point decided nothing; the
+    optimisation problem is now preconditioned at that point (``rescaled``), whose point holds
+    and whose enclosure proves the optimum: certified, within 1e-6, the optimum inside."""
+    r, value, tol = _solved_with_reference("sampled_euler.thm2", 4, 9, "cvxopt")
+    enc = _enclosure_checked(r, value, tol)
+    assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
+
+
+def test_certified_point_with_margin_gets_a_restored_primal_end():
+    """sampled_euler.thm3 at 12 states (seed 3) on Clarabel: the certified point (rescaled
+    strategy, fixed margin) is 2e-4 above the optimum and the tight re-solves left the primal
+    end 1.9e-6 above the proven lower end. The restoration now also runs on an existing primal
+    end that misses 1e-6, and its last solve keeps the rows (``epsilon > 0``, which vanishes at
+    the optimum) at a larger margin than the solver's accuracy: a restored point 4e-7 above."""
+    r, value, tol = _solved_with_reference("sampled_euler.thm3", 3, 12, "clarabel")
+    enc = _enclosure_checked(r, value, tol)
+    assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
+    assert enc["primal"] == "restored point"
