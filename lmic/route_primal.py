@@ -30,12 +30,13 @@ import numpy as np
 
 from lmic.ir.problem import Problem
 from lmic.options import SolveOptions
+from lmic.route_upper import RESTORE_ROW_MARGIN as _RESTORE_ROW_MARGIN
 from lmic.solution import Solution
 
 __all__ = ["RESTORE_ROW_MARGIN", "better_primal", "decided_by_enclosure"]
 
-#: the rows' relative margin of the last restoration solve of :func:`better_primal`
-RESTORE_ROW_MARGIN = 1e-7
+#: the rows' relative margin of the last restoration solve (:data:`lmic.route_upper.RESTORE_RELS`)
+RESTORE_ROW_MARGIN = _RESTORE_ROW_MARGIN
 
 
 def _primal_of(problem: Problem, enc: dict[str, Any]) -> float | None:
@@ -124,19 +125,13 @@ def better_primal(
 
         if method_of(backend) != "interior point":
             return enc
-    from lmic.backoff import restore
+    from lmic.route_upper import restored_end
 
-    # the smallest tightening that gives a provable point; then the rows at a larger margin (a
-    # scalar row that vanishes at the optimum, sampled_euler.thm3's epsilon > 0, is met by the
-    # solver only to its accuracy: random 12 states, seed 3, Clarabel: 1.9e-6 -> 4e-7)
-    for rel, row_rel in ((1e-10, None), (1e-9, None), (1e-8, None), (1e-10, RESTORE_ROW_MARGIN)):
-        rest = restore(problem, x_solver, backend, options, rel=rel, row_rel=row_rel)
-        pe = primal_end(problem, np.asarray(rest["x"], dtype=float)) if rest["x"] is not None else {}
-        if pe.get("proven"):
-            pol, xp = polished(rest["x"], pe)  # as close to the solver's point as the proof allows
-            if better(pol["value"]):
-                enc = take(pol["value"], "restored point", xp)
-            break
+    # a point strictly inside from a solve with every constraint tightened, as close to the
+    # solver's points as the proof allows (the rows at a larger margin last: RESTORE_RELS)
+    rest = restored_end(problem, x_solver, backend, options, outer=() if tight_x is None else (tight_x,))
+    if rest["proven"] and better(rest["value"]):
+        enc = take(rest["value"], "restored point", rest["x"])
     return enc
 
 
