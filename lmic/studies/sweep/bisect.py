@@ -485,10 +485,12 @@ def _bisect(
                 p.problem = None
     if upper is not None and upper_kind != "infeasible-certified" and not message:
         end_name, rel_op, more = ("upper", ">=", "larger (even infinite)") if is_max else ("lower", "<=", "smaller")
-        message = (
-            f"the bisection's {end_name} end {vv(upper):g} is {upper_kind}, not a proof: the {what} is {rel_op} "
-            f"{vv(lower) if lower is not None else '-'} and may be {more}"
-        )
+        message = f"the bisection's {end_name} end {vv(upper):g} is {upper_kind}, not a proof: the {what} is "
+        if proven and lower is not None:  # a farther point is proved infeasible: the proven bracket
+            lo_v, hi_v = sorted((sign * lower, sign * min(proven)))
+            message += f"in [{lo_v:g}, {hi_v:g}] ({sign * min(proven):g}: infeasible-certified)"
+        else:
+            message += f"{rel_op} {vv(lower) if lower is not None else '-'} and may be {more}"
     lower_v, upper_v = bracket_v(lower, upper)
     return SupResult(
         theorem=plan.id,

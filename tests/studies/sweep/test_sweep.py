@@ -177,8 +177,13 @@ def test_maximize_uio_dt_thm4_1_gamma_max_51_5():
     assert res.lower == pytest.approx(51.5, abs=0.1) and res.upper <= 52.0
     best = next(p for p in res.points if p.value == res.lower)
     _certified_at("uio_dt.thm4_1", f, "gamma", res.lower, best.x)
-    assert res.upper_proven is None and res.upper_kind in ("infeasible-bounded", "undecided")
-    assert "not a proof" in res.message
+    # the bisection's own upper end is only infeasible-bounded (P grows without bound near the
+    # supremum), but a farther point, gamma = 52 (the first expansion), is proved infeasible by an
+    # exact ray: a proven bracket, consistent with the catalogue's 51.5 +- 0.1
+    assert res.upper_kind == "infeasible-bounded" and res.upper_proven == 52.0
+    pp = next(p for p in res.points if p.value == res.upper_proven)
+    assert pp.outcome != "feasible" and pp.proof is not None
+    assert "not a proof" in res.message and "in [51.4375, 52] (52: infeasible-certified)" in res.message
 
 
 def test_maximize_bad_input():
