@@ -82,3 +82,33 @@ def test_a_full_disk_is_one_line_and_exit_1():
     assert proc.returncode == 1
     lines = proc.stderr.strip().splitlines()
     assert lines == ["lmic: error: cannot write the output: No space left on device"]
+
+
+_SHOW_BLAS = (
+    "import atexit, os, sys\n"
+    "atexit.register(lambda: sys.stderr.write('BLAS ' + ' '.join(os.environ.get(v, '-') for v in "
+    "('OPENBLAS_NUM_THREADS', 'OMP_NUM_THREADS', 'MKL_NUM_THREADS')) + '\\n'))\n"
+    "from lmic.cli import _entry\n"
+    "_entry()\n"
+)
+
+
+@pytest.mark.parametrize(
+    ("given", "seen"),
+    [({}, "BLAS 1 1 1"), ({"OPENBLAS_NUM_THREADS": "2"}, "BLAS 2 1 1")],
+)
+def test_the_command_runs_blas_single_threaded_unless_told_otherwise(given, seen):
+    env = _env()
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        env.pop(var, None)
+    env.update(given)
+    proc = subprocess.run(
+        [sys.executable, "-c", _SHOW_BLAS, "solve", str(_sdplib("truss1.dat-s"))],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=ROOT,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr.strip().splitlines()[-1] == seen
