@@ -30,13 +30,9 @@ import numpy as np
 
 from lmic.ir.problem import Problem
 from lmic.options import SolveOptions
-from lmic.route_upper import RESTORE_ROW_MARGIN as _RESTORE_ROW_MARGIN
 from lmic.solution import Solution
 
-__all__ = ["RESTORE_ROW_MARGIN", "better_primal", "decided_by_enclosure"]
-
-#: the rows' relative margin of the last restoration solve (:data:`lmic.route_upper.RESTORE_RELS`)
-RESTORE_ROW_MARGIN = _RESTORE_ROW_MARGIN
+__all__ = ["better_primal", "decided_by_enclosure"]
 
 
 def _primal_of(problem: Problem, enc: dict[str, Any]) -> float | None:
@@ -82,9 +78,8 @@ def better_primal(
     if done(enc) or problem.objective.sense == "feasibility":
         return enc
     x_solver, primal0 = sol.x, _primal_of(problem, enc)
-    if primal0 is not None:
-        if (enc["lower"] if sgn > 0 else enc["upper"]) is None:
-            return enc  # no dual end: no gap to meet
+    if primal0 is not None and (enc["lower"] if sgn > 0 else enc["upper"]) is None:
+        return enc  # no dual end: no gap to meet
 
     def better(value: float) -> bool:
         old = _primal_of(problem, enc)

@@ -213,15 +213,13 @@ def upper_route(
         r = dict(restored_end(problem, sol.x, solver, options, outer=tight), what="point restored near the solver's")
         r["checked_x"] = r["x"] if r["proven"] and passes(np.asarray(r["x"], dtype=float)) else None
         r["checked_value"] = r["value"] if r["checked_x"] is not None else None
-        if r["proven"] and dual_end is not None:
-            r["rel_gap"] = max(0.0, sgn_gap(problem, r["value"], dual_end))
     if boxes and not r["proven"]:  # no dual end to aim at (or the search from it failed): box by box
         r = upper_from_boxes(
             problem, solver, options, x_hint=sol.x, deadline=deadline, check=passes, alternatives=others
         )
         r["what"] = "point proved in a box |x| <= R (lmic.upper_end.upper_from_boxes)"
-        if dual_end is not None and r["proven"]:
-            r["rel_gap"] = max(0.0, sgn_gap(problem, r["value"], dual_end))
+    if boxes and r["proven"] and dual_end is not None:  # either search's gap is to the proven dual end
+        r["rel_gap"] = max(0.0, sgn_gap(problem, r["value"], dual_end))
     step[key] = {k: r.get(k) for k in ("proven", "rel_gap", "reason")}
     step[key]["time_s"] = time.perf_counter() - t0
     sgn = -1.0 if problem.objective.sense == "max" else 1.0

@@ -287,14 +287,8 @@ def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
         alpha = np.linalg.lstsq(X / norms, dfl, rcond=None)[0] / norms
         al = [Fraction(float(v)) / (1 << s_) for v, s_ in zip(alpha, shifts, strict=True)]
         dq = [sum((al[j] * basis[j][k] for j in range(len(basis))), Fraction(0)) for k in range(n)]
-        L = 1
-        for f in dq:
-            L = L * f.denominator // math.gcd(L, f.denominator)
-        g = 0
-        dint = [int(f * L) for f in dq]
-        for v in dint:
-            g = math.gcd(g, v)
-        dint = [v // g for v in dint] if g else dint
+        L = math.lcm(*(f.denominator for f in dq))
+        dint = _primitive([int(f * L) for f in dq])
         Vs: list[list[list[str]]] = []
         for (B, _P), lmi in zip(bases, problem.lmis, strict=True):
             if not B:
@@ -302,22 +296,10 @@ def exact_step(problem: Problem, d_float: np.ndarray) -> dict[str, Any]:
                 continue
             Bi = _short(_int_rows([list(col) for col in zip(*B, strict=True)]))  # integer columns, LLL
             Vs.append([[str(Bi[c][a]) for c in range(len(Bi))] for a in range(lmi.dim)])
-        drop = []
-        if len(problem.linear):
-            Af = sp.csr_matrix(problem.linear.A)
-            for r, kind in enumerate(problem.linear.kinds):
-                lo, hi = Af.indptr[r], Af.indptr[r + 1]
-                s = sum(
-                    (_fr(v) * dint[c - 1] for c, v in zip(Af.indices[lo:hi], Af.data[lo:hi], strict=True) if c),
-                    Fraction(0),
-                )
-                if kind == "ge" and s > 0:
-                    drop.append(r)
-        step = {"d": [str(v) for v in dint], "V": Vs, "drop": drop}
-        chk = verify_step(problem, step)
-        if chk["ok"]:
-            return dict(step, ok=True, reason=chk["reason"])
-        last = f"denominators <= {den}: {chk['reason']}"
+        step = _verified_step(problem, dint, Vs)
+        if step["ok"]:
+            return step
+        last = f"denominators <= {den}: {step['reason']}"
     direct = _direction_step(problem, dfl)  # the direction rounded, its null spaces exact
     if direct.get("ok"):
         return direct
@@ -351,31 +333,35 @@ def _direction_step(problem: Problem, dfl: np.ndarray) -> dict[str, Any]:
         if dq in tried or not any(dq):
             continue
         tried.add(dq)
-        dint = _int_rows([list(dq)])[0]
-        g = 0
-        for v in dint:
-            g = math.gcd(g, v)
-        dint = [v // g for v in dint]
+        dint = _primitive(_int_rows([list(dq)])[0])
         Vs: list[list[list[str]]] = []
         for lmi in problem.lmis:
             W = _block_exact(lmi, dint)
             basis = _nullspace_int(_int_rows(W), lmi.dim) if lmi.dim else []
             basis = _short(basis) if basis else []
             Vs.append([[str(col[a]) for col in basis] for a in range(lmi.dim)])
-        drop = []
-        if len(problem.linear):
-            Af = sp.csr_matrix(problem.linear.A)
-            for r, kind in enumerate(problem.linear.kinds):
-                lo, hi = Af.indptr[r], Af.indptr[r + 1]
-                pairs = zip(Af.indices[lo:hi], Af.data[lo:hi], strict=True)
-                if kind == "ge" and sum((_fr(v) * dint[c - 1] for c, v in pairs if c), Fraction(0)) > 0:
-                    drop.append(r)
-        step = {"d": [str(v) for v in dint], "V": Vs, "drop": drop}
-        chk = verify_step(problem, step)
-        if chk["ok"]:
-            return dict(step, ok=True, reason=chk["reason"])
-        last = f"the direction rounded to denominators <= {den} (its null spaces exact): {chk['reason']}"
+        step = _verified_step(problem, dint, Vs)
+        if step["ok"]:
+            return step
+        last = f"the direction rounded to denominators <= {den} (its null spaces exact): {step['reason']}"
     return {"ok": False, "reason": last}
+
+
+def _verified_step(problem: Problem, dint: list[int], Vs: list[list[list[str]]]) -> dict[str, Any]:
+    """The step of the integer direction ``dint`` and the null-space bases ``Vs``, with the
+    ``ge`` rows it makes slack (``a . d > 0``: dropped), checked by :func:`verify_step`: the
+    step with ``ok`` and the check's ``reason``."""
+    drop = []
+    if len(problem.linear):
+        Af = sp.csr_matrix(problem.linear.A)
+        for r, kind in enumerate(problem.linear.kinds):
+            lo, hi = Af.indptr[r], Af.indptr[r + 1]
+            pairs = zip(Af.indices[lo:hi], Af.data[lo:hi], strict=True)
+            if kind == "ge" and sum((_fr(v) * dint[c - 1] for c, v in pairs if c), Fraction(0)) > 0:
+                drop.append(r)
+    step: dict[str, Any] = {"d": [str(v) for v in dint], "V": Vs, "drop": drop}
+    chk = verify_step(problem, step)
+    return dict(step, ok=bool(chk["ok"]), reason=chk["reason"])
 
 
 def reduce_problem(problem: Problem, step: dict[str, Any]) -> Problem:
