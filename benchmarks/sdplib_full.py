@@ -345,6 +345,9 @@ def main(argv: list[str] | None = None) -> int:
     readme = where / "README.md"
     pub = published_optima(readme.read_text()) if readme.is_file() else {}
     files = sorted(where.glob("*.dat-s"), key=lambda p: (p.stat().st_size, p.name))
+    if not files:
+        print(f"sdplib_full: no .dat-s file in {where}", file=sys.stderr)
+        return 2
     if args.only:
         wanted = [s.strip() for s in args.only.split(",") if s.strip()]
         missing = [w for w in wanted if not (where / f"{w}.dat-s").is_file()]

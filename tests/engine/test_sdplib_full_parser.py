@@ -45,3 +45,11 @@ def test_rounding_interval_and_meets():
     assert not bench.meets((0.5665176, 0.57), "5.66517e-01")
     assert bench.meets((None, 1.0), "5.66517e-01") is None
     assert bench.meets((0.0, 1.0), "primal infeasible") is None
+
+
+def test_a_directory_without_problems_is_one_line_and_exit_2(tmp_path, capsys):
+    assert bench.main(["--dir", str(tmp_path)]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [f"sdplib_full: no .dat-s file in {tmp_path}"]
+    (tmp_path / "a.dat-s").write_text("1\n1\n1\n1.0\n0 1 1 1 1.0\n")
+    assert bench.main(["--dir", str(tmp_path), "--only", "b"]) == 2
+    assert capsys.readouterr().err.strip() == f"sdplib_full: no file b.dat-s in {tmp_path}"
