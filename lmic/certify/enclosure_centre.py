@@ -201,10 +201,14 @@ def centred_bound(
             res, mats, y = combine(theta)
             if res["proven"]:
                 res.update(centring_loss=loss, centring_margin=t, theta=theta)
-                if k and not deadline():
+                if k:
                     # the bound loses about theta * delta: the weights between the last that
                     # failed and this one (geometric thirds, smallest first) may lose less
-                    # (uir.thm4_1 n = 12, seed 1: theta 1e-2 at loss 1e-4 costs 1e-6 of the bound)
+                    # (uir.thm4_1 n = 12, seed 1: theta 1e-2 at loss 1e-4 costs 1e-6 of the bound,
+                    # theta 4.6e-3 4.8e-7). Not subject to the deadline: it is at most two more
+                    # combinations (a repair and a proof each, no solve) after one that proved,
+                    # and a deadline here made the bound depend on the machine's speed (the
+                    # search's 3 s minimum was spent just before it on a slower machine)
                     res, mats, y = _refined(combine, THETAS[k - 1], theta, (res, mats, y))
                     res.update(centring_loss=loss, centring_margin=t)
                 return res, mats, y
