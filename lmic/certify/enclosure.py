@@ -368,9 +368,12 @@ def _better(problem: Problem, value: float, than: float) -> bool:
 #: in 19 s in all; with 1 and 3 the search stopped at the perturbed route, gaps 7.2e-5 and
 #: 8.5e-5 in 10.5 s; with 8 and 10, one of the two)
 BUDGET_FACTOR = 12.0
-#: ... and at least this many seconds (a small problem's whole search, perturbed and centring
-#: solves included, takes about 1.5 s on one busy core: twice that is left for contention)
-BUDGET_MIN_S = 3.0
+#: ... and at least this many seconds of processor time (a small problem's whole search,
+#: perturbed and centring solves included, takes about 1.5 s; with a thin dual interior and an
+#: inaccurate dual, about 8 s: uir.thm4_1 n = 12 seed 4 on CVXOPT needs the centring solve at a
+#: third loss, 8.2 s in all, for a relative gap of 5.6e-7 instead of 1.2e-4 at 3 s; the
+#: route's whole enclosure stays within ``routes.ENCLOSURE_BUDGET_FLOOR_S``)
+BUDGET_MIN_S = 8.0
 
 
 def search_budget(solve_s: float) -> float:
@@ -379,7 +382,7 @@ def search_budget(solve_s: float) -> float:
     costs a repair of the dual or a solve of a problem of the dual's size).
 
     >>> search_budget(0.01), search_budget(5.0)
-    (3.0, 60.0)
+    (8.0, 60.0)
     """
     return max(BUDGET_MIN_S, BUDGET_FACTOR * float(solve_s))
 

@@ -170,6 +170,18 @@ def test_centred_weight_refined_below_the_target():
     assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
 
 
+def test_centred_route_tries_a_larger_loss_when_the_weight_gave_up_too_much():
+    """uir.thm4_1 at 12 states (seed 4) on CVXOPT: its dual interior is thin (margin 4e-9 at a
+    loss of 1e-4 of the dual objective) and CVXOPT's dual is inexact, so the combination proved
+    only at weight 1, giving up the whole loss: a relative gap of 1.2e-4. A proof that gave up
+    more than ``CHEAP_LOSS`` is now compared with the next loss's (margin 3.6e-8 at 1e-3, where a
+    weight of 2e-4 proves), within a dual search of at least ``BUDGET_MIN_S`` seconds."""
+    r, value, tol = _solved_with_reference("uir.thm4_1", 4, 12, "cvxopt")
+    enc = _enclosure_checked(r, value, tol)
+    assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
+    assert enc["dual"]["route"] == "centred" and enc["dual"]["centring_loss"] > 1e-4
+
+
 def test_primal_end_from_the_backed_off_point_is_improved_to_the_target():
     """sampled_euler.thm3 at 12 states (seed 0) on Clarabel: every strategy's point fails the
     certifier (margin -9e-9), so the primal end came from the backed-off point alone, 1.9e-5
