@@ -25,9 +25,9 @@ The dual problem itself is solved, on the caller's backend, for the *largest int
 (1 - theta) u_0 + theta u_c`` with the solver's (projected) dual ``u_0`` has every eigenvalue
 above about ``theta t`` while losing only ``theta delta`` of objective. The smallest ``theta``
 that the rigorous proof (:func:`lmic.certify.enclosure_float.prove_float`) accepts, after the
-repair of :mod:`lmic.certify.enclosure_repair`, gives the bound. The losses are tried smallest
-first; a proof that gave up more than :data:`CHEAP_LOSS` is compared with the next loss's,
-whose wider interior may prove at a smaller weight, and the better bound is kept. Nothing about
+repair of :mod:`lmic.certify.enclosure_repair`, gives the bound. The losses are tried in the
+order of :data:`LOSSES`; a proof that gave up more than :data:`CHEAP_LOSS` is compared with the
+other losses' (a wider interior may prove at a smaller weight), and the best bound is kept. Nothing about
 ``u_c`` is trusted: the solver's point is only a candidate, the proof decides.
 
 Where the interior is thinner than the floating-point resolution (the bounded-real lemma from
@@ -67,8 +67,10 @@ _Proof = tuple[dict[str, Any], list[np.ndarray], np.ndarray]
 
 __all__ = ["CHEAP_LOSS", "LOSSES", "THETAS", "centring_problem", "centred_bound"]
 
-#: relative losses ``delta / max(1, |L_0|)`` of dual objective tried, smallest first
-LOSSES = (1e-6, 1e-4, 1e-3, 1e-2)
+#: relative losses ``delta / max(1, |L_0|)`` of dual objective tried, in this order: 1e-4
+#: first (its interior suffices at a weight of 1e-4, a loss of 1e-8, wherever 1e-6's does), then
+#: wider interiors, then 1e-6 for a proof in hand that gave up more than :data:`CHEAP_LOSS`
+LOSSES = (1e-4, 1e-3, 1e-2, 1e-6)
 #: weights ``theta`` of the centred point in the combination, smallest first
 THETAS = (1e-4, 1e-3, 1e-2, 0.03, 0.1, 0.3, 1.0)
 #: a proof that gave up at most this relative share ``theta * delta`` of the dual objective is
@@ -194,7 +196,7 @@ def centred_bound(
         # a proof at loss delta and weight theta gives up about theta * delta of the bound: a
         # larger loss pays only if its smallest weight could give up less
         if proved is not None and THETAS[0] * loss >= _given_up(proved[0]):
-            break
+            continue
         if deadline():
             if proved is None:
                 out["reason"] += "; time budget spent"
