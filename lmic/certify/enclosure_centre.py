@@ -26,9 +26,10 @@ The dual problem itself is solved, on the caller's backend, for the *largest int
 above about ``theta t`` while losing only ``theta delta`` of objective. The smallest ``theta``
 that the rigorous proof (:func:`lmic.certify.enclosure_float.prove_float`) accepts, after the
 repair of :mod:`lmic.certify.enclosure_repair`, gives the bound. The losses are tried in the
-order of :data:`LOSSES`; a proof that gave up more than :data:`CHEAP_LOSS` is compared with the
-other losses' (a wider interior may prove at a smaller weight), and the best bound is kept. Nothing about
-``u_c`` is trusted: the solver's point is only a candidate, the proof decides.
+order of :data:`LOSSES`; a proof that gave up more than :data:`CHEAP_LOSS` is compared with
+the other losses' (a wider interior may prove at a smaller weight), and the best bound is
+kept. Nothing about ``u_c`` is trusted: the solver's point is only a candidate, the proof
+decides.
 
 Where the interior is thinner than the floating-point resolution (the bounded-real lemma from
 about 15 states), no candidate proves: :mod:`lmic.certify.enclosure_face` proves such problems
@@ -74,7 +75,7 @@ LOSSES = (1e-4, 1e-3, 1e-2, 1e-6)
 #: weights ``theta`` of the centred point in the combination, smallest first
 THETAS = (1e-4, 1e-3, 1e-2, 0.03, 0.1, 0.3, 1.0)
 #: a proof that gave up at most this relative share ``theta * delta`` of the dual objective is
-#: kept; one that gave up more is compared with the next loss's (a larger loss has a wider
+#: kept; one that gave up more is compared with the other losses' (a larger loss has a wider
 #: interior, so a smaller weight may prove: uir.thm4_1 n = 12 seed 4 on CVXOPT proved only at
 #: theta 1 at loss 1e-4, a relative gap of 1.2e-4)
 CHEAP_LOSS = 1e-7
