@@ -45,7 +45,7 @@ import numpy as np
 from lmic.certify.enclosure import GAP_TARGET
 from lmic.ir.problem import Problem
 from lmic.outcome import Outcome, rank
-from lmic.route_escalation import RouteClock, gap_note, seconds_left, tighter
+from lmic.route_escalation import RouteClock, gap_note, tighter
 from lmic.route_rule import (
     CHEAP_ESCALATION_S,
     GAP_ESCALATION_FACTOR,
@@ -54,6 +54,7 @@ from lmic.route_rule import (
     gap_escalates,
     ray_proof_s,
 )
+from lmic.route_tighten import tighten
 from lmic.route_unbounded import unbounded_checked as _unbounded_checked
 from lmic.route_unbounded import unbounded_outcome
 from lmic.route_upper import upper_route
@@ -190,8 +191,10 @@ def enclosure_of(
     ``None`` for a feasibility problem, or without a certificate or a solution to work from. A
     degenerate dual is retried on a perturbed problem, then on a centred dual point (the dual
     problem solved for the largest interior margin), both on ``backend``; a gap above
-    :data:`lmic.certify.enclosure.GAP_TARGET` on an interior-point backend gets one re-solve at
-    :data:`TIGHT_TOLS` (:func:`tighten`). The whole enclosure has
+    :data:`lmic.certify.enclosure.GAP_TARGET` on an interior-point backend gets re-solves at
+    :data:`lmic.route_tighten.TIGHT_TOLS`, then one cross re-solve on another interior point
+    when the backend could not go tighter (:func:`lmic.route_tighten.tighten`). The whole
+    enclosure has
     ``budget_s`` seconds (default :func:`enclosure_budget` of the solve's time): no step starts
     after it, the tight re-solve only when the rest of the budget can pay for it, and a budget
     spent is recorded (``budget``), never turned into a bound. The budget counts processor time
@@ -220,17 +223,24 @@ def enclosure_of(
     if getattr(cert, "verdict", None) == "certified":
         x = np.asarray(cert.x, dtype=float) if getattr(cert, "x", None) is not None else sol.x
 
-    def resolve(perturbed: Problem) -> dict[str, Any] | None:
-        if deadline() < solve_s:
-            return None  # the re-solve would not fit in the budget
-        other = _solve_on(backend, perturbed, options)
-        return other.duals if other is not None and other.status in ("optimal", "inaccurate") else None
+    def closures(name: Any, opts: Any = options) -> tuple[Any, Any]:
+        """The enclosure's re-solves (perturbed problems, centring problems) on ``name``."""
 
-    def solve_point(other_problem: Problem) -> np.ndarray | None:
-        if deadline() < solve_s:
-            return None
-        other = _solve_on(backend, other_problem, options)
-        return other.x if other is not None and other.status in ("optimal", "inaccurate") else None
+        def resolve(perturbed: Problem) -> dict[str, Any] | None:
+            if deadline() < solve_s:
+                return None  # the re-solve would not fit in the budget
+            other = _solve_on(name, perturbed, opts)
+            return other.duals if other is not None and other.status in ("optimal", "inaccurate") else None
+
+        def solve_point(other_problem: Problem) -> np.ndarray | None:
+            if deadline() < solve_s:
+                return None
+            other = _solve_on(name, other_problem, opts)
+            return other.x if other is not None and other.status in ("optimal", "inaccurate") else None
+
+        return resolve, solve_point
+
+    resolve, solve_point = closures(backend)
 
     enc = enclosure(
         problem,
@@ -254,137 +264,13 @@ def enclosure_of(
         deadline=deadline,
         solve_s=solve_s,
         target=target,
+        closures=lambda name: closures(name, None),
     )
     spent = clock.elapsed()
     enc["budget"] = {"seconds": budget, "used": spent, "spent": spent > budget}
     if enc["budget"]["spent"] and enc.get("rel_gap") is None:
         enc["reason"] = f"{enc.get('reason')}; enclosure time budget {budget:.3g} s spent"
     return enc, spent
-
-
-def tighten(
-    problem: Problem,
-    enc: dict[str, Any],
-    x: Any,
-    exact: bool,
-    backend: Any,
-    options: Any,
-    resolve: Any,
-    solve_point: Any,
-    deadline: Any = None,
-    solve_s: float = 0.0,
-    target: float | None = None,
-) -> dict[str, Any]:
-    """A gap above ``target`` (default :data:`lmic.certify.enclosure.GAP_TARGET`) on an interior-point backend:
-    re-solves at each of :data:`TIGHT_TOLS` below the solve's tolerance, loosest first, until
-    the gap meets the target, and the better proven end of each.
-
-    When the tight point's primal end is met only to round-off, the end comes from a point
-    polished toward it (``restored point``); without any proven end there, ``tight_x`` records
-    the tight point for the restoration of :func:`lmic.api.solve`. With ``deadline`` (a
-    :func:`time.perf_counter` value, or a callable giving the seconds left), the re-solve runs
-    only when about twice ``solve_s`` (the first solve's time) is left, and its enclosure gets
-    what is left.
-    """
-    from dataclasses import replace
-
-    from lmic.certify.enclosure import GAP_TARGET
-    from lmic.options import SolveOptions
-
-    goal = GAP_TARGET if target is None else float(target)
-    gap = enc.get("rel_gap")
-    label = str(getattr(backend, "name", backend) or "")
-    if (gap is not None and gap <= goal) or "scs" in label.lower():
-        return enc
-    key = "upper" if problem.objective.sense == "min" else "lower"
-    if gap is None and enc.get(key) is not None:
-        # the primal end is proven, the dual end not (the dual search tried its perturbed and centred routes): a
-        # tighter solve puts the dual nearer its cone's boundary (BRL n = 20: twice the time, nothing proved)
-        return enc
-    base_tol = options.tol if options is not None else SolveOptions().tol
-    out = enc
-    for tol in [t for t in TIGHT_TOLS if t < base_tol]:
-        if deadline is not None and seconds_left(deadline) < 2.0 * solve_s:
-            break  # a tight re-solve (typically slower than the first) would not fit the budget
-        # the strict margin shrinks with the tolerance (strict.py keeps delta >= 10 tol): at the default 1e-7
-        # the primal end of a problem whose multipliers have trace ~300 stays 3e-5 above the optimum
-        base = options if options is not None else SolveOptions()
-        tight = replace(base, tol=tol, margin=min(base.margin, 10.0 * tol))
-        before = out
-        out = _tighten_once(problem, out, x, exact, backend, tight, resolve, solve_point, deadline, key)
-        if out.get("rel_gap") is not None and out["rel_gap"] <= goal:
-            break
-        if out is not before and _no_progress(before, out):
-            # a tight solve that ran and did not halve the gap: the gap is not the solver's
-            # tolerance (SDPLIB qap: a primal end limited by the problem), a tighter one will not
-            break
-    return out
-
-
-def _no_progress(before: dict[str, Any], after: dict[str, Any]) -> bool:
-    """Whether a re-solve's enclosure ``after`` failed to halve the relative gap of ``before``
-    (both gaps known).
-
-    >>> _no_progress({"rel_gap": 1e-4}, {"rel_gap": 0.9e-4}), _no_progress({"rel_gap": 1e-4}, {"rel_gap": 1e-6})
-    (True, False)
-    """
-    g0, g1 = before.get("rel_gap"), after.get("rel_gap")
-    return g0 is not None and g1 is not None and g1 > 0.5 * g0
-
-
-#: the tolerances of :func:`tighten`'s re-solves, loosest first: Clarabel stops at
-#: ``AlmostSolved`` at 1e-10 on SDPLIB control3 where 1e-9 closes the gap (2.1e-6 -> 3e-7)
-TIGHT_TOLS = (1e-9, 1e-10)
-
-
-def _tighten_once(
-    problem: Problem,
-    enc: dict[str, Any],
-    x: Any,
-    exact: bool,
-    backend: Any,
-    tight: Any,
-    resolve: Any,
-    solve_point: Any,
-    deadline: Any,
-    key: str,
-) -> dict[str, Any]:
-    """One re-solve of :func:`tighten` at ``tight.tol`` and the better proven end of each."""
-    from lmic.certify.enclosure import best_of, enclosure, polish_primal, with_primal
-    from lmic.errors import LmicError
-    from lmic.policy import decide
-
-    try:
-        # the policy's strategies on this backend (an AlmostSolved solve is re-tried preconditioned
-        # at its point: Clarabel at 1e-9 on SDPLIB control3)
-        left = None if deadline is None else max(0.0, seconds_left(deadline))
-        sol2 = decide(problem, backend, tight, rescue=False, budget_s=left).solution  # strategies within the budget
-    except LmicError:
-        return enc
-    if sol2 is None or sol2.status not in ("optimal", "inaccurate") or sol2.x is None or not sol2.duals:
-        return enc
-    left = None if deadline is None else max(0.0, seconds_left(deadline))
-    enc2 = enclosure(
-        problem,
-        sol2.duals,
-        sol2.x,
-        exact=exact,
-        resolve=resolve,
-        solve_point=solve_point,
-        solve_s=float(getattr(sol2, "solve_s", 0.0) or 0.0),
-        budget_s=left,
-    )
-    inner = enc.get("restored_x") if enc.get("primal") == "restored point" else x
-    if enc2.get(key) is None and enc.get(key) is not None and inner is not None:
-        # the tight point is met only to round-off: as close to it as the proof allows
-        pol = polish_primal(problem, np.asarray(inner, dtype=float), np.asarray(sol2.x, dtype=float))
-        if pol["proven"]:
-            enc2 = dict(with_primal(enc2, pol["value"], "restored point"), restored_x=pol["x"])
-            return best_of(enc, enc2, pol["x"])
-    out = best_of(enc, enc2, sol2.x)
-    if out.get(key) is None:
-        out["tight_x"] = np.asarray(sol2.x, dtype=float).tolist()  # the restoration's target (solve())
-    return out
 
 
 def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, exact: bool = False) -> RouteResult:

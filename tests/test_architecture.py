@@ -75,6 +75,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "lmic.upper_end",
             "lmic.route_upper",
             "lmic.route_primal",
+            "lmic.route_tighten",
             "lmic.testing.*",
         ),
     ),

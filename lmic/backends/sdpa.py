@@ -16,7 +16,7 @@ The phase value sdpa-python reports refers to the SeDuMi *primal* (the IR's dual
 problem is unbounded. SDPA works in double precision and stalls ("primal < dual") at relative
 gaps of a few 1e-7, so its gap tolerance is floored at :data:`TOL_FLOOR` (``pdFEAS``, a point
 short of the gap tolerance, is ``inaccurate``), except for a tolerance at or below
-:data:`TIGHT_TOL`: the tight re-solves of an enclosure (:func:`lmic.routes.tighten`), whose
+:data:`TIGHT_TOL`: the tight re-solves of an enclosure (:func:`lmic.route_tighten.tighten`), whose
 point and dual are used even when SDPA calls them inexact. Where SDPA's dual itself stops
 about 1e-6 (relative) short of the optimum, the enclosure's gap stays there: on the random
 instances of ``benchmarks/theorem_enclosures.py`` at 9 and 12 states, up to 4e-5 on
@@ -56,7 +56,7 @@ __all__ = ["SDPABackend", "sdpa_data", "TOL_FLOOR", "TIGHT_TOL"]
 #: SDPA's tolerances are not set below this (its double-precision limit) ...
 TOL_FLOOR = 1e-6
 #: ... unless the tolerance asked is at most this: a tight re-solve of an enclosure
-#: (:data:`lmic.routes.TIGHT_TOLS`), passed through. Random ``delay_b.thm4_1`` n = 10 (seed 1):
+#: (:data:`lmic.route_tighten.TIGHT_TOLS`), passed through. Random ``delay_b.thm4_1`` n = 10 (seed 1):
 #: epsilonStar 1e-6 (the floor) gives an enclosure of relative gap 1.2e-6 at any tolerance
 #: asked, 1e-9 passed through 7.2e-7 (SDPA stops at ``pdFEAS``, its point and dual still prove
 #: both ends)

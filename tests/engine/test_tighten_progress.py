@@ -1,4 +1,4 @@
-"""The tight re-solves of lmic.routes.tighten stop when one ran without halving the gap: an
+"""The tight re-solves of lmic.route_tighten.tighten stop when one ran without halving the gap: an
 infimum that is not attained (``inf 1e4 x1`` s.t. ``[[x1, 1], [1, x2]] >= 0``, value 0, the
 points go to infinity) has a gap limited by the problem, not by the solver's tolerance."""
 
@@ -8,7 +8,7 @@ import numpy as np
 import scipy.sparse as sp
 
 import lmic.api
-import lmic.routes as routes
+import lmic.route_tighten as route_tighten
 from lmic.certify import certify
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 
@@ -26,15 +26,15 @@ def _unattained() -> Problem:
 def test_no_second_tight_solve_without_progress(monkeypatch):
     p = _unattained()
     seen = []
-    real = routes._tighten_once
+    real = route_tighten._tighten_once
 
     def spy(*args, **kwargs):
         before = args[1]
-        out = real(*args, **kwargs)
+        out, status = real(*args, **kwargs)
         seen.append((before.get("rel_gap"), out.get("rel_gap"), out is before))
-        return out
+        return out, status
 
-    monkeypatch.setattr(routes, "_tighten_once", spy)
+    monkeypatch.setattr(route_tighten, "_tighten_once", spy)
     r = lmic.api.solve(p, backend="clarabel", backoff=0)
     assert certify(p, r.solution).verdict == "certified"
     enc = r.enclosure
@@ -46,6 +46,6 @@ def test_no_second_tight_solve_without_progress(monkeypatch):
 
 
 def test_no_progress_rule():
-    assert routes._no_progress({"rel_gap": 2e-6}, {"rel_gap": 1.5e-6})
-    assert not routes._no_progress({"rel_gap": 2e-6}, {"rel_gap": 0.5e-6})
-    assert not routes._no_progress({"rel_gap": None}, {"rel_gap": 1e-6})
+    assert route_tighten._no_progress({"rel_gap": 2e-6}, {"rel_gap": 1.5e-6})
+    assert not route_tighten._no_progress({"rel_gap": 2e-6}, {"rel_gap": 0.5e-6})
+    assert not route_tighten._no_progress({"rel_gap": None}, {"rel_gap": 1e-6})

@@ -182,6 +182,19 @@ def test_centred_route_tries_a_larger_loss_when_the_weight_gave_up_too_much():
     assert enc["dual"]["route"] == "centred" and enc["dual"]["centring_loss"] > 1e-4
 
 
+def test_sdpa_short_of_its_tolerance_is_crossed_to_another_interior_point():
+    """uir.thm4_1 at 12 states (seed 2) on SDPA: SDPA's tight re-solve stops at ``pdFEAS`` (its
+    dual objective 1.3e-5 below the optimum), so the enclosure stopped at a relative gap of
+    1.3e-5. One cross re-solve on Clarabel, whose point and dual lmic proves like any other,
+    narrows it below 1e-6; the record names it, and the answer stays SDPA's."""
+    r, value, tol = _solved_with_reference("uir.thm4_1", 2, 12, "sdpa")
+    enc = _enclosure_checked(r, value, tol)
+    assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
+    assert enc["cross"]["backend"] == "clarabel" and enc["cross"]["rel_gap_before"] > 1e-5
+    assert "by a re-solve on clarabel" in enc["reason"]
+    assert r.backend == "sdpa"
+
+
 def test_primal_end_from_the_backed_off_point_is_improved_to_the_target():
     """sampled_euler.thm3 at 12 states (seed 0) on Clarabel: every strategy's point fails the
     certifier (margin -9e-9), so the primal end came from the backed-off point alone, 1.9e-5
