@@ -1,4 +1,4 @@
-"""The tight re-solves of an enclosure whose gap misses the target, and the cross re-solve.
+"""The tight re-solves of an enclosure whose gap misses the target, and the cross re-solves.
 
 :func:`tighten` runs after the first enclosure of an optimisation answer
 (:func:`lmic.routes.enclosure_of`) when its relative gap is above the target
@@ -9,13 +9,14 @@
    proved on its own and the better proven end of each is kept
    (:func:`lmic.certify.enclosure.best_of`); a re-solve that did not halve the gap ends the
    ladder (the gap is then not the tolerance's);
-2. **a cross re-solve** on another interior-point backend (:data:`CROSS_BACKENDS`) when the
-   gap still misses the target *because the backend could not go tighter*: a tight re-solve
-   ended without reaching its tolerance (SDPA's ``pdFEAS``: status ``inaccurate``) or with no
-   point. The cross re-solve runs at the first tight tolerance, and its enclosure's own
+2. **cross re-solves** on the other interior-point backends (:data:`CROSS_BACKENDS`, in
+   order, until the gap meets the target) when the gap still misses the target *because the
+   backend could not go tighter*: a tight re-solve ended without reaching its tolerance
+   (SDPA's ``pdFEAS``: status ``inaccurate``) or with no point. A cross re-solve runs at the
+   first tight tolerance, and its enclosure's own
    re-solves (perturbed and centring problems) run on that backend too. Its point and dual are
    candidates like any other: lmic proves both ends (the primal end at the point, the dual end
-   by the rigorous bound), and the record names the backend (``cross``). The answer's point,
+   by the rigorous bound), and the record names the backends (``cross``). The answer's point,
    status and gains stay the chosen backend's.
 
 Every step runs only when the enclosure's budget has about twice the first solve's time left.
@@ -42,8 +43,8 @@ __all__ = ["TIGHT_TOLS", "CROSS_BACKENDS", "tighten"]
 #: the tolerances of :func:`tighten`'s re-solves, loosest first: Clarabel stops at
 #: ``AlmostSolved`` at 1e-10 on SDPLIB control3 where 1e-9 closes the gap (2.1e-6 -> 3e-7)
 TIGHT_TOLS = (1e-9, 1e-10)
-#: the interior-point backends a cross re-solve may use, in this order (the first that is not
-#: the answer's backend, nor the solver a modelling-layer backend wraps)
+#: the interior-point backends the cross re-solves may use, in this order (not the answer's
+#: backend, nor the solver a modelling-layer backend wraps)
 CROSS_BACKENDS = ("clarabel", "cvxopt", "sdpa")
 
 
@@ -62,7 +63,7 @@ def tighten(
     closures: Callable[[str], tuple[Any, Any]] | None = None,
 ) -> dict[str, Any]:
     """A gap above ``target`` (default :data:`lmic.certify.enclosure.GAP_TARGET`) on an
-    interior-point backend: the tight re-solves, then the cross re-solve (module docstring).
+    interior-point backend: the tight re-solves, then the cross re-solves (module docstring).
 
     When the tight point's primal end is met only to round-off, the end comes from a point
     polished toward it (``restored point``); without any proven end there, ``tight_x`` records
@@ -70,7 +71,7 @@ def tighten(
     :func:`time.perf_counter` value, or a callable giving the seconds left), a re-solve runs
     only when about twice ``solve_s`` (the first solve's time) is left, and its enclosure gets
     what is left. ``closures(name)`` gives ``(resolve, solve_point)`` on backend ``name`` for
-    the cross re-solve's enclosure; without it there is no cross re-solve.
+    the cross re-solves' enclosures; without it there is none.
 
     >>> tighten(None, {"rel_gap": 1e-8}, None, False, "clarabel", None, None, None)
     {'rel_gap': 1e-08}
@@ -108,6 +109,7 @@ def tighten(
             break
     if not stuck or closures is None:
         return out
+    pre = out.get("rel_gap")  # the gap the backend itself reached
     for other in _cross_candidates(label):
         if deadline is not None and seconds_left(deadline) < 2.0 * solve_s:
             break
@@ -119,11 +121,13 @@ def tighten(
         before = out
         out, _ = _tighten_once(problem, out, x, exact, other, cross, res, pts, deadline, key)
         if out is not before and _narrowed(before, out):
-            g = before.get("rel_gap")
-            out = dict(out, cross={"backend": other, "rel_gap_before": g})
-            was = f" from {g:.2g}" if g is not None else ""
-            out["reason"] = f"{out.get('reason')}; narrowed{was} by a re-solve on {other}"
-        break  # one cross re-solve: the first other backend
+            by = [*out.get("cross", {}).get("backends", []), other]
+            out = dict(out, cross={"backend": other, "backends": by, "rel_gap_before": pre})
+            was = f" from {pre:.2g}" if pre is not None else ""
+            out["reason"] = f"{out.get('reason')}; narrowed{was} by re-solves on {', '.join(by)}"
+        if _met(out, goal):
+            break  # else the next other backend (sampled_euler.thm2 n = 12 seed 2 on SDPA:
+            # Clarabel's cross re-solve narrowed 4.3e-5 to 1.2e-6)
     return out
 
 

@@ -192,7 +192,7 @@ def enclosure_of(
     degenerate dual is retried on a perturbed problem, then on a centred dual point (the dual
     problem solved for the largest interior margin), both on ``backend``; a gap above
     :data:`lmic.certify.enclosure.GAP_TARGET` on an interior-point backend gets re-solves at
-    :data:`lmic.route_tighten.TIGHT_TOLS`, then one cross re-solve on another interior point
+    :data:`lmic.route_tighten.TIGHT_TOLS`, then cross re-solves on the other interior points
     when the backend could not go tighter (:func:`lmic.route_tighten.tighten`). The whole
     enclosure has
     ``budget_s`` seconds (default :func:`enclosure_budget` of the solve's time): no step starts
