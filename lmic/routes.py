@@ -194,8 +194,7 @@ def enclosure_of(
     :data:`lmic.certify.enclosure.GAP_TARGET` on an interior-point backend gets re-solves at
     :data:`lmic.route_tighten.TIGHT_TOLS`, then cross re-solves on the other interior points
     when the backend could not go tighter (:func:`lmic.route_tighten.tighten`). The whole
-    enclosure has
-    ``budget_s`` seconds (default :func:`enclosure_budget` of the solve's time): no step starts
+    enclosure has ``budget_s`` seconds (default :func:`enclosure_budget` of the solve's time): no step starts
     after it, the tight re-solve only when the rest of the budget can pay for it, and a budget
     spent is recorded (``budget``), never turned into a bound. The budget counts processor time
     (:class:`lmic.route_escalation.RouteClock`): a loaded machine does not spend it.
