@@ -149,8 +149,10 @@ GAP_ESCALATION_FLOOR_S = 20.0
 #: next interior point while the route has run less than this: a second solve of a moderate
 #: problem (SDPA's relative gap stops near 1e-6 on the shipped uncertain_dt examples, Clarabel's
 #: 3e-8; random ``delay_b.thm4_1`` n = 8: SDPA 2.5e-6 after 2.9 s, then CVXOPT 7.0e-9, 9.0 s in
-#: all; with 2 s here the route stopped at 2.5e-6)
-CHEAP_ESCALATION_S = 10.0
+#: all; with 2 s here the route stopped at 2.5e-6); as ``routes.ENCLOSURE_BUDGET_FLOOR_S``
+#: (SDPLIB truss7: Clarabel's step takes 8-11 s to 2.2e-6, CVXOPT's next 1.5 s to 9.2e-9; with
+#: 10 here the route stopped at 2.2e-6 in some runs)
+CHEAP_ESCALATION_S = 20.0
 
 
 def ray_proof_s(attempts: list[Any]) -> float:
