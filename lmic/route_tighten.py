@@ -90,14 +90,16 @@ def tighten(
         # tighter solve puts the dual nearer its cone's boundary (BRL n = 20: twice the time, nothing proved)
         return enc
     base = options if options is not None else SolveOptions()
+
+    def fits() -> bool:  # a re-solve (typically slower than the first) fits the budget
+        return deadline is None or seconds_left(deadline) >= 2.0 * solve_s
+
     out = enc
     stuck = False  # whether a tight re-solve ended short of its tolerance
     for tol in [t for t in TIGHT_TOLS if t < base.tol]:
-        if deadline is not None and seconds_left(deadline) < 2.0 * solve_s:
-            break  # a tight re-solve (typically slower than the first) would not fit the budget
-        # the strict margin shrinks with the tolerance (strict.py keeps delta >= 10 tol): at the default 1e-7
-        # the primal end of a problem whose multipliers have trace ~300 stays 3e-5 above the optimum
-        tight = replace(base, tol=tol, margin=min(base.margin, 10.0 * tol))
+        if not fits():
+            break
+        tight = _tight(base, tol)
         before = out
         out, status = _tighten_once(problem, out, x, exact, backend, tight, resolve, solve_point, deadline, key)
         stuck = stuck or status != "optimal"
@@ -111,12 +113,11 @@ def tighten(
         return out
     pre = out.get("rel_gap")  # the gap the backend itself reached
     for other in _cross_candidates(label):
-        if deadline is not None and seconds_left(deadline) < 2.0 * solve_s:
+        if not fits():
             break
         # at the first tight tolerance (a dual near the optimum is what the proof needs); the
         # user's solver-specific settings (``extra``) are not the other backend's
-        tol = min(base.tol, TIGHT_TOLS[0])
-        cross = replace(base, tol=tol, margin=min(base.margin, 10.0 * tol), extra={})
+        cross = replace(_tight(base, min(base.tol, TIGHT_TOLS[0])), extra={})
         res, pts = closures(other)
         before = out
         out, _ = _tighten_once(problem, out, x, exact, other, cross, res, pts, deadline, key)
@@ -129,6 +130,13 @@ def tighten(
             break  # else the next other backend (sampled_euler.thm2 n = 12 seed 2 on SDPA:
             # Clarabel's cross re-solve narrowed 4.3e-5 to 1.2e-6)
     return out
+
+
+def _tight(base: Any, tol: float) -> Any:
+    """``base`` at tolerance ``tol``. The strict margin shrinks with it (strict.py keeps
+    ``delta >= 10 tol``): at the default 1e-7 the primal end of a problem whose multipliers have
+    trace ~300 stays 3e-5 above the optimum."""
+    return replace(base, tol=tol, margin=min(base.margin, 10.0 * tol))
 
 
 def _narrowed(before: dict[str, Any], after: dict[str, Any]) -> bool:

@@ -222,7 +222,7 @@ def enclosure_of(
     if getattr(cert, "verdict", None) == "certified":
         x = np.asarray(cert.x, dtype=float) if getattr(cert, "x", None) is not None else sol.x
 
-    def closures(name: Any, opts: Any = options) -> tuple[Any, Any]:
+    def closures(name: Any, opts: Any) -> tuple[Any, Any]:
         """The enclosure's re-solves (perturbed problems, centring problems) on ``name``."""
 
         def resolve(perturbed: Problem) -> dict[str, Any] | None:
@@ -239,7 +239,7 @@ def enclosure_of(
 
         return resolve, solve_point
 
-    resolve, solve_point = closures(backend)
+    resolve, solve_point = closures(backend, options)
 
     enc = enclosure(
         problem,
