@@ -388,6 +388,8 @@ def solve(
     else:
         enc, enclosure_s = _enclosure(problem, sol, cert, exact, used, options)
     tight_x = enc.pop("tight_x", None) if enc is not None else None
+    enc, cut_s = _cut(problem, enc, used, options, exact, solve_s, routed.route)
+    enclosure_s += cut_s
     back = _backoff(problem, enc, backoff, used, options, sol.objective)
     if enc is not None:
         # no rigorous primal end at the solver's point, or one that misses GAP_TARGET: a better
@@ -446,6 +448,31 @@ def _enclosure(
     return enclosure_of(problem, sol, cert, exact, backend, options)
 
 
+def _cut(
+    problem: Problem,
+    enc: dict[str, Any] | None,
+    backend: Any,
+    options: SolveOptions | None,
+    exact: bool,
+    solve_s: float,
+    route: dict[str, Any] | None = None,
+) -> tuple[dict[str, Any] | None, float]:
+    """An enclosure with a primal end and no dual end: the objective-cut search
+    (:mod:`lmic.route_cut`) on the answer's backend; the route's text says what it proved."""
+    from lmic.route_cut import cut_budget, cut_route, wants_cut
+
+    if not wants_cut(problem, enc):
+        return enc, 0.0
+    assert enc is not None
+    t0 = time.perf_counter()
+    enc = cut_route(problem, enc, backend, options or SolveOptions(), exact, cut_budget(solve_s))
+    if route is not None and route.get("text"):
+        steps = enc["cut"]["steps"]
+        ends = f"relative gap {enc['rel_gap']:.2g}" if enc.get("rel_gap") is not None else "no dual end proved"
+        route["text"] = f"{route['text']} => objective cuts ({steps} feasibility problems) -> {ends}"
+    return enc, time.perf_counter() - t0
+
+
 def _backoff(
     problem: Problem,
     enc: dict[str, Any] | None,
@@ -470,7 +497,8 @@ def _backoff(
         value = claimed
     if value is None or not np.isfinite(value):
         return None
-    return backoff(problem, float(value), backend, options, rel=float(rel))
+    given = enc.get("restored_x") if enc.get("cut") else None  # the objective-cut search's point
+    return backoff(problem, float(value), backend, options, rel=float(rel), fallback=given)
 
 
 def _enclosure_summary(enc: dict[str, Any] | None) -> dict[str, Any] | None:

@@ -134,6 +134,7 @@ def backoff(
     rel: float = DEFAULT_BACKOFF,
     all_margins: bool = False,
     margin: float | None = None,
+    fallback: Any = None,
 ) -> dict[str, Any]:
     """Solve the backed-off problem and certify its point against ``problem``.
 
@@ -152,6 +153,11 @@ def backoff(
         inside, which :func:`lmic.certify.enclosure.primal_end` can prove feasible).
     margin : float, optional
         The relative margin (default :data:`MARGIN`).
+    fallback : array_like, optional
+        A point to use when neither the backed-off solve nor the largest-margin one gives a
+        certified point (``method`` ``"given point"``): it must be certified here and within the
+        bound (the objective-cut search's point, :mod:`lmic.route_cut`, near an infimum that is
+        not attained, where the slice is too thin for the solvers).
 
     Returns
     -------
@@ -177,22 +183,23 @@ def backoff(
     out["status"] = sol.status
     other = None
     if sol.x is None:
-        other = _largest_margin(problem, out["bound"], be, options)
+        other = _largest_margin(problem, out["bound"], be, options) or _given(problem, fallback, out["bound"])
         if other is None:
             out.update(verdict="undecided", reason=f"backoff solve ended {sol.status} without a point ({sol.message})")
             out["time_s"] = time.perf_counter() - t0
             return out
         x, mine, cert = other
-        out["method"] = "largest margin"
     else:
         x, mine, cert = _certified(problem, sol)
     if cert.verdict != "certified" and other is None:
         # a slice too thin for the solver's accuracy (a near-singular optimum): its most interior
         # point instead (lmic.upper_end.margin_problem, box ten times the objective's size)
-        other = _largest_margin(problem, out["bound"], be, options)
+        other = _largest_margin(problem, out["bound"], be, options) or _given(problem, fallback, out["bound"])
         if other is not None:
             x, mine, cert = other
-            out["method"] = "largest margin"
+    if other is not None:
+        out["method"] = "largest margin" if mine.backend != "given point" else "given point"
+        out["status"] = mine.status  # the point's own solve ("status" is what lmic audit certifies with)
     d = cert.to_dict()
     out.update(
         verdict=cert.verdict,
@@ -321,6 +328,31 @@ def _largest_margin(problem: Problem, bound: float, backend: Any, options: Any) 
         return None
     x, mine, cert = _certified(problem, sol)
     return (x, mine, cert) if cert.verdict == "certified" else None
+
+
+def _given(problem: Problem, x: Any, bound: float) -> tuple[np.ndarray, Any, Any] | None:
+    """``(x, solution, certificate)`` of a given point when the certifier certifies it (in exact
+    arithmetic where its margins are below the float threshold) and its objective is within
+    ``bound``; else ``None``.
+
+    >>> _given(None, None, 1.0) is None
+    True
+    """
+    from lmic.solution import Solution
+
+    if x is None:
+        return None
+    s = -1.0 if problem.objective.sense == "max" else 1.0
+    from lmic.policy import exact_rescue_point
+
+    given = Solution(status="optimal", x=np.asarray(x, dtype=float), backend="given point")
+    xs, mine, cert = _certified(problem, given)
+    if cert.verdict == "rejected":  # margins below the float threshold: the exact proof decides
+        cert = exact_rescue_point(problem, mine, cert) or cert
+    value = problem.objective.value(xs)
+    if cert.verdict != "certified" or value is None or not s * float(value) <= s * bound:
+        return None
+    return xs, mine, cert
 
 
 def _certified(problem: Problem, sol: Any) -> tuple[np.ndarray, Any, Any]:

@@ -76,6 +76,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "lmic.route_upper",
             "lmic.route_primal",
             "lmic.route_tighten",
+            "lmic.route_cut",
             "lmic.testing.*",
         ),
     ),

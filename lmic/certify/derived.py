@@ -40,6 +40,25 @@ def _finite(v: Any) -> bool:
     return bool(np.all(np.isfinite(np.asarray(v, dtype=float))))
 
 
+def _not_real(v: Any) -> str:
+    """Why a derived value is not a real number ("" when it is): a complex value (the square
+    root of a negative variable at a solver's point, ``1 / sqrt(rho)`` with ``rho < 0``) or a
+    non-numeric one.
+
+    >>> _not_real(2.0), _not_real(np.sqrt(complex(-1.0))), _not_real("x")
+    ('', 'complex value', 'not a number')
+    """
+    try:
+        arr = np.asarray(v)
+    except (TypeError, ValueError):
+        return "not a number"
+    if np.iscomplexobj(arr):
+        return "complex value"
+    if arr.dtype.kind not in "biuf":
+        return "not a number"
+    return ""
+
+
 def environment_report(problem: Problem, x: np.ndarray) -> tuple[dict, list[dict]]:
     """Environment for expression trees and the per-quantity derived report."""
     try:
@@ -63,6 +82,10 @@ def environment_report(problem: Problem, x: np.ndarray) -> tuple[dict, list[dict
             report.append({"name": d.name, "value": None, "ok": False, "error": failed[d.name]})
             continue
         v = env[d.name]
+        why = _not_real(v)
+        if why:
+            report.append({"name": d.name, "value": None, "ok": False, "error": why})
+            continue
         ok = _finite(v)
         report.append({"name": d.name, "value": _value_json(v), "ok": ok, "error": "" if ok else "not finite"})
     return env, report

@@ -407,6 +407,10 @@ def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dic
     >>> r = best_of(a, b, [2.0])
     >>> r["lower"], r["upper"], r["primal"], r["restored_x"], r["gap"]
     (1.0, 2.0, 'restored point', [2.0], 1.0)
+    >>> c = {"sense": "min", "kind": "minimum", "lower": None, "upper": None, "primal": "no certified point",
+    ...      "dual": {"proven": False, "reason": "no dual"}, "reason": "no certified bound"}
+    >>> best_of(c, dict(c, upper=2.0, primal="certified point"), [2.0])["reason"]
+    'minimum: only the upper end is certified; no certified lower end (no dual)'
     """
     out = dict(first)
     sense = first.get("sense")
@@ -446,6 +450,10 @@ def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dic
             if hi >= lo
             else f"inconsistent ends: lower {lo:.10g} > upper {hi:.10g}"
         )
+    elif take_p or take_d:  # one end, now from the other solve: the first's reason is stale
+        have, missing = (pkey, dkey) if out.get(pkey) is not None else (dkey, pkey)
+        why = (out.get("dual") or {}).get("reason") if missing == dkey else "no certified point"
+        out["reason"] = f"{out['kind']}: only the {have} end is certified; no certified {missing} end ({why})"
     return out
 
 
@@ -500,7 +508,9 @@ def describe(record: dict[str, Any] | None) -> list[str]:
         lines = [f"optimal value ({kind}): " + record.get("reason", "no certified bound")]
     dual_end = "lower" if record.get("sense") != "max" else "upper"
     primal_end = "upper" if dual_end == "lower" else "lower"
-    if dual.get("proven"):
+    if dual.get("proven") and dual.get("route") == "objective cut":
+        lines.append(f"  {dual_end} end: {dual.get('reason')} (exact rational arithmetic)")
+    elif dual.get("proven"):
         how = "exact rational arithmetic" if dual.get("method") == "exact" else "rigorous floating-point error bounds"
         if dual.get("route") == "face":
             where = f"the optimal face W = 0 of a Lyapunov-type LMI, rank {dual.get('rank')}" + (
@@ -516,6 +526,13 @@ def describe(record: dict[str, Any] | None) -> list[str]:
     else:
         lines.append(f"  {dual_end} end: no certified dual bound ({dual.get('reason', 'not attempted')})")
     lines.append(f"  {primal_end} end: {record.get('primal', 'no certified point')}")
+    cut = record.get("cut") or {}
+    if cut.get("steps"):
+        proved = sum(1 for s in cut.get("log", []) if str(s.get("decided", "")).startswith(("point (", "infeasible (")))
+        lines.append(
+            f"  objective cuts: {cut['steps']} feasibility problems with the objective bounded, {proved} decided "
+            f"({cut.get('time_s', 0.0):.2f} s)"
+        )
     cond = record.get("conditional") or {}
     if cond.get("value") is not None:
         lines.append(

@@ -377,8 +377,8 @@ def facial_or(
 
 
 def verify_any(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
-    """:func:`verify_facial` for a facial record, else
-    :func:`~lmic.certify.enclosure_dual.verify_dual_bound`.
+    """:func:`verify_facial` for a facial record, :func:`~lmic.certify.enclosure_cut.verify_cut`
+    for an objective cut, else :func:`~lmic.certify.enclosure_dual.verify_dual_bound`.
 
     >>> verify_any(None, {"dual": None, "lower": None})["ok"]
     False
@@ -386,4 +386,8 @@ def verify_any(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
     d = record.get("dual")
     if isinstance(d, dict) and d.get("form") == "facial":
         return verify_facial(problem, record)
+    if record.get("route") == "objective cut":
+        from lmic.certify.enclosure_cut import verify_cut
+
+        return verify_cut(problem, record)
     return verify_dual_bound(problem, record)

@@ -290,8 +290,21 @@ def _uncertain(item: str, d: dict[str, np.ndarray], params: dict[str, Any]) -> t
     return _solve(alpha + e1, cons)
 
 
+#: the fixed margin and the relative resolution of the uio_dt.thm4_1 bisection (catalogue 4.3 and
+#: 11.3: bisection on feasibility at margin 1e-7 gives gamma_max 51.50, published 51.5 +- 0.1)
+UIO_MARGIN = 1e-7
+UIO_RTOL = 2e-3
+
+
 def _uio(d: dict[str, np.ndarray]) -> tuple[str, float | None, float]:
-    """Paper C Theorem 4.1, LMI (25)-(26), catalogue 4.3 (d13, d23 of test_uio_dt)."""
+    """Paper C Theorem 4.1, LMI (25)-(26), catalogue 4.3 (d13, d23 of test_uio_dt).
+
+    ``min rho`` has no attained minimum (P grows without bound near it) and a direct solve stops
+    early, far above it (Clarabel at rho ~ 7e-3 on the example, against 1/51.5^2 = 3.77e-4). The
+    reference is the catalogue's method instead: bisection on ``rho = 1 / gamma^2`` of the
+    feasibility problem of Theorem 3.2, ``M(gamma) <= -margin I`` (Clarabel), a point counting
+    as feasible only when numpy's eigenvalues of ``M`` at it are all negative; the tolerance is
+    the bisection's resolution (relative :data:`UIO_RTOL`) plus the direct solve's own."""
     A, C, D, D1 = d["A"], d["C"], d["D"], d["D1"]
     n, p, q = A.shape[0], C.shape[0], D.shape[1]
     dh = _load("delshad_helpers")
@@ -301,8 +314,37 @@ def _uio(d: dict[str, np.ndarray]) -> tuple[str, float | None, float]:
     Yb, Kb, rho = cp.Variable((n, p)), cp.Variable((n, p)), cp.Variable()
     d13 = A.T @ P + (U @ C @ A).T @ P + (V @ C @ A).T @ Yb.T - C.T @ Kb.T
     d23 = D.T @ P + (U @ C @ D).T @ P + (V @ C @ D).T @ Yb.T
-    M = dh.uio_thm4_1_block(P, d13, d23, rho, n, q)
-    return _solve(rho, [_sym(M) << 0, rho >= 0])
+    M = _sym(dh.uio_thm4_1_block(P, d13, d23, rho, n, q))
+    status, early, _ = _solve(rho, [M << 0, rho >= 0])
+    if early is None:
+        return status, None, float("inf")
+    # feasibility at gamma = 1 / sqrt(rho) in Theorem 3.2's form (its LMI (20), of which (25) is
+    # the Schur complement): the catalogue's bisection, which reproduces Table 2's 51.5
+    g2 = cp.Parameter(nonneg=True)
+    Z = np.zeros
+    M32 = _sym(cp.bmat([[-P + g2 * np.eye(n), Z((n, q)), d13], [Z((q, n)), -np.eye(q), d23], [d13.T, d23.T, -P]]))
+    feas = cp.Problem(cp.Minimize(0), [M32 << -UIO_MARGIN * np.eye(M32.shape[0])])
+
+    def feasible(value: float) -> bool:  # value: rho
+        g2.value = 1.0 / value
+        try:
+            feas.solve(solver="CLARABEL", **REF_SETTINGS)
+        except cp.error.SolverError:
+            return False
+        if feas.status not in ("optimal", "optimal_inaccurate") or P.value is None:
+            return False
+        return bool(np.max(np.linalg.eigvalsh(M32.value)) < 0)
+
+    hi = max(early, 1e-12)
+    if not feasible(hi):
+        hi *= 1.0 + 1e-3
+        if not feasible(hi):
+            return "error", None, float("inf")
+    lo = 0.0
+    while hi - lo > UIO_RTOL * hi:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if feasible(mid) else (mid, hi)
+    return "optimal", 0.5 * (lo + hi), 0.5 * (hi - lo) + REF_TOL * max(1.0, hi)
 
 
 def _uir(item: str, d: dict[str, np.ndarray], params: dict[str, Any]) -> tuple[str, float | None, float]:

@@ -111,6 +111,16 @@ def _recession_direction(problem) -> np.ndarray | None:
 
 
 def test_uio_dt_thm4_1_upper_end_and_degenerate_dual():
+    """The dual of ``min rho`` has no interior point (the optimal set is unbounded: a recession
+    direction of zero objective), so no repaired dual point proves a lower end. On this instance
+    (seed 0, the optimum attained near the solver's point) the objective cuts just below it end
+    with bounded rays only (their exact proofs fail, as the dual's: the face is irrational), so
+    there is still no lower end, never an invented one, and the record says what was tried. The
+    shipped example, whose infimum is not attained, gets both ends from the cuts
+    (``test_uio_dt.test_thm4_1_min_rho_enclosed_by_objective_cuts``). The reference is the
+    catalogue's bisection (``optimisation_instances._uio``)."""
+    from lmic.route_cut import MAX_UNDECIDED
+
     tid = "uio_dt.thm4_1"
     system = instance(tid, 0, 2)
     status, value, tol = reference(tid, system)
@@ -120,9 +130,12 @@ def test_uio_dt_thm4_1_upper_end_and_degenerate_dual():
     assert enc["upper"] is not None and math.isfinite(enc["upper"])
     d = _recession_direction(r.problem)
     assert d is not None and float(np.max(np.abs(d))) > 1e-3
-    # hence no certified lower end (never an invented one), and the record says so
     assert enc["lower"] is None and enc["dual"]["proven"] is False
     assert "no certified lower end" in enc["reason"]
+    assert f"objective cuts: {MAX_UNDECIDED} tried, none proved" in enc["reason"]
+    assert enc["cut"]["steps"] == MAX_UNDECIDED
+    assert all("infeasible-bounded" in step["decided"] for step in enc["cut"]["log"])
+    assert all(step["cut"] < enc["upper"] for step in enc["cut"]["log"])
 
 
 def test_a_rejected_small_margin_point_still_gives_the_upper_end():

@@ -144,6 +144,51 @@ def test_thm4_1_direct_min_rho_stops_early():
     assert r.derived["gamma_max"] == pytest.approx(1 / np.sqrt(r.objective), rel=1e-9)
 
 
+def test_thm4_1_min_rho_enclosed_by_objective_cuts(tmp_path):
+    """``lmic solve`` on the example (min rho, no attained minimum): the solver stops at gamma_max
+    ~ 12, the dual has no provable point, and the objective cuts (lmic.route_cut) prove both
+    ends around Table 2's 51.5 (catalogue 4.3 and 11.3: 51.5 +- 0.1 by bisection): every cut
+    below is an exact Farkas proof, every point above a certified point. The backed-off point is
+    the cuts' point, its gains certified and below 1e4; the certificate file passes ``lmic audit``
+    and a lower end moved above the infimum, or a forged cut, does not."""
+    import json
+
+    from lmic.certify import audit_certificate, write_certificate
+    from lmic.system import load_system
+
+    r = solve("uio_dt.thm4_1", example(EX41))
+    enc = r.enclosure
+    assert r.verdict == "certified" and enc["consistent"]
+    assert enc["dual"]["route"] == "objective cut" and enc["dual"]["method"] == "exact"
+    lo, hi = enc["lower"], enc["upper"]
+    assert lo <= 1 / 51.4**2 and hi >= 1 / 51.6**2  # 51.5 +- 0.1 inside
+    assert hi - lo <= 2e-2 * hi  # gamma_max within 1 % (relative gap 5e-6: rho ~ 3.8e-4 is small)
+    assert r.objective > 10 * hi  # the solver's own point stopped far above
+    b = r.backoff
+    assert b["verdict"] == "certified" and b["method"] == "given point"
+    assert 1 / np.sqrt(hi) - 1e-6 <= b["derived"]["gamma_max"] <= 1 / np.sqrt(lo)
+    for name in ("K", "L", "E", "N", "G"):
+        assert np.linalg.norm(np.atleast_2d(np.asarray(b["derived"][name], dtype=float)), 2) < 1e4
+    path = tmp_path / "uio.json"
+    sysobj = load_system(example(EX41))
+    write_certificate(path, r.problem, r.solution, r.certificate, system=sysobj, enclosure=enc, backoff=b)
+    ok = audit_certificate(path)
+    assert ok.ok and "enclosure" in ok.checked and "backoff" in ok.checked, ok.message
+    doc = json.loads(path.read_text())
+    raised = 1 / 51.3**2  # above the infimum
+    doc["enclosure"]["lower"] = raised
+    doc["enclosure"]["dual"]["lower"] = raised
+    path.write_text(json.dumps(doc))
+    bad = audit_certificate(path)
+    assert not bad.ok and bad.field == "enclosure.dual", bad.message
+    doc["enclosure"]["lower"] = doc["enclosure"]["dual"]["lower"] = lo
+    farkas = doc["enclosure"]["dual"]["cut"]["farkas"]
+    farkas["linear"] = [0.0 for _ in farkas["linear"]]
+    path.write_text(json.dumps(doc))
+    bad = audit_certificate(path)
+    assert not bad.ok and bad.field == "enclosure.dual", bad.message
+
+
 def test_thm4_1_gamma_parameter_bounds_rho():
     prob = compile_theorem("uio_dt.thm4_1", example(EX41), {"gamma": 10.0})
     row = prob.linear.A.toarray()[-1]
