@@ -338,13 +338,12 @@ def _given(problem: Problem, x: Any, bound: float) -> tuple[np.ndarray, Any, Any
     >>> _given(None, None, 1.0) is None
     True
     """
+    from lmic.policy import exact_rescue_point
     from lmic.solution import Solution
 
     if x is None:
         return None
     s = -1.0 if problem.objective.sense == "max" else 1.0
-    from lmic.policy import exact_rescue_point
-
     given = Solution(status="optimal", x=np.asarray(x, dtype=float), backend="given point")
     xs, mine, cert = _certified(problem, given)
     if cert.verdict == "rejected":  # margins below the float threshold: the exact proof decides

@@ -5,7 +5,8 @@ An optimisation answer whose enclosure has a primal end but no dual end (the dua
 rational point near its optimum: an infimum that is not attained, ``uio_dt.thm4_1``, where the
 solver also stops far above the infimum) is decided once more through feasibility problems:
 the problem with the extra row "objective no better than ``r``"
-(:func:`lmic.certify.enclosure_cut.cut_problem`), decided by the policy on the route's backend.
+(:func:`lmic.certify.enclosure_cut.cut_problem`), decided by the policy on the answer's
+backend and on one more interior-point backend per cut (:data:`RAY_BACKENDS`).
 
 * a **certified point** of the cut problem is a point of the problem: its rigorous objective
   (:func:`lmic.certify.enclosure_float.primal_end`, exactly when needed) is a new primal end
@@ -120,7 +121,7 @@ def cut_route(
     enc : dict
         Its enclosure (:func:`lmic.certify.enclosure.enclosure`).
     backend : str or None
-        The route's backend (``None``: the default route of a feasibility problem).
+        The answer's backend (``None``: the policy's default route for each cut problem).
     options : SolveOptions
     exact : bool
     budget_s : float
@@ -129,9 +130,11 @@ def cut_route(
 
     Examples
     --------
-    >>> enc = cut_route(problem, enc, None, SolveOptions(), False, 20.0)   # doctest: +SKIP
-    >>> enc["dual"]["route"], enc["cut"]["steps"]                          # doctest: +SKIP
-    ('objective cut', 9)
+    >>> enc = cut_route(problem, enc, "clarabel", SolveOptions(), False, 10.0)   # doctest: +SKIP
+    >>> enc["dual"]["route"], enc["cut"]["steps"]                                # doctest: +SKIP
+    ('objective cut', 17)
+
+    (``tests/engine/test_route_cut.py`` runs it on ``inf t`` subject to ``[[x, 1], [1, t]] > 0``.)
     """
     from lmic.certify.enclosure_float import primal_end
     from lmic.certify.snap import exact_primal_end
@@ -196,14 +199,14 @@ def _decide_cut(
     order: list[str],
     proved: bool = False,
 ) -> dict[str, Any]:
-    """One cut at ``r`` (minimisation form): the policy on the route's backend and the
-    max-margin reduction on the first of ``order`` (their rays: the cut proved by
-    :func:`lmic.certify.enclosure_cut.prove_cut`, which tries every face threshold).
+    """One cut at ``r`` (minimisation form): the policy on the route's backend and on the first
+    of ``order`` (with the max-margin reduction where the problem is strict); their points are
+    certified by the policy, their rays proved by :func:`lmic.certify.enclosure_cut.prove_cut`.
 
     Returns ``decided`` (what happened), and ``x`` (a certified point of the cut problem) or
     ``record`` (the proven cut), or neither. ``left()`` is the budget's seconds left; the
-    backend that proved moves to the front of ``order``, and once one has (``proved``) its
-    max-margin solve goes first.
+    backend whose ray proved moves to the front of ``order``, and once one has (``proved``) it
+    goes first.
     """
     from lmic.certify.enclosure_cut import cut_problem, prove_cut
     from lmic.errors import LmicError
@@ -211,17 +214,19 @@ def _decide_cut(
     from lmic.reductions.strict import has_strict
 
     cut = cut_problem(problem, r)
-    tries: list[tuple[Any, Any]] = [(backend, options)]
-    if options.strict == "auto" and has_strict(cut):
-        # one max-margin ray a cut, from the first of ``order``: the backend whose ray proved the
-        # last cut, first (its max-margin point, when the cut is feasible, is certified as well;
-        # uio_dt.thm4_1: 16 cuts in 15 s the other way round); before any proof, after the
-        # route's backend, each cut on the next backend (every ray at every cut cost 3 s a cut
-        # on uio_dt.thm4_1 near its infimum, and 30 s an instance where nothing proves)
-        ray = (order[0], replace(options, strict="max-margin"))
-        tries = [ray, *tries] if proved else [*tries, ray]
-        if not proved:
-            order.append(order.pop(0))
+    # the other backend's ray: its max-margin reduction where the problem is strict, else its
+    # own. One a cut, from the first of ``order``: the backend whose ray proved the last cut
+    # first (its max-margin point, when the cut is feasible, is certified as well;
+    # uio_dt.thm4_1: 16 cuts in 15 s the other way round); before any proof, after the
+    # route's backend, each cut on the next backend (every ray at every cut cost 3 s a cut on
+    # uio_dt.thm4_1 near its infimum, and 30 s an instance where nothing proves)
+    strict = options.strict == "auto" and has_strict(cut)
+    ray = (order[0], replace(options, strict="max-margin") if strict else options)
+    tries: list[tuple[Any, Any]] = [ray, (backend, options)] if proved else [(backend, options), ray]
+    if ray[0] == backend and ray[1] is options:
+        tries = tries[:1]  # the same decision twice
+    if not proved:
+        order.append(order.pop(0))
     notes = []
     for name, opts in tries:
         rest = left()
@@ -243,10 +248,10 @@ def _decide_cut(
         if sol is not None and sol.farkas and out.verdict in ("infeasible-certified", "infeasible-bounded"):
             rec = prove_cut(problem, r, sol.farkas, getattr(out.certificate, "farkas", None) or {})
             if rec["proven"]:
-                if opts.strict == "max-margin" and name in order:
+                if name in order and (name, opts) == ray:
                     order.remove(name)
                     order.insert(0, name)
-                how = ", max-margin" if opts.strict == "max-margin" else ""
+                how = ", max-margin" if opts is not options else ""
                 return {"decided": f"infeasible ({label}{how})", "record": rec}
         notes.append(f"{label}: {out.verdict}")
     return {"decided": "; ".join(notes) or "nothing"}
