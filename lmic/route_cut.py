@@ -43,6 +43,8 @@ from lmic.ir.problem import Problem
 from lmic.route_escalation import RouteClock
 
 __all__ = [
+    "proof_size",
+    "CUT_MAX_ENTRIES",
     "cut_route",
     "cut_budget",
     "wants_cut",
@@ -76,6 +78,10 @@ CUT_RAY_PROOF_S = 0.5
 #: progress, undecided ones near an optimum whose face is irrational are not (random 3-state
 #: uio_dt.thm4_1 instances: 2-3 s each, four of them before)
 WASTE_SHARE = 0.3
+#: the search runs on problems whose :func:`proof_size` is at most this: an exact proof of a cut
+#: costs 5 ms at 2.5e3 (uio_dt.thm4_1's example), 0.1-0.7 s at 5.7e3 (4 states) and 5-8 s at
+#: 1.1e5 (the bounded-real lemma at 20 states), one or two a cut
+CUT_MAX_ENTRIES = 30_000
 #: the search's budget in processor seconds: ``max(FLOOR, FACTOR x)`` the route's solve time
 CUT_BUDGET_FLOOR_S = 10.0
 CUT_BUDGET_FACTOR = 2.0
@@ -86,9 +92,21 @@ def cut_budget(solve_s: float) -> float:
     return max(CUT_BUDGET_FLOOR_S, CUT_BUDGET_FACTOR * float(solve_s))
 
 
+def proof_size(problem: Problem) -> int:
+    """``(1 + n)`` times the LMIs' lower-triangle entries: the scale of a cut's exact proof
+    (:data:`CUT_MAX_ENTRIES`).
+
+    >>> from lmic.testing.conformance import CASES
+    >>> proof_size(CASES["max_sense"].build())  # one variable, one 3 x 3 LMI
+    12
+    """
+    return (1 + problem.n) * sum(lmi.dim * (lmi.dim + 1) // 2 for lmi in problem.lmis)
+
+
 def wants_cut(problem: Problem, enc: dict[str, Any] | None) -> bool:
     """Whether the search applies: an optimisation problem whose enclosure (of the IR's own
-    problem) has its primal end and no dual end.
+    problem) has its primal end and no dual end, small enough for exact proofs of its cuts
+    (:func:`proof_size` at most :data:`CUT_MAX_ENTRIES`).
 
     >>> from lmic.testing.conformance import CASES
     >>> p = CASES["max_sense"].build()
@@ -96,6 +114,8 @@ def wants_cut(problem: Problem, enc: dict[str, Any] | None) -> bool:
     (True, False, False)
     """
     if enc is None or problem.objective.sense not in ("min", "max"):
+        return False
+    if proof_size(problem) > CUT_MAX_ENTRIES:
         return False
     if enc.get("problem", "ir") != "ir" or enc.get("consistent") is False:
         return False
@@ -245,7 +265,17 @@ def _decide_cut(
         if out.verdict == "certified" and out.solution is not None and out.solution.x is not None:
             return {"decided": f"point ({label})", "x": np.asarray(out.solution.x, dtype=float)}
         sol = out.solution
-        if sol is not None and sol.farkas and out.verdict in ("infeasible-certified", "infeasible-bounded"):
+        # the policy proves a bounded ray at one face threshold, as prove_cut does: a ray it
+        # failed on is not tried again (5 s an exact proof on a 20-state bounded-real lemma)
+        failed = out.verdict == "infeasible-bounded" and any(
+            "exact proof of the ray failed" in a.note for a in out.attempts
+        )
+        if (
+            sol is not None
+            and sol.farkas
+            and out.verdict in ("infeasible-certified", "infeasible-bounded")
+            and not failed
+        ):
             rec = prove_cut(problem, r, sol.farkas, getattr(out.certificate, "farkas", None) or {})
             if rec["proven"]:
                 if name in order and (name, opts) == ray:
