@@ -253,11 +253,10 @@ def _decide_cut(
         if rest <= 0.0:
             notes.append("budget spent")
             break
-        limit = rest if opts.time_limit is None else min(rest, float(opts.time_limit))
         try:
-            out = decide(
-                cut, name, replace(opts, time_limit=max(limit, 1.0)), exact=exact, ray_budget_s=CUT_RAY_PROOF_S
-            )
+            # the user's time limit, if any, as on the route (a time limit puts every solve in a
+            # forked child: 90 ms of a 0.2 s cut on uio_dt.thm4_1); the budget is checked between
+            out = decide(cut, name, opts, exact=exact, ray_budget_s=CUT_RAY_PROOF_S)
         except (LmicError, ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
             notes.append(f"{name or 'auto'}: {exc}")
             continue

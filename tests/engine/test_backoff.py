@@ -34,12 +34,38 @@ def test_backed_off_gains_are_certified_and_near_the_optimum():
     assert b["norm_inf"] <= float(np.max(np.abs(r.solution.x))) * (1 + 1e-6)
 
 
-def test_uio_flexible_joint_backoff_gives_certified_gains_below_1e4():
-    r = lmic.api.solve("uio_dt.thm4_1", str(EXAMPLES / "uio_dt.thm4_1.flexible_joint.yaml"), backend="clarabel")
-    b = r.backoff
-    assert b["verdict"] == "certified"
-    for name in ("K", "L", "E", "N", "G"):
-        assert np.linalg.norm(np.atleast_2d(np.asarray(b["derived"][name], dtype=float)), 2) < 1e4
+def _hyperbola():
+    """``min t`` subject to ``[[x, 1], [1, t]] > 0`` (``t > 1 / x``: an infimum 0, not attained)."""
+    import scipy.sparse as sp
+
+    from lmic.ir.problem import LMI
+
+    coeffs = sp.csc_matrix(np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]))
+    variables = [Variable("x", "scalar", (1, 1)), Variable("t", "scalar", (1, 1), offset=1)]
+    lmis = [LMI("h", 2, coeffs, strict=True)]
+    return Problem(variables, lmis, LinearConstraints.empty(2), Objective("min", [0.0, 0.0, 1.0]))
+
+
+def test_given_point_when_the_backed_off_solve_gives_none(monkeypatch):
+    """Near an infimum that is not attained the backed-off slice can be too thin for the solver
+    (uio_dt.thm4_1: "backoff solve ended infeasible without a point"): the given point (the
+    objective cuts' one, lmic.route_cut) is used when it is certified and within the bound, with
+    the status of its own solve (what lmic audit certifies it with); otherwise nothing is."""
+    import lmic.backoff as bo
+    from lmic.solution import Solution
+
+    p = _hyperbola()
+    monkeypatch.setattr(bo, "solve_with_reductions", lambda *a, **k: Solution(status="infeasible"))
+    monkeypatch.setattr(bo, "_largest_margin", lambda *a, **k: None)
+    # value 0.01, rel 0.5: the bound is t <= 0.015
+    ok = bo.backoff(p, 0.01, "clarabel", rel=0.5, fallback=[100.0, 0.0125])
+    assert ok["verdict"] == "certified" and ok["method"] == "given point" and ok["status"] == "optimal"
+    assert ok["objective"] == 0.0125 and ok["x"] == [100.0, 0.0125]
+    outside = bo.backoff(p, 0.01, "clarabel", rel=0.5, fallback=[100.0, 0.02])  # t above the bound
+    infeasible = bo.backoff(p, 0.01, "clarabel", rel=0.5, fallback=[10.0, 0.0125])  # t < 1 / x
+    none = bo.backoff(p, 0.01, "clarabel", rel=0.5)
+    for b in (outside, infeasible, none):
+        assert b["verdict"] == "undecided" and b["x"] is None and "without a point" in b["reason"]
 
 
 def test_backoff_is_recorded_and_a_tampered_point_is_rejected(tmp_path):

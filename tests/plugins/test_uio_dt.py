@@ -134,19 +134,9 @@ def test_thm4_1_gamma_max_by_bisection():
     assert certify(prob, sol).verdict == "infeasible-bounded"
 
 
-def test_thm4_1_direct_min_rho_stops_early():
-    """Direct min rho: a valid but early point (Clarabel ~11-12 on the example, not 51.5)."""
-    r = solve("uio_dt.thm4_1", example(EX41), backend="clarabel")
-    assert r.status == "optimal"
-    cert = certify(r.problem, r.solution, exact=True)
-    assert cert.verdict == "certified" and cert.exact["proven"], cert.reason
-    assert 5.0 < r.derived["gamma_max"] < 51.5
-    assert r.derived["gamma_max"] == pytest.approx(1 / np.sqrt(r.objective), rel=1e-9)
-
-
 def test_thm4_1_min_rho_enclosed_by_objective_cuts(tmp_path):
-    """``lmic solve`` on the example (min rho, no attained minimum): the solver stops at gamma_max
-    ~ 12, the dual has no provable point, and the objective cuts (lmic.route_cut) prove both
+    """``lmic solve`` on the example (min rho, no attained minimum): the solver stops early, at
+    gamma_max ~ 12 (a valid point), the dual has no provable point, and the objective cuts (lmic.route_cut) prove both
     ends around Table 2's 51.5 (catalogue 4.3 and 11.3: 51.5 +- 0.1 by bisection): every cut
     below is an exact Farkas proof, every point above a certified point. The backed-off point is
     the cuts' point, its gains certified and below 1e4; the certificate file passes ``lmic audit``
@@ -157,6 +147,13 @@ def test_thm4_1_min_rho_enclosed_by_objective_cuts(tmp_path):
     from lmic.system import load_system
 
     r = solve("uio_dt.thm4_1", example(EX41))
+    # the direct min rho: a valid but early point (Clarabel ~11-12 on the example, not 51.5),
+    # its margins proved exactly
+    assert r.status == "optimal" and r.backend == "clarabel"
+    cert = certify(r.problem, r.solution, exact=True)
+    assert cert.verdict == "certified" and cert.exact["proven"], cert.reason
+    assert 5.0 < r.derived["gamma_max"] < 51.5
+    assert r.derived["gamma_max"] == pytest.approx(1 / np.sqrt(r.objective), rel=1e-9)
     enc = r.enclosure
     assert r.verdict == "certified" and enc["consistent"]
     assert enc["dual"]["route"] == "objective cut" and enc["dual"]["method"] == "exact"
