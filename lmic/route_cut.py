@@ -197,7 +197,8 @@ def cut_route(
             if lo is None:
                 step *= CUT_GROWTH
         elif found.get("record") is not None:
-            lo, lo_rec = r, found["record"]
+            lo_rec = found["record"]
+            lo = float(lo_rec["lower"])  # r, or just below it when the objective has a constant
         else:
             tried.append(r)
             undecided += 1

@@ -9,10 +9,11 @@ the problem, as stated (its strict constraints strict), has an objective ``<= r`
 a lower end of its infimum (an upper end of a supremum). The route that searches ``r`` is
 :mod:`lmic.route_cut`.
 
-The record (``enclosure.dual`` with ``route`` ``"objective cut"``) keeps ``r`` (``lower``, in
-the minimisation form), the float certificate the exact proof started from and its face
-threshold; :func:`verify_cut` (``lmic audit``) rebuilds the cut problem from the record and
-proves it again.
+The record (``enclosure.dual`` with ``route`` ``"objective cut"``) keeps ``r`` (``cut.r``, in
+the minimisation form; ``lower`` is :func:`cut_bound`, ``r`` itself unless the objective has a
+constant), the float certificate the exact proof started from and its face threshold;
+:func:`verify_cut` (``lmic audit``) rebuilds the cut problem from the record and proves it
+again.
 
 Examples
 --------
@@ -40,7 +41,7 @@ import scipy.sparse as sp
 
 from lmic.ir.problem import LinearConstraints, Objective, Problem
 
-__all__ = ["cut_problem", "prove_cut", "verify_cut", "CUT_NAME"]
+__all__ = ["cut_problem", "cut_bound", "prove_cut", "verify_cut", "CUT_NAME"]
 
 #: the name of the cut's row in the cut problem
 CUT_NAME = "objective cut"
@@ -73,6 +74,28 @@ def cut_problem(problem: Problem, r: float) -> Problem:
     A = sp.vstack([sp.csr_matrix(lin.A), cut]).tocsr() if len(lin) else cut
     linear = LinearConstraints(A, [*lin.kinds, "ge"], [*lin.strict, False], [*lin.names, CUT_NAME])
     return dataclasses.replace(problem, linear=linear, objective=Objective("feasibility", np.zeros(problem.n + 1)))
+
+
+def cut_bound(problem: Problem, r: float) -> float:
+    """The lower end (minimisation form) that an infeasibility proof of :func:`cut_problem` at
+    ``r`` proves: the cut row's constant is ``fl(r - s c0)`` (``s`` the sense's sign), so the
+    proof excludes ``f(x) <= s c0 + fl(r - s c0)``, summed exactly and rounded down. It is ``r``
+    itself when ``c0 = 0``.
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+    >>> p = Problem([Variable("t", "scalar", (1, 1))], [LMI("t >= 0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("min", [0.1, 1.0]))
+    >>> cut_bound(p, 0.3) <= 0.3, cut_bound(Problem(p.variables, p.lmis, p.linear, Objective("min", [0, 1.0])), 0.3)
+    (True, 0.3)
+    """
+    from fractions import Fraction
+
+    sign = 1.0 if problem.objective.sense == "min" else -1.0
+    c0 = float(np.asarray(problem.objective.c, dtype=float).ravel()[0])
+    exact = Fraction(sign * c0) + Fraction(float(r) - sign * c0)
+    value = float(exact)
+    return value if Fraction(value) <= exact else math.nextafter(value, -math.inf)
 
 
 def prove_cut(problem: Problem, r: float, farkas: dict[str, Any], verification: dict[str, Any]) -> dict[str, Any]:
@@ -115,13 +138,15 @@ def prove_cut(problem: Problem, r: float, farkas: dict[str, Any], verification: 
     again = prove_farkas(cut, cand, rel_face=(thr,))  # what the audit will run: the same proof
     if not again.get("proven"):
         return dict(out, reason=f"the cut at {r:.10g}: the exact proof did not repeat ({again.get('reason')})")
+    bound = cut_bound(problem, r)
     return {
         "proven": True,
         "route": "objective cut",
-        "lower": float(r),
+        "lower": bound,
         "method": "exact",
         "kind": again["kind"],
         "cut": {
+            "r": float(r),
             "farkas": {
                 "lmis": [np.asarray(Z, dtype=float).tolist() for Z in cand["lmis"]],
                 "linear": np.asarray(cand.get("linear", []), dtype=float).tolist(),
@@ -130,23 +155,29 @@ def prove_cut(problem: Problem, r: float, farkas: dict[str, Any], verification: 
         },
         "reason": (
             f"no point with objective {'<=' if problem.objective.sense == 'min' else '>='} "
-            f"{r if problem.objective.sense == 'min' else -r:.10g}: exact Farkas proof of the cut ({again['kind']})"
+            f"{bound if problem.objective.sense == 'min' else -bound:.10g}: exact Farkas proof of the cut "
+            f"({again['kind']})"
         ),
     }
 
 
 def verify_cut(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
     """Re-prove a recorded objective cut (``lmic audit``): the cut problem rebuilt at the
-    record's ``lower`` and its recorded certificate proved exactly again.
+    record's ``cut.r``, its recorded certificate proved exactly again, and the record's
+    ``lower`` not above what that proof bounds (:func:`cut_bound`).
 
     >>> verify_cut(None, {"route": "objective cut", "lower": None})["ok"]
     False
     """
     from lmic.certify.farkas import prove_farkas
 
-    r, cut = record.get("lower"), record.get("cut")
-    if not isinstance(r, int | float) or not math.isfinite(r) or not isinstance(cut, dict):
+    lower, cut = record.get("lower"), record.get("cut")
+    r = cut.get("r") if isinstance(cut, dict) else None
+    ok_numbers = all(isinstance(v, int | float) and math.isfinite(v) for v in (lower, r))
+    if not ok_numbers or not isinstance(cut, dict):
         return {"ok": False, "reason": "the objective cut's value or certificate is missing"}
+    if float(lower) > cut_bound(problem, float(r)):
+        return {"ok": False, "reason": f"the lower end {float(lower):.10g} is above the cut's bound"}
     thr = cut.get("threshold")
     if not isinstance(thr, int | float) or not 0.0 < float(thr) < 1.0:
         return {"ok": False, "reason": "the objective cut's face threshold is not in (0, 1)"}

@@ -54,7 +54,8 @@ def test_a_cut_beyond_the_optimum_is_a_proven_end_and_audited(sense, r, bound):
     assert audit_enclosure(p, enc, None)["ok"]
     # tampered: the cut moved past the optimum, the ray changed, the threshold made invalid
     moved = 2.5 if sense == "min" else -2.5
-    assert not verify_cut(p, dict(rec, lower=moved))["ok"]
+    assert "above the cut's bound" in verify_cut(p, dict(rec, lower=moved))["reason"]
+    assert not verify_cut(p, dict(rec, lower=moved, cut={**rec["cut"], "r": moved}))["ok"]
     forged = {**rec["cut"], "farkas": {"lmis": [[[1.0]], [[1.0]]], "linear": [0.0]}}
     assert not verify_cut(p, dict(rec, cut=forged))["ok"]
     assert not verify_cut(p, dict(rec, cut={**rec["cut"], "threshold": 2.0}))["ok"]
@@ -88,3 +89,23 @@ def test_a_malformed_record_is_rejected_with_a_reason():
     assert "missing" in verify_cut(p, {"route": "objective cut", "lower": float("nan"), "cut": {}})["reason"]
     bad = {"route": "objective cut", "lower": 1.5, "cut": {"farkas": {"lmis": "x"}, "threshold": 1e-9}}
     assert not verify_cut(p, bad)["ok"]
+
+
+def test_an_objective_constant_is_summed_exactly_and_rounded_down():
+    """``min 0.1 + t`` over ``t >= 2`` (optimum 2.1): the cut row's constant is ``fl(r - 0.1)``,
+    so the end the proof gives is ``0.1 + fl(r - 0.1)`` in exact arithmetic, rounded down."""
+    from fractions import Fraction
+
+    from lmic.certify.enclosure_cut import cut_bound
+
+    p = _interval("min", False)
+    p = Problem(p.variables, p.lmis, p.linear, Objective("min", [0.1, 1.0]))
+    r = 2.05
+    ray = {"lmis": [np.eye(1), np.zeros((1, 1))], "linear": [1.0]}
+    rec = prove_cut(p, r, ray, verify_farkas(cut_problem(p, r), ray))
+    assert rec["proven"] and rec["cut"]["r"] == r
+    exact = Fraction(0.1) + Fraction(r - 0.1)
+    assert Fraction(rec["lower"]) <= exact and rec["lower"] == cut_bound(p, r)
+    assert Fraction(float(np.nextafter(rec["lower"], np.inf))) > exact  # the largest float below
+    assert verify_cut(p, rec)["ok"]
+    assert not verify_cut(p, dict(rec, lower=np.nextafter(float(exact), np.inf)))["ok"]
