@@ -171,20 +171,20 @@ def verify_cut(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
     """
     from lmic.certify.farkas import prove_farkas
 
-    lower, cut = record.get("lower"), record.get("cut")
-    r = cut.get("r") if isinstance(cut, dict) else None
-    ok_numbers = all(isinstance(v, int | float) and math.isfinite(v) for v in (lower, r))
-    if not ok_numbers or not isinstance(cut, dict):
+    cut = record.get("cut")
+    raw = (record.get("lower"), cut.get("r") if isinstance(cut, dict) else None)
+    if not isinstance(cut, dict) or not all(isinstance(v, int | float) and math.isfinite(v) for v in raw):
         return {"ok": False, "reason": "the objective cut's value or certificate is missing"}
-    if float(lower) > cut_bound(problem, float(r)):
-        return {"ok": False, "reason": f"the lower end {float(lower):.10g} is above the cut's bound"}
+    lower, r = float(raw[0]), float(raw[1])  # type: ignore[arg-type]  # checked numbers just above
+    if lower > cut_bound(problem, r):
+        return {"ok": False, "reason": f"the lower end {lower:.10g} is above the cut's bound"}
     thr = cut.get("threshold")
     if not isinstance(thr, int | float) or not 0.0 < float(thr) < 1.0:
         return {"ok": False, "reason": "the objective cut's face threshold is not in (0, 1)"}
     try:
-        proof = prove_farkas(cut_problem(problem, float(r)), cut.get("farkas") or {}, rel_face=(float(thr),))
+        proof = prove_farkas(cut_problem(problem, r), cut.get("farkas") or {}, rel_face=(float(thr),))
     except (ValueError, ArithmeticError, TypeError) as exc:
         return {"ok": False, "reason": f"the objective cut's certificate is malformed: {exc}"}
     if not proof.get("proven"):
-        return {"ok": False, "reason": f"the objective cut at {float(r):.10g} is not proved: {proof.get('reason')}"}
+        return {"ok": False, "reason": f"the objective cut at {r:.10g} is not proved: {proof.get('reason')}"}
     return {"ok": True, "reason": f"objective cut re-proved ({proof['kind']})"}
