@@ -324,6 +324,7 @@ def _narrowed(
     if lo is not None and lo_rec is not None:
         out[dkey] = sign * lo
         out["dual"] = lo_rec
+        out.pop("conditional", None)  # a proven end replaces the box-conditional one (as best_of)
         notes.append("dual end by an objective cut proved infeasible")
     out["cut"] = {"steps": len(log), "log": log, "time_s": seconds}
     a, b = out.get("lower"), out.get("upper")
