@@ -195,26 +195,18 @@ def test_centred_route_tries_a_larger_loss_when_the_weight_gave_up_too_much():
     assert enc["dual"]["route"] == "centred" and enc["dual"]["centring_loss"] > 1e-4
 
 
-def test_sdpa_short_of_its_tolerance_is_crossed_to_another_interior_point():
-    """uir.thm4_1 at 12 states (seed 2) on SDPA: SDPA's tight re-solve stops at ``pdFEAS`` (its
-    dual objective 1.3e-5 below the optimum), so the enclosure stopped at a relative gap of
-    1.3e-5. One cross re-solve on Clarabel, whose point and dual lmic proves like any other,
-    narrows it below 1e-6; the record names it, and the answer stays SDPA's."""
-    r, value, tol = _solved_with_reference("uir.thm4_1", 2, 12, "sdpa")
-    enc = _enclosure_checked(r, value, tol)
-    assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
-    assert enc["cross"]["backends"] == ["clarabel"] and enc["cross"]["rel_gap_before"] > 1e-5
-    assert "by re-solves on clarabel" in enc["reason"]
-    assert r.backend == "sdpa"
-
-
 def test_cross_re_solves_go_on_while_the_gap_misses_the_target():
-    """sampled_euler.thm2 at 12 states (seed 2) on SDPA: Clarabel's cross re-solve narrows 4.3e-5
-    to 1.2e-6 only; CVXOPT's, next, to 1.4e-8."""
+    """sampled_euler.thm2 at 12 states (seed 2) on SDPA: SDPA's tight re-solve stops at
+    ``pdFEAS`` (its dual objective 4.3e-5 below the optimum). Cross re-solves on the other
+    interior points, whose points and duals lmic proves like any other, narrow it: Clarabel's to
+    1.2e-6 only, CVXOPT's, next, to 1.4e-8; the record names them, and the answer stays SDPA's.
+    (uir.thm4_1 at 12 states, seed 2, on SDPA needs Clarabel's alone: 1.3e-5 to below 1e-6.)"""
     r, value, tol = _solved_with_reference("sampled_euler.thm2", 2, 12, "sdpa")
     enc = _enclosure_checked(r, value, tol)
-    assert enc["rel_gap"] <= GAP, enc["reason"]
+    assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
     assert enc["cross"]["backends"] == ["clarabel", "cvxopt"] and enc["cross"]["rel_gap_before"] > 1e-5
+    assert "by re-solves on clarabel, cvxopt" in enc["reason"]
+    assert r.backend == "sdpa"
 
 
 def test_primal_end_from_the_backed_off_point_is_improved_to_the_target():
