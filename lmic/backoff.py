@@ -183,22 +183,17 @@ def backoff(
     out["status"] = sol.status
     other = None
     if sol.x is None:
-        other = _largest_margin(problem, out["bound"], be, options) or _given(problem, fallback, out["bound"])
+        other = _other_point(problem, out["bound"], be, options, fallback)
         if other is None:
             out.update(verdict="undecided", reason=f"backoff solve ended {sol.status} without a point ({sol.message})")
             out["time_s"] = time.perf_counter() - t0
             return out
-        x, mine, cert = other
     else:
         x, mine, cert = _certified(problem, sol)
-    if cert.verdict != "certified" and other is None:
-        # a slice too thin for the solver's accuracy (a near-singular optimum): its most interior
-        # point instead (lmic.upper_end.margin_problem, box ten times the objective's size)
-        other = _largest_margin(problem, out["bound"], be, options) or _given(problem, fallback, out["bound"])
-        if other is not None:
-            x, mine, cert = other
+        # a slice too thin for the solver's accuracy (a near-singular optimum): another point
+        other = _other_point(problem, out["bound"], be, options, fallback) if cert.verdict != "certified" else None
     if other is not None:
-        out["method"] = "largest margin" if mine.backend != "given point" else "given point"
+        x, mine, cert, out["method"] = other
         out["status"] = mine.status  # the point's own solve ("status" is what lmic audit certifies with)
     d = cert.to_dict()
     out.update(
@@ -328,6 +323,19 @@ def _largest_margin(problem: Problem, bound: float, backend: Any, options: Any) 
         return None
     x, mine, cert = _certified(problem, sol)
     return (x, mine, cert) if cert.verdict == "certified" else None
+
+
+def _other_point(
+    problem: Problem, bound: float, backend: Any, options: Any, given: Any
+) -> tuple[np.ndarray, Any, Any, str] | None:
+    """When the backed-off solve gives no certified point: the most interior point within
+    ``bound`` (:func:`_largest_margin`, method ``"largest margin"``), else the ``given`` point
+    (:func:`_given`, method ``"given point"``); ``(x, solution, certificate, method)`` or ``None``."""
+    found = _largest_margin(problem, bound, backend, options)
+    if found is not None:
+        return (*found, "largest margin")
+    found = _given(problem, given, bound)
+    return None if found is None else (*found, "given point")
 
 
 def _given(problem: Problem, x: Any, bound: float) -> tuple[np.ndarray, Any, Any] | None:

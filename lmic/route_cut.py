@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from lmic.certify.enclosure import GAP_TARGET
+from lmic.certify.enclosure import GAP_TARGET, relative_gap
 from lmic.ir.problem import Problem
 from lmic.route_escalation import RouteClock
 
@@ -169,44 +169,41 @@ def cut_route(
     log: list[dict[str, Any]] = []
     clock = RouteClock()  # processor time of this process and its solver children, capped by wall time
     step = CUT_FIRST * max(1.0, abs(U))
-    undecided, wasted = 0, 0.0  # cuts that decided nothing, and their seconds
+    wasted = 0.0  # the seconds of the cuts that decided nothing
     order = list(RAY_BACKENDS)  # the backends whose rays proved a cut move to the front
+
+    def left() -> float:
+        return budget_s - clock.elapsed()
+
     for _ in range(MAX_CUT_STEPS):
-        if clock.elapsed() >= budget_s or undecided >= MAX_UNDECIDED or wasted >= WASTE_SHARE * budget_s:
+        if left() <= 0.0 or len(tried) >= MAX_UNDECIDED or wasted >= WASTE_SHARE * budget_s:
             break
         if lo is None:
             r = U - step
         else:
-            rel = (U - lo) / max(1.0, 0.5 * (abs(U) + abs(lo)))
-            if rel <= GAP_TARGET or (undecided >= RESOLUTION_UNDECIDED and rel <= float(options.gap)):
+            rel = relative_gap(lo, U)
+            if rel <= GAP_TARGET or (len(tried) >= RESOLUTION_UNDECIDED and rel <= float(options.gap)):
                 break  # the target met, or --gap met and the cuts have reached their resolution
             r = _next_cut(lo, U, tried)
-        t_step, before = clock.wall(), undecided
-        left = lambda: budget_s - clock.elapsed()  # noqa: E731
+        t_step = clock.wall()
         found = _decide_cut(problem, r, backend, options, exact, left, order, proved=lo_rec is not None)
         decided = found["decided"]
-        if found.get("x") is not None:
-            x = found["x"]
-            pe = exact_primal_end(problem, x, primal_end(problem, x))
-            if pe.get("proven") and sign * float(pe["value"]) < U:
-                U, best_x = sign * float(pe["value"]), x
-            else:
-                decided = f"{decided}, no better end"
-                tried.append(r)
-                undecided += 1
-            if lo is None:
-                step *= CUT_GROWTH
-        elif found.get("record") is not None:
+        settled = found.get("record") is not None or found.get("x") is not None  # a proof or a point
+        if found.get("record") is not None:
             lo_rec = found["record"]
             lo = float(lo_rec["lower"])  # r, or just below it when the objective has a constant
         else:
-            tried.append(r)
-            undecided += 1
+            x = found.get("x")
+            pe = exact_primal_end(problem, x, primal_end(problem, x)) if x is not None else {}
+            if pe.get("proven") and sign * float(pe["value"]) < U:
+                U, best_x = sign * float(pe["value"]), x
+            else:
+                decided = f"{decided}, no better end" if x is not None else decided
+                tried.append(r)
+                wasted += clock.wall() - t_step
             if lo is None:
                 step *= CUT_GROWTH  # further from the primal end: a cut easier to prove
-        if undecided > before:
-            wasted += clock.wall() - t_step
-        log.append({"cut": sign * r, "decided": decided, "time_s": round(clock.wall() - t_step, 3)})
+        log.append({"cut": sign * r, "decided": decided, "settled": settled, "time_s": round(clock.wall() - t_step, 3)})
     return _narrowed(problem, enc, lo, lo_rec, U, best_x, log, clock.wall())
 
 
@@ -330,7 +327,7 @@ def _narrowed(
     a, b = out.get("lower"), out.get("upper")
     if a is not None and b is not None:
         out["gap"] = b - a
-        out["rel_gap"] = (b - a) / max(1.0, 0.5 * (abs(a) + abs(b))) if b >= a else 0.0
+        out["rel_gap"] = relative_gap(a, b) if b >= a else 0.0
         if b < a:  # both ends are proofs: never hide an inconsistency
             out["reason"] = f"inconsistent ends: lower {a:.10g} > upper {b:.10g}"
             out["consistent"] = False

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from lmic.certify.enclosure import GAP_TARGET
+from lmic.certify.enclosure import GAP_TARGET, relative_gap
 from lmic.ir.problem import Problem
 from lmic.outcome import Outcome
 
@@ -132,7 +132,7 @@ def sgn_gap(problem: Problem, value: float, dual_end: float) -> float:
     0.666667
     """
     hi, lo = (value, dual_end) if problem.objective.sense == "min" else (dual_end, value)
-    return (hi - lo) / max(1.0, 0.5 * (abs(hi) + abs(lo)))
+    return relative_gap(lo, hi)
 
 
 def upper_route(

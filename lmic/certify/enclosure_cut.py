@@ -108,21 +108,14 @@ def prove_cut(problem: Problem, r: float, farkas: dict[str, Any], verification: 
     (``{"farkas": {lmis, linear}, "threshold"}``: what :func:`verify_cut` re-proves), ``reason``.
     """
     from lmic.certify.farkas import prove_farkas
-    from lmic.certify.farkas_ray import _parse
+    from lmic.certify.farkas_exact import farkas_candidates
 
     cut = cut_problem(problem, r)
     out: dict[str, Any] = {"proven": False, "route": "objective cut", "lower": None}
-    # the candidates of lmic.certify.farkas.prove_infeasible: the repaired certificate, then
-    # the solver's in the orientation that verified (both when none did)
     try:
-        mats, y = _parse(cut, farkas)
+        cands = [c for _, c in farkas_candidates(cut, farkas, verification)]
     except (ValueError, ArithmeticError) as exc:
         return dict(out, reason=f"the cut at {r:.10g} has no usable certificate: {exc}")
-    cands: list[dict[str, Any]] = []
-    if verification.get("repaired") and verification.get("certificate"):
-        cands.append(verification["certificate"])
-    signs = [-1.0 if verification.get("negated") else 1.0] if verification.get("verified") else [1.0, -1.0]
-    cands += [{"lmis": [sg * Z for Z in mats], "linear": sg * y} for sg in signs]
     proof: dict[str, Any] = {}
     cand: dict[str, Any] = {}
     for cand in cands:

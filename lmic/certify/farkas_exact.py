@@ -35,7 +35,7 @@ from lmic.certify.farkas_ray import _parse, _weights
 from lmic.ir.problem import Problem
 from lmic.ir.svec import tril_rows_cols
 
-__all__ = ["prove_farkas", "prove_infeasible", "EXACT_MAX_ENTRIES"]
+__all__ = ["prove_farkas", "prove_infeasible", "farkas_candidates", "EXACT_MAX_ENTRIES"]
 
 #: largest exact Jacobian ((1 + n) x (tril entries) x (face unknowns)) an exact proof builds
 EXACT_MAX_ENTRIES = 50_000_000
@@ -311,6 +311,29 @@ def _prove_farkas(
     return dict(base, proven=False, kind=None, reason=f"no exact separation: g_0 = {float(g0):.3g}")
 
 
+def farkas_candidates(
+    problem: Problem, farkas: dict[str, Any], verification: dict[str, Any]
+) -> list[tuple[str, dict[str, Any]]]:
+    """The certificates an exact proof of infeasibility starts from, in order, as
+    ``(source, {"lmis", "linear"})``: the repaired certificate (when :func:`verify_farkas`
+    repaired one), then the solver's in the orientation that verified (both when none did).
+
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]]))],
+    ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
+    >>> [(s, float(c["lmis"][0][0, 0])) for s, c in farkas_candidates(p, {"lmis": [np.eye(1)]}, {})]
+    [('solver', 1.0), ('solver', -1.0)]
+    """
+    mats, y = _parse(problem, farkas)
+    out: list[tuple[str, dict[str, Any]]] = []
+    if verification.get("repaired") and verification.get("certificate"):
+        out.append(("repaired", verification["certificate"]))
+    signs = [-1.0 if verification.get("negated") else 1.0] if verification.get("verified") else [1.0, -1.0]
+    out += [("solver", {"lmis": [sg * Z for Z in mats], "linear": sg * y}) for sg in signs]
+    return out
+
+
 def prove_infeasible(
     problem: Problem,
     farkas: dict[str, Any],
@@ -345,14 +368,8 @@ def prove_infeasible(
     >>> r["proven"], r["kind"], r["source"]
     (True, 'strict', 'solver')
     """
-    mats, y = _parse(problem, farkas)
-    candidates: list[tuple[str, dict[str, Any]]] = []
-    if verification.get("repaired"):
-        candidates.append(("repaired", verification["certificate"]))
-    signs = [-1.0 if verification.get("negated") else 1.0] if verification.get("verified") else [1.0, -1.0]
-    candidates += [("solver", {"lmis": [sg * Z for Z in mats], "linear": sg * y}) for sg in signs]
     out: dict[str, Any] = {}
-    for source, cand in candidates:
+    for source, cand in farkas_candidates(problem, farkas, verification):
         r = prove_farkas(problem, cand) if rel_face is None else prove_farkas(problem, cand, rel_face=rel_face)
         r["source"] = source
         if not out or r["proven"]:
