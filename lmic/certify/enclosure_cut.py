@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from lmic.errors import LmicError
 from lmic.ir.problem import LinearConstraints, Objective, Problem
 
 __all__ = ["cut_problem", "cut_bound", "prove_cut", "verify_cut", "CUT_NAME"]
@@ -114,7 +115,7 @@ def prove_cut(problem: Problem, r: float, farkas: dict[str, Any], verification: 
     out: dict[str, Any] = {"proven": False, "route": "objective cut", "lower": None}
     try:
         cands = [c for _, c in farkas_candidates(cut, farkas, verification)]
-    except (ValueError, ArithmeticError) as exc:
+    except (LmicError, ValueError, ArithmeticError) as exc:
         return dict(out, reason=f"the cut at {r:.10g} has no usable certificate: {exc}")
     proof: dict[str, Any] = {}
     cand: dict[str, Any] = {}
@@ -176,7 +177,7 @@ def verify_cut(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
         return {"ok": False, "reason": "the objective cut's face threshold is not in (0, 1)"}
     try:
         proof = prove_farkas(cut_problem(problem, r), cut.get("farkas") or {}, rel_face=(float(thr),))
-    except (ValueError, ArithmeticError, TypeError) as exc:
+    except (LmicError, ValueError, ArithmeticError, TypeError) as exc:  # a wrong shape: LmicError
         return {"ok": False, "reason": f"the objective cut's certificate is malformed: {exc}"}
     if not proof.get("proven"):
         return {"ok": False, "reason": f"the objective cut at {r:.10g} is not proved: {proof.get('reason')}"}

@@ -87,8 +87,11 @@ def test_a_feasible_cut_is_never_proved():
 def test_a_malformed_record_is_rejected_with_a_reason():
     p = _interval("min", False)
     assert "missing" in verify_cut(p, {"route": "objective cut", "lower": float("nan"), "cut": {}})["reason"]
-    bad = {"route": "objective cut", "lower": 1.5, "cut": {"farkas": {"lmis": "x"}, "threshold": 1e-9}}
-    assert not verify_cut(p, bad)["ok"]
+    bad = {"route": "objective cut", "lower": 1.5, "cut": {"r": 1.5, "farkas": {"lmis": "x"}, "threshold": 1e-9}}
+    assert "malformed" in verify_cut(p, bad)["reason"]
+    shape = {"r": 1.5, "farkas": {"lmis": [[[1.0, 2.0]], [[0.0]]], "linear": [1.0]}, "threshold": 1e-9}
+    out = verify_cut(p, {"route": "objective cut", "lower": 1.5, "cut": shape})
+    assert not out["ok"] and "malformed" in out["reason"] and "shape" in out["reason"]
 
 
 def test_an_objective_constant_is_summed_exactly_and_rounded_down():
