@@ -400,8 +400,8 @@ def solve(
         # the route's last resort (lmic.routes._boxed_upper) restored from the same point: not twice
         tried = any("upper_boxed" in st for st in (routed.route or {}).get("steps", []))
         enc = better_primal(problem, enc, back, sol, tight_x, used, options, restore_tried=tried)
-        upgraded = decided_by_enclosure(problem, outcome, enc, options)
-        if upgraded is not None:  # the restored point passes the certifier and the gap is met
+        upgraded = decided_by_enclosure(problem, outcome, enc, options, back)
+        if upgraded is not None:  # the enclosure's proven point passes the certifier
             outcome, sol, cert = upgraded, upgraded.solution, upgraded.certificate
             variables, derived = _values(problem, sol.x, cert)
         enclosure_s += time.perf_counter() - t_rest

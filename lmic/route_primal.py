@@ -62,8 +62,9 @@ def better_primal(
     primal end from the backed-off point is recorded as such; any other as a ``restored point``
     with its ``restored_x`` (both re-proved by ``lmic audit``).
 
-    An existing primal end is worked on only when the dual end is proven (a gap to meet); the
-    restoration solve then runs on interior-point backends only (a first-order one's points are
+    An existing primal end without a proven dual end is only compared with the backed-off
+    point's (a proof, no solve: there is no gap to meet); with one, the polish and the
+    restoration solve follow, the latter on interior-point backends only (a first-order one's points are
     too coarse). It is also what closes the gap of a certified point that keeps the strict
     reduction's margin (random sampled_euler.thm3 at 12 states, seed 3, on Clarabel: 1.9e-6).
     """
@@ -78,8 +79,9 @@ def better_primal(
     if done(enc) or problem.objective.sense == "feasibility":
         return enc
     x_solver, primal0 = sol.x, _primal_of(problem, enc)
-    if primal0 is not None and (enc["lower"] if sgn > 0 else enc["upper"]) is None:
-        return enc  # no dual end: no gap to meet
+    # no dual end: no gap to meet, so no solve; the backed-off point's proven end is still kept
+    # when better (a proof, no solve)
+    one_end = primal0 is not None and (enc["lower"] if sgn > 0 else enc["upper"]) is None
 
     def better(value: float) -> bool:
         old = _primal_of(problem, enc)
@@ -110,10 +112,13 @@ def better_primal(
         if pe["proven"]:
             if better(pe["value"]):
                 enc = take(pe["value"], "certified backed-off point", xb)
+            if one_end:
+                return enc
             pol, xp = polished(xb, pe)
             if pol is not pe and better(pol["value"]):
                 enc = take(pol["value"], "restored point", xp)
-    if done(enc) or x_solver is None or restore_tried:  # restore_tried: the route already restored from x_solver
+    # restore_tried: the route already restored from x_solver
+    if one_end or done(enc) or x_solver is None or restore_tried:
         return enc
     if primal0 is not None:
         from lmic.routes import method_of
@@ -131,38 +136,62 @@ def better_primal(
 
 
 def decided_by_enclosure(
-    problem: Problem, outcome: Any, enc: dict[str, Any] | None, options: SolveOptions | None
+    problem: Problem,
+    outcome: Any,
+    enc: dict[str, Any] | None,
+    options: SolveOptions | None,
+    back: dict[str, Any] | None = None,
 ) -> Any | None:
-    """A ``rejected`` or ``undecided`` optimisation outcome whose enclosure has both ends proven
-    within ``options.gap`` from a restored point (``restored_x``): ``certified`` with that point
-    when the certifier certifies it (its evidence: the certifier's and the enclosure's, both
-    proofs); ``None`` otherwise (the outcome stands)."""
+    """The answer an optimisation outcome becomes from its enclosure's proven point.
+
+    * A ``rejected`` or ``undecided`` outcome whose enclosure has both ends proven within
+      ``options.gap`` from a restored point (``restored_x``): ``certified`` with that point when
+      the certifier certifies it (its evidence: the certifier's and the enclosure's, both
+      proofs).
+    * A ``rejected`` outcome (the solver's point fails) whose enclosure's primal end is a point
+      the certifier certifies (a restored point, a certified backed-off point) but whose gap is
+      not met: ``undecided`` *with that point*, as for a point that holds from an inexact solve
+      (:mod:`lmic.policy`): the point is proven, the optimum is not, and the reason says so. The
+      answer's variables and gains are then those of a proven point, not of the rejected one.
+
+    ``None`` otherwise (the outcome stands).
+    """
     gap = (options or SolveOptions()).gap
-    if outcome.verdict not in ("rejected", "undecided") or enc is None or outcome.solution is None:
+    if outcome.verdict not in ("rejected", "undecided") or enc is None:
         return None
-    if enc.get("restored_x") is None or enc.get("rel_gap") is None or enc["rel_gap"] > gap:
-        return None
+    proven_optimum = enc.get("restored_x") is not None and enc.get("rel_gap") is not None and enc["rel_gap"] <= gap
+    point_holds = getattr(outcome.certificate, "verdict", None) == "certified"
+    x_enc, label = enc.get("restored_x"), "the enclosure's restored point"
+    if x_enc is None and enc.get("primal") == "certified backed-off point" and back and back.get("x") is not None:
+        x_enc, label = back["x"], "the certified backed-off point"
+    if x_enc is None or (point_holds and not proven_optimum):
+        return None  # nothing proven to adopt, or the answer's own point already holds
     from lmic.certify import certify
     from lmic.outcome import Outcome, evidence_of
 
-    x = np.asarray(enc["restored_x"], dtype=float)
+    x = np.asarray(x_enc, dtype=float)
     old = outcome.solution
     sol2 = Solution(
-        status=old.status,
+        status=old.status if old is not None else "error",
         x=x,
         objective=problem.objective.value(x),
-        duals=old.duals,
-        backend=old.backend,
-        message="the restored point of the enclosure (lmic.api)",
+        duals=old.duals if old is not None else {},
+        backend=old.backend if old is not None else outcome.backend,
+        message=f"{label} (lmic.api)",
     )
     cert2 = certify(problem, sol2)
     if cert2.verdict != "certified":
         return None
+    if proven_optimum:
+        verdict = "certified"
+        why = f"the enclosure proves the optimum: {enc['reason']}"
+    else:
+        verdict = "undecided"
+        why = f"the optimum is not proven to --gap {gap:g}: {enc.get('reason')}"
     return Outcome(
-        "certified",
+        verdict,
         evidence_of("certified", cert2),
-        f"{cert2.reason} (the enclosure's restored point; the solver's point: {outcome.verdict}); "
-        f"the enclosure proves the optimum: {enc['reason']}",
+        f"{cert2.reason} ({label}; the solver's point: {outcome.verdict}); {why}",
         list(outcome.attempts),
         sol2,
         cert2,
