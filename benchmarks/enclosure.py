@@ -126,12 +126,30 @@ def hinf_bracket(A: Any, B: Any, C: Any, tol: float = 1e-12) -> tuple[float, flo
 BRL_KINDS = {"random": (-0.5, False), "eighths": (-0.5, True), "near": (-0.01, False)}
 
 
+def brl_system(n: int, kind: str, seed: int = 0) -> dict[str, Any]:
+    """The system file (as a dict) of one bounded-real lemma case: ``n`` states, a kind of
+    :data:`BRL_KINDS`, ``m = q = 2``."""
+    import numpy as np
+
+    abscissa, eighths = BRL_KINDS[kind]
+    rng = np.random.default_rng(seed)
+    A = rng.standard_normal((n, n))
+    A -= (max(np.linalg.eigvals(A).real) - abscissa) * np.eye(n)
+    if eighths:
+        A[np.diag_indices(n)] = np.round(A[np.diag_indices(n)] * 8) / 8
+        while max(np.linalg.eigvals(A).real) >= -0.1:
+            A -= 0.125 * np.eye(n)
+    B, C = rng.standard_normal((n, 2)), rng.standard_normal((2, n))
+    return {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}
+
+
 def brl_problems(
     sizes: list[int], kinds: tuple[str, ...] = ("random", "eighths"), seed: int = 0
 ) -> list[tuple[str, Any, tuple[float, float]]]:
     """``(label, Problem, H-infinity bracket)`` of the bounded-real lemma for each size and kind
     (:data:`BRL_KINDS`: a random diagonal, the diagonal in eighths, or a random system with
-    spectral abscissa -0.01, where Clarabel alone stops at AlmostSolved / NumericalError)."""
+    spectral abscissa -0.01, where Clarabel alone stops at AlmostSolved / NumericalError;
+    the systems of :func:`brl_system`)."""
     import numpy as np
 
     from lmic.api import load_target
@@ -139,16 +157,8 @@ def brl_problems(
     out = []
     for n in sizes:
         for kind in kinds:
-            abscissa, eighths = BRL_KINDS[kind]
-            rng = np.random.default_rng(seed)
-            A = rng.standard_normal((n, n))
-            A -= (max(np.linalg.eigvals(A).real) - abscissa) * np.eye(n)
-            if eighths:
-                A[np.diag_indices(n)] = np.round(A[np.diag_indices(n)] * 8) / 8
-                while max(np.linalg.eigvals(A).real) >= -0.1:
-                    A -= 0.125 * np.eye(n)
-            B, C = rng.standard_normal((n, 2)), rng.standard_normal((2, n))
-            system = {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}
+            system = brl_system(n, kind, seed)
+            A, B, C = (np.asarray(system["data"][k]) for k in ("A", "B", "C"))
             label = f"brl n={n} {kind}" + (f" seed {seed}" if seed else "")
             out.append((label, load_target("tutorial.bounded_real", system)[0], hinf_bracket(A, B, C)))
     return out

@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from enclosure import brl_problems  # noqa: E402
+from enclosure import BRL_KINDS, brl_problems, brl_system  # noqa: E402
 from routes import _cvxpy_brl, _med, _plant, _rounds, ratio  # noqa: E402
 
 __all__ = ["fmt", "cvxpy_ir", "lmic_run", "main"]
@@ -184,7 +184,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run the tables (interleaved rounds) and print them."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--brl-sizes", default="10,20,30,40")
-    ap.add_argument("--kinds", default="random,eighths", help="bounded-real lemma systems: random, eighths")
+    ap.add_argument("--kinds", default="random,eighths", help="bounded-real lemma systems: random, eighths, near")
     ap.add_argument("--theorem-sizes", default="4,8")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--limit", type=float, default=300.0, help="seconds per run")
@@ -202,10 +202,11 @@ def main(argv: list[str] | None = None) -> int:
     out: list[str] = []
     if "brl" in only:
         cases = []
-        kinds = set(args.kinds.split(","))
-        for label, _problem, bracket in brl_problems(ints(args.brl_sizes)):
-            if label.split()[-1] not in kinds:
-                continue
+        kinds = [k for k in args.kinds.split(",") if k]
+        unknown = [k for k in kinds if k not in BRL_KINDS]
+        if unknown:
+            ap.error(f"unknown --kinds {', '.join(unknown)}; known: {', '.join(BRL_KINDS)}")
+        for label, _problem, bracket in brl_problems(ints(args.brl_sizes), tuple(kinds)):
             system = _system_of(label)  # the same system, for lmic's bind and the CVXPY version
             cases.append((label, ("tutorial.bounded_real", system), _cvxpy_brl, (system,), bracket))
         out += ["", "Bounded-real lemma (min gamma); in: the enclosure contains the H-infinity norm"]
@@ -227,18 +228,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _system_of(label: str) -> dict[str, Any]:
-    """The ``(A, B, C)`` of a :func:`enclosure.brl_problems` case, rebuilt with its generator."""
+    """The system of a :func:`enclosure.brl_problems` case (``brl n=N KIND``), from its generator."""
     n = int(label.split("n=")[1].split()[0])
-    kind = label.split()[-1]
-    rng = np.random.default_rng(0)
-    A = rng.standard_normal((n, n))
-    A -= (max(np.linalg.eigvals(A).real) + 0.5) * np.eye(n)
-    if kind == "eighths":
-        A[np.diag_indices(n)] = np.round(A[np.diag_indices(n)] * 8) / 8
-        while max(np.linalg.eigvals(A).real) >= -0.1:
-            A -= 0.125 * np.eye(n)
-    B, C = rng.standard_normal((n, 2)), rng.standard_normal((2, n))
-    return {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}
+    return brl_system(n, label.split()[-1])
 
 
 if __name__ == "__main__":
