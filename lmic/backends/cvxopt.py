@@ -8,6 +8,14 @@ rows go to ``Gl``/``hl``, equalities to ``A x = b`` (``A = a``, ``b = -a0``; the
 change sign to reach the IR's convention). CVXOPT has no time limit of its own: with
 ``SolveOptions.time_limit`` the solve runs in a child process.
 
+KKT solvers, in turn: the structured one (:mod:`lmic.backends.cvxopt_kkt`) where it is cheaper,
+else ``chol``; a run that stops ``unknown`` (or raises) is run again with CVXOPT's ``qr`` from
+the start, except after a structured run whose last :data:`QR_TAIL_TRIED` iterations already
+were ``qr`` (it hands over to ``qr`` near the optimum): on the near-unstable bounded-real lemma
+(spectral abscissa -0.01, 20 to 50 states) both runs stall alike after 50 to 90 ``qr``
+iterations, and the second one cost as much as the first (50 states: 83 s for the two, neither
+rescued 8 of 8 cases measured at 16 to 24 states; ``benchmarks`` in the closing note).
+
 Examples
 --------
 >>> CVXOPTBackend.name
@@ -29,7 +37,11 @@ from lmic.ir.problem import Problem
 from lmic.options import SolveOptions
 from lmic.solution import Solution
 
-__all__ = ["CVXOPTBackend", "to_cvxopt_sparse"]
+__all__ = ["CVXOPTBackend", "to_cvxopt_sparse", "QR_TAIL_TRIED"]
+
+#: a structured run that stopped 'unknown' after this many iterations of CVXOPT's 'qr' (its
+#: hand-over near the optimum) is not run again with 'qr' from the start (module docstring)
+QR_TAIL_TRIED = 10
 
 
 def to_cvxopt_sparse(M: sp.spmatrix):
@@ -198,11 +210,26 @@ class CVXOPTBackend(Backend):
             return solvers.sdp(c, kktsolver=kkt, options=dict(opts), **kwargs)
 
         t0 = time.perf_counter()
-        result, kkt = in_turn(
-            [chosen] if chosen else ([structured, "qr"] if structured is not None else KKT_ORDER),
-            run,
-            lambda r: str(r["status"]) == "unknown",
-        )
+
+        def again(r: Any) -> bool:
+            # 'unknown' asks for CVXOPT's 'qr' from the start, unless the structured run's last
+            # QR_TAIL_TRIED iterations already were 'qr' (the same stall again: module docstring)
+            return str(r["status"]) == "unknown" and not (
+                structured is not None and structured.qr_tail >= QR_TAIL_TRIED
+            )
+
+        if structured is not None and not chosen:
+            try:
+                result, kkt = run(structured), structured
+            except (ValueError, ArithmeticError):
+                if structured.qr_tail >= QR_TAIL_TRIED:
+                    raise
+                result, kkt = run("qr"), "qr"
+            else:
+                if again(result):
+                    result, kkt = run("qr"), "qr"
+        else:
+            result, kkt = in_turn([chosen] if chosen else KKT_ORDER, run, again)
         solve_s = time.perf_counter() - t0
         native = str(result["status"])
         duals = None

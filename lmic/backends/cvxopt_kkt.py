@@ -438,6 +438,11 @@ class StructuredKKT:
         self._work: list[list[np.ndarray]] = [[] for _ in self.blocks]
         self._qr: Any = None
 
+    @property
+    def qr_tail(self) -> int:
+        """Factorisations made by CVXOPT's QR solver after the hand-over (0 without one)."""
+        return 0 if self.fallback_from is None else self.iterations - self.fallback_from
+
     def __call__(self, W: dict[str, Any]) -> Any:
         """Factor the KKT system of the scaling ``W``; return the solve ``f(x, y, z)``.
 

@@ -290,3 +290,33 @@ def test_refinement_makes_the_solve_exact_for_the_true_operator(small_problems_t
         f(x, y, z)
         out.append(np.array(x).ravel())
     np.testing.assert_allclose(out[0], out[1], rtol=1e-7, atol=1e-9 * np.abs(out[1]).max())
+
+
+@pytest.mark.parametrize("structured_iterations, runs, answer", [(1, 1, "structured"), (8, 2, "qr")])
+def test_a_run_that_stalled_in_qr_is_not_run_again_with_qr(
+    monkeypatch, small_problems_too, structured_iterations, runs, answer
+):
+    """A structured run stopped 'unknown' (here by the iteration limit, 12) after
+    QR_TAIL_TRIED or more iterations of CVXOPT's 'qr' is the answer: a second run with 'qr'
+    from the start is not made (on the near-unstable bounded-real lemma it stalls alike and
+    costs as much). After a shorter 'qr' tail (4 iterations) the second run is made."""
+    from cvxopt import solvers
+
+    from lmic.api import load_target, solve_problem
+    from lmic.options import SolveOptions
+
+    problem = load_target("tutorial.bounded_real", brl_system(10, 4)[3])[0]
+    calls = {"n": 0}
+    real_sdp = solvers.sdp
+
+    def counting(*args, **kwargs):
+        calls["n"] += 1
+        return real_sdp(*args, **kwargs)
+
+    monkeypatch.setattr(solvers, "sdp", counting)
+    monkeypatch.setattr(kkt_module, "MAX_STRUCTURED_ITERATIONS", structured_iterations)
+    solution = solve_problem(problem, "cvxopt", SolveOptions(max_iter=12))
+    qr_tail = 12 - structured_iterations + 1
+    assert (qr_tail >= cvxopt_backend.QR_TAIL_TRIED) == (runs == 1)
+    assert calls["n"] == runs and solution.info["kktsolver"] == answer
+    assert solution.status == "inaccurate" and solution.native_status == "unknown"
