@@ -64,8 +64,8 @@ def better_primal(
 
     An existing primal end without a proven dual end is only compared with the backed-off
     point's (a proof, no solve: there is no gap to meet); with one, the polish and the
-    restoration solve follow, the latter on interior-point backends only (a first-order one's points are
-    too coarse). It is also what closes the gap of a certified point that keeps the strict
+    restoration solve follow, the latter on interior-point backends only (a first-order one's
+    points are too coarse). It is also what closes the gap of a certified point that keeps the strict
     reduction's margin (random sampled_euler.thm3 at 12 states, seed 3, on Clarabel: 1.9e-6).
     """
     from lmic.certify.enclosure import GAP_TARGET, polish_primal, primal_end, with_primal
@@ -144,26 +144,30 @@ def decided_by_enclosure(
 ) -> Any | None:
     """The answer an optimisation outcome becomes from its enclosure's proven point.
 
-    * A ``rejected`` or ``undecided`` outcome whose enclosure has both ends proven within
-      ``options.gap`` from a restored point (``restored_x``): ``certified`` with that point when
-      the certifier certifies it (its evidence: the certifier's and the enclosure's, both
-      proofs).
-    * A ``rejected`` outcome (the solver's point fails) whose enclosure's primal end is a point
-      the certifier certifies (a restored point, a certified backed-off point) but whose gap is
-      not met: ``undecided`` *with that point*, as for a point that holds from an inexact solve
-      (:mod:`lmic.policy`): the point is proven, the optimum is not, and the reason says so. The
-      answer's variables and gains are then those of a proven point, not of the rejected one.
+    The enclosure's primal end may come from a point of its own: a restored point
+    (``restored_x``) or the certified backed-off point (``back``). When the certifier certifies
+    that point:
+
+    * a ``rejected`` or ``undecided`` outcome whose enclosure has both ends proven within
+      ``options.gap``: ``certified`` with that point (its evidence: the certifier's and the
+      enclosure's, both proofs);
+    * a ``rejected`` or ``undecided`` outcome without a point that holds (the solver's point
+      fails, or there is none) whose gap is not met: ``undecided`` *with that point*, as for a
+      point that holds from an inexact solve (:mod:`lmic.policy`): the point is proven, the
+      optimum is not, and the reason says so. The answer's variables and gains are then those
+      of a proven point, not of the rejected one.
 
     ``None`` otherwise (the outcome stands).
     """
     gap = (options or SolveOptions()).gap
     if outcome.verdict not in ("rejected", "undecided") or enc is None:
         return None
-    proven_optimum = enc.get("restored_x") is not None and enc.get("rel_gap") is not None and enc["rel_gap"] <= gap
     point_holds = getattr(outcome.certificate, "verdict", None) == "certified"
     x_enc, label = enc.get("restored_x"), "the enclosure's restored point"
     if x_enc is None and enc.get("primal") == "certified backed-off point" and back and back.get("x") is not None:
         x_enc, label = back["x"], "the certified backed-off point"
+    # the enclosure's primal end is the adopted point's: its gap is that point's
+    proven_optimum = x_enc is not None and enc.get("rel_gap") is not None and enc["rel_gap"] <= gap
     if x_enc is None or (point_holds and not proven_optimum):
         return None  # nothing proven to adopt, or the answer's own point already holds
     from lmic.certify import certify

@@ -105,3 +105,10 @@ def test_uio_instance_with_a_rejected_solver_point_answers_with_the_proven_one()
     # independent reference (bisection on Theorem 3.2's feasibility, resolution 2e-3)
     _, value, tol = oi.reference("uio_dt.thm4_1", oi.instance("uio_dt.thm4_1", 100, 2))
     assert abs(r.objective - value) <= tol
+
+
+def test_a_backed_off_primal_end_that_meets_the_gap_certifies_the_answer():
+    p = _min_t()
+    enc = _enc(1.0, 1.0 + 1e-8, 1.0 + 1e-8, primal="certified backed-off point")
+    out = decided_by_enclosure(p, _rejected(p), enc, SolveOptions(gap=1e-4), back={"x": [1.0 + 1e-8]})
+    assert out is not None and out.verdict == "certified" and out.solution.x.tolist() == [1.0 + 1e-8]
