@@ -13,8 +13,8 @@ else ``chol``; a run that stops ``unknown`` (or raises) is run again with CVXOPT
 the start, except after a structured run whose last :data:`QR_TAIL_TRIED` iterations already
 were ``qr`` (it hands over to ``qr`` near the optimum): on the near-unstable bounded-real lemma
 (spectral abscissa -0.01, 20 to 50 states) both runs stall alike after 50 to 90 ``qr``
-iterations, and the second one cost as much as the first (50 states: 83 s for the two, neither
-rescued 8 of 8 cases measured at 16 to 24 states; ``benchmarks`` in the closing note).
+iterations, and the second one costs as much as the first (50 states: 83 s for the two); at 20
+and 24 states (seeds 0-2) the second run rescued none of the 5 structured runs that stalled.
 
 Examples
 --------
