@@ -469,7 +469,10 @@ def _cut(
     if route is not None and route.get("text"):
         steps = enc["cut"]["steps"]
         ends = f"relative gap {enc['rel_gap']:.2g}" if enc.get("rel_gap") is not None else "no dual end proved"
-        route["text"] = f"{route['text']} => objective cuts ({steps} feasibility problems) -> {ends}"
+        if enc["cut"].get("skipped"):
+            route["text"] = f"{route['text']} => objective cuts not tried (dual equality system singular in floats)"
+        else:
+            route["text"] = f"{route['text']} => objective cuts ({steps} feasibility problems) -> {ends}"
     return enc, time.perf_counter() - t0
 
 

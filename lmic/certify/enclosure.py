@@ -544,6 +544,8 @@ def describe(record: dict[str, Any] | None) -> list[str]:
             f"  objective cuts: {cut['steps']} feasibility problems with the objective bounded, {proved} decided "
             f"({cut.get('time_s', 0.0):.2f} s)"
         )
+    elif cut.get("skipped"):
+        lines.append(f"  objective cuts: not tried ({cut['skipped']})")
     cond = record.get("conditional") or {}
     if cond.get("value") is not None:
         lines.append(

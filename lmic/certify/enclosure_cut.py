@@ -42,7 +42,7 @@ import scipy.sparse as sp
 from lmic.errors import LmicError
 from lmic.ir.problem import LinearConstraints, Objective, Problem
 
-__all__ = ["cut_problem", "cut_bound", "prove_cut", "verify_cut", "CUT_NAME"]
+__all__ = ["cut_problem", "cut_bound", "prove_cut", "verify_cut", "CUT_NAME", "near_dependent_rows", "NEAR_SINGULAR"]
 
 #: the name of the cut's row in the cut problem
 CUT_NAME = "objective cut"
@@ -182,3 +182,57 @@ def verify_cut(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
     if not proof.get("proven"):
         return {"ok": False, "reason": f"the objective cut at {r:.10g} is not proved: {proof.get('reason')}"}
     return {"ok": True, "reason": f"objective cut re-proved ({proof['kind']})"}
+
+
+#: the smallest singular value, relative to the largest, of the normalised rows of the dual
+#: equality system below which :func:`near_dependent_rows` calls them dependent in floating point
+NEAR_SINGULAR = 1e-12
+
+
+def near_dependent_rows(problem: Problem) -> str | None:
+    """Why no cut of ``problem`` can be proved infeasible, or ``None``: the rows of the dual
+    equality system (one per variable the constraints involve, each normalised) are dependent
+    to within :data:`NEAR_SINGULAR` in floating point, yet independent exactly.
+
+    A Farkas certificate of a cut problem must meet these rows (with one more column, the cut's
+    multiplier, which does not separate rows the objective does not involve), exactly for
+    :func:`prove_cut`: the exact correction of a float certificate is its residual over the
+    smallest singular value, far beyond any margin. Exactly dependent rows (a projector with
+    exact entries, the flexible-joint example of ``uio_dt.thm4_1``) are consistent and the proof
+    goes through; rows dependent only up to rounding (the same projector of random data:
+    ``Ybar V`` with ``V`` of rank 1 in floating point) are not.
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+    >>> v = [Variable("a", "scalar", (1, 1)), Variable("b", "scalar", (1, 1), offset=1)]
+    >>> F = lambda b: sp.csc_matrix(np.array([[1.0, 1.0, 1.0], [0.0, 0.0, 0.0], [1.0, 0.0, b]]))
+    >>> lmi = lambda b: LMI("I + a A + b B > 0", 2, F(b))
+    >>> p = Problem(v, [lmi(2.0**-52)], LinearConstraints.empty(2), Objective("min", [0.0, 1.0, 0.0]))
+    >>> near_dependent_rows(p)[:31]  # a's and b's coefficients equal up to rounding
+    'the dual equality system is sin'
+    >>> near_dependent_rows(dataclasses.replace(p, lmis=[lmi(0.0)])) is None  # equal exactly: provable
+    True
+    """
+    from fractions import Fraction
+
+    from lmic.certify.enclosure_repair import _jacobian
+    from lmic.certify.psd import load_flint
+
+    J = _jacobian(problem)[0].toarray()[1:]
+    J = J[np.any(J != 0, axis=1)]
+    if J.shape[0] < 2:
+        return None
+    norms = np.linalg.norm(J, axis=1, keepdims=True)
+    s = np.linalg.svd(J / norms, compute_uv=False)
+    if not s[-1] < NEAR_SINGULAR * s[0]:
+        return None
+    flint = load_flint()
+    exact = flint.fmpq_mat(
+        J.shape[0], J.shape[1], [flint.fmpq(*Fraction(float(v)).as_integer_ratio()) for v in J.ravel()]
+    )
+    if exact.rank() < J.shape[0]:
+        return None  # exactly dependent: the proof handles consistent rows
+    return (
+        f"the dual equality system is singular to {s[-1] / s[0]:.1e} (relative) in floating point and regular "
+        "exactly: no cut's Farkas certificate can be made exact"
+    )

@@ -110,15 +110,22 @@ def _recession_direction(problem) -> np.ndarray | None:
     return None if prob.status != "optimal" else d.value
 
 
-def test_uio_dt_thm4_1_upper_end_and_degenerate_dual():
+def test_uio_dt_thm4_1_upper_end_and_degenerate_dual(monkeypatch):
     """The dual of ``min rho`` has no interior point (the optimal set is unbounded: a recession
-    direction of zero objective), so no repaired dual point proves a lower end. On this instance
-    (seed 0, the optimum attained near the solver's point) the objective cuts just below it end
-    with bounded rays only (their exact proofs fail, as the dual's: the face is irrational), so
-    there is still no lower end, never an invented one, and the record says what was tried. The
-    shipped example, whose infimum is not attained, gets both ends from the cuts
-    (``test_uio_dt.test_thm4_1_min_rho_enclosed_by_objective_cuts``). The reference is the
-    catalogue's bisection (``optimisation_instances._uio``)."""
+    direction of zero objective), so no repaired dual point proves a lower end. On random data
+    the coefficients of ``Ybar`` (through ``(V C A)' Ybar'``, ``V`` a projector of rank 1
+    computed in floating point) are pairwise parallel up to rounding: the dual equality system
+    is singular in floats and regular exactly, and no Farkas certificate of an objective cut
+    can be made exact either. The cuts are therefore not tried (they cost 1-9 s on such
+    instances); with the gate off they all end in bounded rays. There is still no lower end,
+    never an invented one, and the record says why. The shipped example, whose projector is
+    exact, gets both ends from the cuts (``test_uio_dt.test_thm4_1_min_rho_enclosed_by_objective_cuts``).
+    The reference is the catalogue's bisection (``optimisation_instances._uio``)."""
+    from fractions import Fraction
+
+    import flint
+
+    import lmic.certify.enclosure_cut as enclosure_cut
     from lmic.route_cut import MAX_UNDECIDED
 
     tid = "uio_dt.thm4_1"
@@ -131,8 +138,19 @@ def test_uio_dt_thm4_1_upper_end_and_degenerate_dual():
     d = _recession_direction(r.problem)
     assert d is not None and float(np.max(np.abs(d))) > 1e-3
     assert enc["lower"] is None and enc["dual"]["proven"] is False
-    assert "no certified lower end" in enc["reason"]
-    assert f"objective cuts: {MAX_UNDECIDED} tried, none proved" in enc["reason"]
+    assert "no certified lower end" in enc["reason"] and "objective cuts not tried" in enc["reason"]
+    assert enc["cut"]["steps"] == 0 and "singular" in enc["cut"]["skipped"]
+    # the claim, recomputed: every variable's coefficients over the LMIs, as one row each
+    rows = np.hstack([lmi.coeffs.toarray()[:, 1:].T for lmi in r.problem.lmis])
+    rows = rows[np.any(rows != 0, axis=1)]
+    sv = np.linalg.svd(rows / np.linalg.norm(rows, axis=1, keepdims=True), compute_uv=False)
+    assert sv[-1] < 1e-12 * sv[0]
+    exact = flint.fmpq_mat(*rows.shape, [flint.fmpq(*Fraction(float(v)).as_integer_ratio()) for v in rows.ravel()])
+    assert exact.rank() == rows.shape[0]
+    # with the gate off, the cuts just below the primal end end in bounded rays only
+    monkeypatch.setattr(enclosure_cut, "near_dependent_rows", lambda problem: None)
+    enc = _enclosure_checked(solve(tid, system, backend="clarabel", backoff=0), value, tol)
+    assert enc["lower"] is None and f"objective cuts: {MAX_UNDECIDED} tried, none proved" in enc["reason"]
     assert enc["cut"]["steps"] == MAX_UNDECIDED
     assert all("infeasible-bounded" in step["decided"] for step in enc["cut"]["log"])
     assert all(step["cut"] < enc["upper"] for step in enc["cut"]["log"])
