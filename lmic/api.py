@@ -467,12 +467,12 @@ def _cut(
     t0 = time.perf_counter()
     enc = cut_route(problem, enc, backend, options or SolveOptions(), exact, cut_budget(solve_s))
     if route is not None and route.get("text"):
-        steps = enc["cut"]["steps"]
-        ends = f"relative gap {enc['rel_gap']:.2g}" if enc.get("rel_gap") is not None else "no dual end proved"
         if enc["cut"].get("skipped"):
-            route["text"] = f"{route['text']} => objective cuts not tried (dual equality system singular in floats)"
+            tail = "objective cuts not tried (dual equality system singular in floats)"
         else:
-            route["text"] = f"{route['text']} => objective cuts ({steps} feasibility problems) -> {ends}"
+            ends = f"relative gap {enc['rel_gap']:.2g}" if enc.get("rel_gap") is not None else "no dual end proved"
+            tail = f"objective cuts ({enc['cut']['steps']} feasibility problems) -> {ends}"
+        route["text"] = f"{route['text']} => {tail}"
     return enc, time.perf_counter() - t0
 
 

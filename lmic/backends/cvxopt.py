@@ -211,18 +211,19 @@ class CVXOPTBackend(Backend):
 
         t0 = time.perf_counter()
 
+        def qr_tried() -> bool:
+            # the structured run's last QR_TAIL_TRIED iterations already were 'qr': a run with
+            # 'qr' from the start would stall alike (module docstring)
+            return structured is not None and structured.qr_tail >= QR_TAIL_TRIED
+
         def again(r: Any) -> bool:
-            # 'unknown' asks for CVXOPT's 'qr' from the start, unless the structured run's last
-            # QR_TAIL_TRIED iterations already were 'qr' (the same stall again: module docstring)
-            return str(r["status"]) == "unknown" and not (
-                structured is not None and structured.qr_tail >= QR_TAIL_TRIED
-            )
+            return str(r["status"]) == "unknown" and not qr_tried()
 
         if structured is not None and not chosen:
             try:
                 result, kkt = run(structured), structured
             except (ValueError, ArithmeticError):
-                if structured.qr_tail >= QR_TAIL_TRIED:
+                if qr_tried():
                     raise
                 result, kkt = run("qr"), "qr"
             else:
