@@ -8,6 +8,7 @@ from __future__ import annotations
 import cvxpy as cp
 import numpy as np
 import pytest
+import sympy
 from delshad_helpers import (
     bisect,
     cvx_max_margin,
@@ -248,6 +249,59 @@ def test_thm3_3_random_matches_cvxpy(seed, q1, gamma, mu, backend):
     if q1 == 2:  # q1 + p > n + h: the projector beta is not zero
         assert np.linalg.norm(r.problem.data["beta1"]) > 0.1
     _agree(r, t_ref)
+
+
+def _exact(a):
+    """A float array as an exact sympy matrix (every float is a dyadic rational)."""
+    a = np.atleast_2d(np.asarray(a, dtype=float))
+    return sympy.Matrix(a.shape[0], a.shape[1], [sympy.Rational(float(x)) for x in a.ravel()])
+
+
+def test_thm3_3_feasible_where_the_direct_reference_stops_early():
+    """Seed 301, q1 = 2, mu = 0.2 (a survey instance): CVXPY + Clarabel's max-margin reference
+    returns t = -0.081, "infeasible", yet the LMIs hold at a point whose Ybar1 is ~5e8: the
+    feasible points lie far out along the directions the projector beta nearly annihilates,
+    where the direct solve does not go. lmic's max-margin solve does not claim infeasibility
+    (its ray is not proved) and the fixed-margin route certifies the point. The test checks it
+    independently of lmic and of rounding: the pre-processing of Section 3.3 (M, alpha, beta,
+    with the exact pseudo-inverse and projector) and LMI (40) are recomputed in rational
+    arithmetic at lmic's point, and ``-F40 - 1e-3 I`` is proved positive definite."""
+    d = _random_plant(301, 2)
+    assert _cvx_thm3_3(d, 0.1, 0.2) < -1e-5  # the direct reference says infeasible
+    r = solve("descriptor.thm3_3", _system(d, gamma=0.1, mu=0.2))
+    assert r.verdict == "certified" and r.certificate.verdict == "certified", r.certificate.reason
+    v = r.values
+    assert np.abs(v["Ybar1"]).max() > 1e6  # far out, where the float projector's rounding matters
+    A, C, F, G, R = (_exact(d[k]) for k in "ACFGR")
+    n, h = A.shape[0], F.shape[1]
+    eta = sympy.Matrix.hstack(sympy.eye(n), sympy.zeros(n, h))
+    Abar, Cbar = sympy.Matrix.hstack(A, F), sympy.Matrix.hstack(C, G)
+    M = (R * sympy.Matrix.vstack(eta, Cbar).pinv())[:, :n]
+    T = sympy.Matrix.vstack(M * eta, Cbar)
+    Tp = T.pinv()
+    Pi = sympy.eye(T.shape[0]) - T * Tp
+    q1 = R.shape[0]
+    a1, a2, b1, b2 = Tp[:, :q1], Tp[:, q1:], Pi[:, :q1], Pi[:, q1:]
+    assert Pi * T == sympy.zeros(*T.shape)  # exact
+    P, Gam, Yb1, Y2 = (_exact(v[k]) for k in ("P", "Gamma", "Ybar1", "Y2"))
+    D, D1, D2 = _exact(d["D"]), _exact(d["D1"]), _exact(d["D2"])
+    gamma, mu = sympy.Rational(1, 10), sympy.Rational(1, 5)
+    PN = P * M * Abar * a1 + Yb1 * b1
+    a13 = P * M * Abar * a2 * D2 + Yb1 * b2 * D2 - P * M * D1
+    a14 = a1.T + b1.T * Y2.T
+    a34 = D2.T * a2.T + D2.T * b2.T * Y2.T
+    nh = a1.shape[0]
+    F40 = sympy.BlockMatrix(
+        [
+            [PN + PN.T, P * M * D, a13, a14],
+            [(P * M * D).T, -Gam, sympy.zeros(1, 1), sympy.zeros(1, nh)],
+            [a13.T, sympy.zeros(1, 1), -(mu**2) * sympy.eye(1), a34],
+            [a14.T, sympy.zeros(nh, 1), a34.T, -sympy.eye(nh) / (1 + gamma**2)],
+        ]
+    ).as_explicit()
+    eps = sympy.Rational(1, 1000)
+    for block in (P, sympy.eye(1) - Gam, -F40):
+        assert (block - eps * sympy.eye(block.shape[0])).is_positive_definite
 
 
 # -- bad input -------------------------------------------------------------------------------------
