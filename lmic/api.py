@@ -71,7 +71,9 @@ class Result:
         :class:`lmic.certify.Certificate` (``None`` if the certifier is not installed).
     timings : dict
         ``compile_s`` (compile or file load), ``lower_s`` (lmic's reduction, lowering and result
-        mapping), ``solve_s`` (inside the solver), ``certify_s``.
+        mapping), ``solve_s`` (inside the solver), ``certify_s``; ``enclosure_s`` (optimisation
+        problems), ``backoff_s`` (the backed-off solve) and ``ray_search_s`` (the search for an
+        improving ray after a solver said ``unbounded``, when it proved nothing) when they ran.
     attempts : list of dict
         For ``auto``: every backend tried, its status and verdict.
     enclosure : dict or None
@@ -372,7 +374,7 @@ def solve(
     t0 = time.perf_counter()
     routed = decide_route(problem, backend, options, exact=exact)  # the default route (lmic.routes)
     outcome = routed.outcome
-    total = time.perf_counter() - t0 - routed.enclosure_s
+    total = time.perf_counter() - t0 - routed.enclosure_s - outcome.ray_search_s
     sol, cert = outcome.solution, outcome.certificate
     used = outcome.backend or str(getattr(backend, "label", backend))
     attempts = [a.to_dict() for a in outcome.attempts]
@@ -412,6 +414,8 @@ def solve(
         "certify_s": certify_s,
         "enclosure_s": enclosure_s,
     }
+    if outcome.ray_search_s:
+        timings["ray_search_s"] = outcome.ray_search_s
     if back is not None:
         timings["backoff_s"] = back["time_s"]
     return Result(

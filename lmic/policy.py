@@ -357,6 +357,7 @@ def decide(
     rescue: bool = True,
     budget_s: float | None = None,
     ray_budget_s: float | None = None,
+    max_bounded: int = MAX_BOUNDED,
 ) -> Outcome:
     """Decide ``problem`` by the policy of the module docstring.
 
@@ -386,6 +387,11 @@ def decide(
         per backend shares :data:`RAY_PROOF_BUDGET_S` across them, :mod:`lmic.routes`); default:
         the first proof always runs, the next ones while the proofs took less than
         :data:`RAY_PROOF_BUDGET_S`.
+    max_bounded : int
+        Stop escalating after this many backends gave bounded rays (default
+        :data:`MAX_BOUNDED`); ``1`` when any infeasibility answer settles the question, e.g. the
+        search for an improving ray (:mod:`lmic.route_unbounded`), where a ray problem that is
+        infeasible means only "no ray found".
 
     Returns
     -------
@@ -485,7 +491,7 @@ def decide(
             break
         if run.best is not None and run.best.verdict == "infeasible-bounded":
             bounded += 1
-            if bounded >= MAX_BOUNDED:
+            if bounded >= max_bounded:
                 break
         if qi == len(queue) and cut and budget_s is None and auto_budget:
             # nothing decided within the budgets: the first backend cut by its budget, unbounded

@@ -101,7 +101,7 @@ def print_result(
             markup=False,
         )
     t = result.timings
-    times = ", ".join(f"{k[:-2]} {v:.3f} s" for k, v in t.items() if isinstance(v, float))
+    times = ", ".join(f"{k[:-2].replace('_', ' ')} {v:.3f} s" for k, v in t.items() if isinstance(v, float))
     c.print(f"[dim]timings  {times}[/dim]")
     if output and result.certificate is not None:
         c.print(f"wrote    {output}")
