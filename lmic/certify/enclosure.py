@@ -116,7 +116,7 @@ from lmic.certify.enclosure_conditional import RADIUS_FACTOR, best_box_bound, bo
 from lmic.certify.enclosure_dual import dual_bound, verify_dual_bound
 from lmic.certify.enclosure_exact import EXACT_MAX_N
 from lmic.certify.enclosure_face import face_bound
-from lmic.certify.enclosure_facial import facial_or, obvious_face
+from lmic.certify.enclosure_facial import FacialFirst, facial_or, obvious_face
 from lmic.certify.enclosure_float import lambda_min_lower, polish_primal, primal_end
 from lmic.certify.enclosure_repair import PERTURBATIONS, SHIFTS, perturbed_problem
 from lmic.certify.snap import exact_primal_end
@@ -233,6 +233,8 @@ def enclosure(
             dual = facial_or(problem, duals, dual, solve_point, exact=exact, resolve=resolve, deadline=deadline)
         if not dual.get("proven"):
             tried = dual.get("reason") if face else None
+            # the solver's dual failed: its face before dual_bound's re-solves (FacialFirst)
+            first = FacialFirst(problem, duals, solve_point, exact, resolve, deadline) if face is None else None
             try:
                 search = search_budget(solve_s) if budget_s is None else min(search_budget(solve_s), float(budget_s))
                 dual = dual_bound(
@@ -243,10 +245,11 @@ def enclosure(
                     solve_point=solve_point,
                     budget_s=search,
                     solve_s=solve_s,
+                    before_solves=first if solve_point is not None else None,
                 )
             except CertificateError as exc:
                 dual = {"proven": False, "reason": str(exc)}
-            if face is None:
+            if face is None and not (first is not None and first.tried):
                 # no strictly feasible dual point: the face it lives on (lmic.certify.enclosure_facial)
                 dual = facial_or(problem, duals, dual, solve_point, exact=exact, resolve=resolve, deadline=deadline)
             elif not dual.get("proven"):

@@ -66,6 +66,7 @@ def dual_bound(
     budget_s: float = 20.0,
     solve_s: float = 0.0,
     solve_point: Callable[[Problem], np.ndarray | None] | None = None,
+    before_solves: Callable[[], dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
     """Prove a lower bound of the minimisation form's optimal value from a dual point.
 
@@ -93,6 +94,11 @@ def dual_bound(
         ``solve_point(problem) -> x or None`` (a solve on the caller's backend, its primal
         point). When neither the shifts nor the perturbation prove, the dual problem is solved
         for a centred point (:mod:`lmic.certify.enclosure_centre`, ``route`` ``"centred"``).
+    before_solves : callable, optional
+        ``before_solves() -> record``: a route tried when the solver's dual fails, before any
+        re-solve (the caller's facial reduction, :mod:`lmic.certify.enclosure_facial`: one solve
+        when the dual has no strictly feasible point, where no re-solve here can prove). Its
+        record is returned when it proves; its reason is kept otherwise.
 
     Returns
     -------
@@ -182,6 +188,13 @@ def dual_bound(
             out = probe
     elif not out["proven"] and len(SHIFTS) > 1:
         out["reason"] = f"{out.get('reason')}; time budget {budget_s:g} s spent after {n_tried} attempts"
+    if not out["proven"] and before_solves is not None and not spent(solves=True):
+        first = before_solves()
+        if first.get("proven"):
+            first["time_s"] = time.perf_counter() - t0
+            return first
+        if first.get("reason"):
+            out["reason"] = f"{out.get('reason')}; {first.get('reason')}"
     if not out["proven"] and resolve is not None:
         for eps_rel in PERTURBATIONS:
             if spent(solves=True):

@@ -199,3 +199,39 @@ def test_family_face_instance_against_an_independent_solve(tmp_path):
     e = r.enclosure
     assert e["dual"]["route"] == "facial"
     assert fam.inside(e, ref, src), (e["lower"], ref, e["upper"])
+
+
+def test_a_dual_without_interior_goes_facial_before_any_re_solve(tmp_path, monkeypatch):
+    """SDPLIB's qap layout (4 facilities): the dual has no strictly feasible point (the
+    gangster constraints), the face is not exposed by one variable (no ``obvious_face``), and
+    the shifted repairs of the solver's dual fail. The facial route is then the next step,
+    before the perturbed and centring re-solves of ``dual_bound`` (which cannot prove there:
+    6 perturbed and 3 centring solves, 8 of the 9 s of the enclosure on the 6-facility layout).
+    Every solve of the enclosure is recorded: the exposing problem's comes first, and the
+    bound encloses CVXPY + Clarabel's optimum (an independent solve of the dual form)."""
+    import lmic.routes as routes
+    from lmic.certify.enclosure_facial import obvious_face
+
+    fam = _families()
+    prob = fam.qap_problem(4, 4)
+    ref = fam.cvxpy_value(prob)
+    f = tmp_path / "qap_4.dat-s"
+    f.write_text(fam.sdpa_text(*prob))
+    seen: list[str] = []
+    real = routes._solve_on
+
+    def recording(backend, problem, options):
+        meta = problem.meta or {}
+        kind = "exposing" if "exposing_of" in meta else ("perturbed-or-centring" if problem.lmis else "other")
+        seen.append(kind)
+        return real(backend, problem, options)
+
+    monkeypatch.setattr(routes, "_solve_on", recording)
+    r = lmic.api.solve(str(f))
+    assert obvious_face(r.problem) is None
+    assert r.verdict == "certified"
+    e = r.enclosure
+    assert e["dual"]["route"] == "facial", e["dual"].get("reason")
+    assert seen and seen[0] == "exposing", seen
+    assert e["lower"] - 1e-6 * abs(ref) <= ref <= e["upper"] + 1e-6 * abs(ref), (e["lower"], ref, e["upper"])
+    assert e["rel_gap"] < 1e-6
