@@ -234,5 +234,6 @@ def near_dependent_rows(problem: Problem) -> str | None:
         return None  # exactly dependent: the proof handles consistent rows
     return (
         f"the dual equality system is singular to {s[-1] / s[0]:.1e} (relative) in floating point and regular "
-        "exactly: no cut's Farkas certificate can be made exact"
+        "exactly: no cut's Farkas certificate can be made exact (variables that act only through "
+        "rounding, e.g. through a projector computed in floating point: docs/writing-a-theorem.md)"
     )
