@@ -316,6 +316,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     steps: list[dict[str, Any]] = []
     bounded = 0
     escalated = 0
+    ray_search_s = 0.0
     clock, first_s = RouteClock(), 0.0  # the route's cost, robust to load (route_escalation)
     k = -1
     while k + 1 < len(names):
@@ -341,6 +342,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
         if budget is not None and not out.decided and time.perf_counter() - t_b >= budget:
             cut.append(name)  # stopped by its budget: the next backend now; retried at the end
         attempts.extend(out.attempts)
+        ray_search_s += out.ray_search_s  # each backend's search for a ray it said exists
         step: dict[str, Any] = {"backend": name, "verdict": out.verdict}
         steps.append(step)
         enc = None
@@ -404,6 +406,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     best, best_enc, t_box = _boxed_upper(problem, best, best_enc, steps, options, exact)
     enc_s += t_box
     best.attempts = attempts
+    best.ray_search_s = ray_search_s
     if best.solution is not None:
         best.solution.info["attempts"] = [a.to_dict() for a in attempts]
     return RouteResult(best, best_enc, enc_s, {"steps": steps, "text": describe(steps, problem), "gap": options.gap})

@@ -82,3 +82,29 @@ def test_a_ray_search_on_a_bounded_problem_asks_one_backend_per_ray_problem(monk
     # the two ray problems (strict, then closed): one backend each; then the original's
     # feasibility problem, on its own route (stopped by MAX_BOUNDED as any decision)
     assert [len(b) for _, b in asked] == [1, 1, policy.MAX_BOUNDED], asked
+
+
+def test_the_route_reports_the_ray_search_apart_from_lmics_own_time(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The search for a ray a backend claimed (stood in by 0.4 s of sleep recorded on the
+    outcome) reaches ``ray_search_s`` of the route's answer (the route sums it over its
+    backends) and the timings, not ``lower_s`` (lmic's reduction and lowering)."""
+    import time
+
+    import lmic.api
+    import lmic.routes as routes
+
+    real = routes._unbounded_checked
+
+    def searched(problem, out, options):
+        out = real(problem, out, options)
+        time.sleep(0.4)
+        out.ray_search_s += 0.4
+        return out
+
+    monkeypatch.setattr(routes, "_unbounded_checked", searched)
+    r = lmic.api.solve(_bounded_problem())
+    assert r.verdict == "certified"
+    assert r.enclosure["lower"] <= 1.0 <= r.enclosure["upper"]  # the optimum t = 1
+    n_backends = len({a["backend"] for a in r.attempts})
+    assert r.timings["ray_search_s"] == pytest.approx(0.4 * n_backends)
+    assert r.timings["lower_s"] < 0.4
