@@ -178,8 +178,9 @@ class Outcome:
     backend: str | None = None
     #: ``unbounded-certified``: the exact improving ray (:mod:`lmic.route_unbounded`)
     unbounded: dict[str, Any] | None = field(default=None, repr=False)
-    #: seconds of the search for an improving ray after a solver said ``unbounded``, when it
-    #: proved nothing (its solves are not among ``attempts``: :mod:`lmic.route_unbounded`)
+    #: seconds of the search for an improving ray after a solver said ``unbounded`` (the ray
+    #: problems and the feasibility check), when it proved nothing (its solves are not among
+    #: ``attempts``: :mod:`lmic.route_unbounded`)
     ray_search_s: float = 0.0
 
     def exit_code(self) -> int:

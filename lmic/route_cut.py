@@ -32,6 +32,7 @@ Examples
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
@@ -160,8 +161,6 @@ def cut_route(
 
     (``tests/engine/test_route_cut.py`` runs it on ``inf t`` subject to ``[[x, 1], [1, t]] > 0``.)
     """
-    import time
-
     from lmic.certify.enclosure_cut import near_dependent_rows
     from lmic.certify.enclosure_float import primal_end
     from lmic.certify.snap import exact_primal_end

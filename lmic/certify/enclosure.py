@@ -233,8 +233,8 @@ def enclosure(
             dual = facial_or(problem, duals, dual, solve_point, exact=exact, resolve=resolve, deadline=deadline)
         if not dual.get("proven"):
             tried = dual.get("reason") if face else None
-            # the solver's dual failed: its face before dual_bound's re-solves (FacialFirst)
-            first = FacialFirst(problem, duals, solve_point, exact, resolve, deadline) if face is None else None
+            face_first = face is None and solve_point is not None  # its face before dual_bound's re-solves
+            first = FacialFirst(problem, duals, solve_point, exact, resolve, deadline) if face_first else None
             try:
                 search = search_budget(solve_s) if budget_s is None else min(search_budget(solve_s), float(budget_s))
                 dual = dual_bound(
@@ -245,14 +245,13 @@ def enclosure(
                     solve_point=solve_point,
                     budget_s=search,
                     solve_s=solve_s,
-                    before_solves=first if solve_point is not None else None,
+                    before_solves=first,
                 )
             except CertificateError as exc:
                 dual = {"proven": False, "reason": str(exc)}
-            if face is None and not (first is not None and first.tried):
-                # no strictly feasible dual point: the face it lives on (lmic.certify.enclosure_facial)
-                dual = facial_or(problem, duals, dual, solve_point, exact=exact, resolve=resolve, deadline=deadline)
-            elif not dual.get("proven"):
+            if first is not None:  # no strictly feasible dual point: the face it lives on, if not tried yet
+                dual = first.after(dual)
+            elif face is not None and not dual.get("proven"):
                 dual["reason"] = f"{dual.get('reason')}; {tried}"
     out["dual"] = dual
     upper_value = None

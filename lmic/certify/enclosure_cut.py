@@ -213,8 +213,7 @@ def near_dependent_rows(problem: Problem) -> str | None:
     >>> near_dependent_rows(dataclasses.replace(p, lmis=[lmi(0.0)])) is None  # equal exactly: provable
     True
     """
-    from fractions import Fraction
-
+    from lmic.certify.enclosure_facial_int import _exact_int_rows
     from lmic.certify.enclosure_repair import _jacobian
     from lmic.certify.psd import load_flint
 
@@ -226,11 +225,8 @@ def near_dependent_rows(problem: Problem) -> str | None:
     s = np.linalg.svd(J / norms, compute_uv=False)
     if not s[-1] < NEAR_SINGULAR * s[0]:
         return None
-    flint = load_flint()
-    exact = flint.fmpq_mat(
-        J.shape[0], J.shape[1], [flint.fmpq(*Fraction(float(v)).as_integer_ratio()) for v in J.ravel()]
-    )
-    if exact.rank() < J.shape[0]:
+    # each row times a power of two, exactly integer: the same rank as the float data's
+    if load_flint().fmpz_mat(_exact_int_rows(J)).rank() < J.shape[0]:
         return None  # exactly dependent: the proof handles consistent rows
     return (
         f"the dual equality system is singular to {s[-1] / s[0]:.1e} (relative) in floating point and regular "

@@ -98,7 +98,7 @@ def dual_bound(
         ``before_solves() -> record``: a route tried when the solver's dual fails, before any
         re-solve (the caller's facial reduction, :mod:`lmic.certify.enclosure_facial`: one solve
         when the dual has no strictly feasible point, where no re-solve here can prove). Its
-        record is returned when it proves; its reason is kept otherwise.
+        record is returned when it proves (the caller keeps its reason otherwise).
 
     Returns
     -------
@@ -193,8 +193,6 @@ def dual_bound(
         if first.get("proven"):
             first["time_s"] = time.perf_counter() - t0
             return first
-        if first.get("reason"):
-            out["reason"] = f"{out.get('reason')}; {first.get('reason')}"
     if not out["proven"] and resolve is not None:
         for eps_rel in PERTURBATIONS:
             if spent(solves=True):

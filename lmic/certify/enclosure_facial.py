@@ -59,6 +59,7 @@ example of :mod:`lmic.certify.enclosure_facial_exact`; the search for ``d`` on t
 :func:`exposing_problem`.
 """
 
+import functools
 import time
 from collections.abc import Callable
 from typing import Any
@@ -365,27 +366,30 @@ def facial_or(
     """
     if dual.get("proven") or solve_point is None or not duals or duals.get("lmis") is None:
         return dual
+    before = f"{dual['reason']}; " if dual.get("reason") else ""
     if deadline is not None and time.perf_counter() > deadline:
-        return dict(dual, reason=f"{dual.get('reason')}; facial reduction not tried (time budget spent)")
+        return dict(dual, reason=f"{before}facial reduction not tried (time budget spent)")
     try:
         fac = facial_bound(problem, duals, solve_point, exact=exact, resolve=resolve, deadline=deadline)
     except (OverflowError, ValueError, ZeroDivisionError, ArithmeticError, np.linalg.LinAlgError) as exc:
         fac = {"proven": False, "reason": f"numerical failure ({type(exc).__name__}: {exc})"}
     if fac["proven"]:
         return fac
-    return dict(dual, reason=f"{dual.get('reason')}; facial reduction: {fac['reason']}")
+    return dict(dual, reason=f"{before}facial reduction: {fac['reason']}")
 
 
 class FacialFirst:
     """The facial route as :func:`~lmic.certify.enclosure_dual.dual_bound`'s ``before_solves``:
     tried when the solver's dual fails, before the perturbed and centring re-solves, which
     cannot prove where the dual has no strictly feasible point (SDPLIB qap: 6 perturbed and 3
-    centring solves, 8 of the enclosure's 9 s, before the facial route proved); ``tried`` says
-    whether it ran (the caller then does not run it again).
+    centring solves, 8 of the enclosure's 9 s, before the facial route proved). ``record`` is
+    its result once it ran; :meth:`after` gives the dual end after ``dual_bound``.
 
     >>> f = FacialFirst(None, None, None, False, None, None)
-    >>> f()["proven"], f.tried
-    (False, True)
+    >>> f.after({"proven": False, "reason": "r"})["reason"]  # not run yet: run now (no dual point)
+    'r'
+    >>> f()["proven"], f.after({"proven": False, "reason": "r"})["reason"]
+    (False, 'r')
     """
 
     def __init__(
@@ -397,19 +401,23 @@ class FacialFirst:
         resolve: Callable[[Problem], dict[str, Any] | None] | None,
         deadline: float | None,
     ) -> None:
-        self.args = (problem, duals, solve_point)
-        self.exact, self.resolve, self.deadline = exact, resolve, deadline
-        self.tried = False
+        self._run = functools.partial(
+            facial_or, problem, duals, solve_point=solve_point, exact=exact, resolve=resolve, deadline=deadline
+        )
+        self.record: dict[str, Any] | None = None
 
     def __call__(self) -> dict[str, Any]:
-        self.tried = True
-        problem, duals, solve_point = self.args
-        start = {"proven": False, "reason": ""}
-        rec = facial_or(
-            problem, duals, start, solve_point, exact=self.exact, resolve=self.resolve, deadline=self.deadline
-        )
-        rec["reason"] = str(rec.get("reason") or "").lstrip("; ")
-        return rec
+        self.record = self._run({"proven": False, "reason": ""})
+        return self.record
+
+    def after(self, dual: dict[str, Any]) -> dict[str, Any]:
+        """``dual`` (``dual_bound``'s record) when proven; else the facial route's proof, or
+        ``dual`` with the facial route's reason (running it now when it did not run before)."""
+        if self.record is None:
+            return self._run(dual)
+        if dual.get("proven") or not self.record.get("reason"):
+            return dual
+        return dict(dual, reason=f"{dual.get('reason')}; {self.record['reason']}")
 
 
 def verify_any(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:

@@ -228,6 +228,19 @@ def test_sdplib_hinf2_lower_end_from_the_centred_dual_within_1e3():
     assert e["rel_gap"] <= 2e-3
 
 
+def test_sdplib_hinf4_failed_lower_end_names_every_route_tried():
+    """hinf4 (default route): no dual point is proved, and the reason names the repair, the
+    centring and the facial reduction (tried right after the repair), never a placeholder."""
+    from test_enclosure import SDPLIB
+
+    r = lmic.api.solve(str(SDPLIB / "hinf4.dat-s"))
+    dual = r.enclosure["dual"]
+    assert not dual["proven"] and r.enclosure["lower"] is None
+    reason = dual["reason"]
+    assert "not proved PSD" in reason and "facial reduction: step 1:" in reason, reason
+    assert "None" not in reason and "; ;" not in reason, reason
+
+
 def test_sdplib_hinf1_dual_has_no_interior_so_no_lower_end():
     """hinf1's dual has no interior point at all: the centring problem's largest margin is not
     positive even at a loss of 100 times the objective, so no dual point can be proved and
