@@ -58,7 +58,7 @@ if TYPE_CHECKING:  # sympy is imported only for analysed (not frozen) plans
 
     AnyTerm = Term | warm.Term
 
-__all__ = ["bind", "resolve_inputs", "Inputs"]
+__all__ = ["bind", "resolve_inputs", "Inputs", "BOUND_PLAN"]
 
 _SYM_TOL = 1e-9
 
@@ -523,7 +523,17 @@ class _Binder:
         if t.observer_decl is not None:
             ob = t.observer_decl
             meta["observer"] = {"model": ob.model, "time": ob.time, "roles": dict(ob.roles)}
-        return Problem(list(self.vars.values()), lmis, linear, objective, data, derived, checks, meta)
+        problem = Problem(list(self.vars.values()), lmis, linear, objective, data, derived, checks, meta)
+        # the plan it was bound from, for its exact recompilation (lmic.compile.exact.exact_of):
+        # a theorem passed as an object is not in the registry, so its id alone cannot find it
+        setattr(problem, BOUND_PLAN, plan)
+        return problem
+
+
+#: the attribute of a bound Problem that holds the plan it was bound from (not part of the IR:
+#: ``dataclasses.replace`` and every transformation drop it, and the recompilation then goes by
+#: the theorem's id)
+BOUND_PLAN = "_lmic_bound_plan"
 
 
 def template_identity(plan: Plan | FrozenPlan) -> dict[str, Any]:

@@ -21,12 +21,13 @@ freeze wrote a template's ``1/3`` as a float: the analysed plan is used instead)
 Which problem
 -------------
 :func:`exact_of` gives a compiled problem's exact counterpart lazily (cached on the problem):
-for a problem compiled from a theorem (``meta["theorem"]``, the template hash recorded), the
-theorem is compiled again exactly from ``problem.data`` (the system's numbers); for an IR
-with no theorem (read from ``.json`` or SDPA), the IR's own floats are the data
-(:func:`from_ir`, ``about`` ``"ir"``). :meth:`ExactProblem.perturbation` bounds ``|G_exact(x) -
-G_float(x)|`` rigorously (:func:`lmic.certify.enclosure_float.primal_end` uses it once a
-counterpart exists, so that a certified point is proved for both problems).
+the one its transformation attached (:data:`EXACT_MAKER`: a study's lifted problem); for a
+problem compiled from a theorem (``meta["theorem"]``, the template hash recorded), the theorem
+compiled again exactly from ``problem.data`` by the plan it was bound from
+(:data:`lmic.compile.bind.BOUND_PLAN`: an inline theorem is in no registry), else by its id;
+for an IR with no theorem (``.json``, SDPA), the IR's own floats (:func:`from_ir`).
+:meth:`ExactProblem.perturbation` bounds ``|G_exact(x) - G_float(x)|`` rigorously (a certified
+point is then proved for both problems: :func:`lmic.certify.enclosure_float.primal_end`).
 
 Examples
 --------
@@ -66,6 +67,8 @@ __all__ = ["ExactUnavailable", "ExactLMI", "ExactProblem", "exact_bind", "exact_
 
 _U = 2.0**-53
 _ATTR = "_lmic_exact"
+#: a problem's attribute: a callable that builds its :class:`ExactProblem` (a transformation's)
+EXACT_MAKER = "_lmic_exact_maker"
 
 
 class ExactUnavailable(LmicError):
@@ -239,10 +242,7 @@ def _tree_value(tree: Any, env: Mapping[str, Fraction]) -> Fraction:
     if op == "add":
         return sum(args, Fraction(0))
     if op == "mul":
-        out = Fraction(1)
-        for a in args:
-            out *= a
-        return out
+        return math.prod(args, start=Fraction(1))
     if op == "neg":
         return -args[0]
     if op == "inv" and args[0] != 0:
@@ -269,10 +269,7 @@ def _sympy_value(expr: Any, env: Mapping[str, Fraction]) -> Fraction:
     if isinstance(expr, sympy.Add):
         return sum((_sympy_value(a, env) for a in expr.args), Fraction(0))
     if isinstance(expr, sympy.Mul):
-        out = Fraction(1)
-        for a in expr.args:
-            out *= _sympy_value(a, env)
-        return out
+        return math.prod((_sympy_value(a, env) for a in expr.args), start=Fraction(1))
     if isinstance(expr, sympy.Pow) and expr.exp.is_Integer:
         base = _sympy_value(expr.base, env)
         if base == 0 and int(expr.exp) < 0:
@@ -569,17 +566,21 @@ def exact_of(problem: Problem) -> ExactProblem:
 
 
 def _recompile(problem: Problem) -> ExactProblem:
+    maker = getattr(problem, EXACT_MAKER, None)
+    if maker is not None:
+        return maker()
     meta = problem.meta or {}
     tid = meta.get("theorem")
     if not isinstance(tid, str):
         return from_ir(problem)
     from lmic.compile import plan_for
-    from lmic.compile.bind import template_identity
+    from lmic.compile.bind import BOUND_PLAN, template_identity
     from lmic.compile.warm import FrozenPlan, warm_plan
 
     params = dict(meta.get("params") or {})
+    bound = getattr(problem, BOUND_PLAN, None)  # an inline theorem is found by nothing else
     try:
-        plan: Any = warm_plan(tid, params) or plan_for(tid, params)
+        plan: Any = bound if getattr(bound, "id", None) == tid else warm_plan(tid, params) or plan_for(tid, params)
         for attempt in range(2):
             want = (meta.get("template") or {}).get("sha256")
             if want is not None and template_identity(plan)["template"]["sha256"] != want:

@@ -160,6 +160,31 @@ def test_bounded_real_enclosure_contains_the_hinf_norm(seed, backend):
     assert e["rel_gap"] <= 1e-4
 
 
+def test_an_inline_theorem_gets_the_exact_face_route_of_a_registered_one():
+    """A bounded-real lemma written inline (a theorem object, in no registry) at 20 states: the
+    face route recompiles it exactly from the plan it was bound from, so its lower end is proven
+    as the registered plugin's is (before, it had no lower end at all: "unknown theorem"). The
+    enclosure contains the H-infinity norm (Hamiltonian bisection)."""
+    from lmic.template import STAR, I, block, theorem
+
+    @theorem(id="test.notebook_brl", title="t", citation="c")
+    def notebook_brl(t):
+        n, m, q = t.dims("n m q")
+        A, B, C = t.data("A", n, n), t.data("B", n, m), t.data("C", q, n)
+        P = t.symmetric("P", n, pd=True)
+        gamma = t.scalar("gamma", sign="positive")
+        t.lmi("brl", block([[A.T * P + P * A, P * B, C.T], [STAR, -gamma * I(m), 0], [STAR, STAR, -gamma * I(q)]]) < 0)
+        t.minimize(gamma)
+
+    A, B, C = _stable(20, 0)
+    lo, hi = hinf_norm(A, B, C)
+    system = {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}
+    e = lmic.api.solve(notebook_brl, system).enclosure
+    assert e["dual"]["proven"] and "exact" in e["dual"]["reason"], e["reason"]
+    assert e["lower"] <= hi and lo <= e["upper"]
+    assert e["rel_gap"] <= 1e-6
+
+
 def test_bounded_real_20_states_upper_end_and_backed_off_point_are_certified():
     """20 states (cvxopt): the rigorous upper end is above the H-infinity norm and the
     backed-off point is certified by the certifier; the nearly degenerate dual is proved on the

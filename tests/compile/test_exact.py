@@ -15,7 +15,7 @@ from lmic.compile.bind import bind
 from lmic.compile.exact import ExactUnavailable, exact_bind, from_ir
 from lmic.compile.plan import analyse
 from lmic.ir.svec import tril_rows_cols
-from lmic.template import block, theorem
+from lmic.template import STAR, I, block, theorem
 
 
 @theorem(id="test.exact_products", title="t", citation="c")
@@ -146,3 +146,40 @@ def test_exact_of_recompiles_a_theorem_and_declines_an_unknown_one():
     bare = load_target("tutorial.bounded_real", {"data": {"A": A, "B": [[1.0], [0.5]], "C": [[1.0, 0.1]]}})[0]
     bare.meta.pop("theorem")
     assert exact_of(bare).about == "ir"
+
+
+@theorem(id="test.inline_bounded_real", title="t", citation="c")
+def _inline_brl(t):
+    n, m, q = t.dims("n m q")
+    A, B, C = t.data("A", n, n), t.data("B", n, m), t.data("C", q, n)
+    P = t.symmetric("P", n, pd=True)
+    gamma = t.scalar("gamma", sign="positive")
+    t.lmi("brl", block([[A.T * P + P * A, P * B, C.T], [STAR, -gamma * I(m), 0], [STAR, STAR, -gamma * I(q)]]) < 0)
+    t.minimize(gamma)
+
+
+def test_exact_of_an_unregistered_theorem_uses_the_plan_it_was_bound_from():
+    """A theorem passed as an object (a notebook's, a newcomer's) is in no registry: its id
+    alone cannot recompile it. The problem keeps the plan it was bound from, and its exact
+    counterpart is that plan compiled exactly (the sum A_00 + A_11 of P_01's coefficient, in
+    Fractions, where the float IR rounded it). A copy of the IR without the plan declines by
+    name, as before."""
+    import dataclasses
+
+    from lmic.compile.exact import exact_of
+    from lmic.registry import get_theorem
+
+    with pytest.raises(Exception, match="test.inline_bounded_real"):
+        get_theorem("test.inline_bounded_real")  # not registered: nothing finds it by id
+    A = [[-0.3, 0.1], [0.2, -0.7]]
+    system = {"data": {"A": A, "B": [[1.0], [0.5]], "C": [[1.0, 0.1]]}}
+    prob = bind(analyse(_inline_brl), system)
+    ex = exact_of(prob)
+    assert ex.about == "theorem"
+    P01 = 1 + prob.variables[0].offset + 1
+    brl = [lmi.name for lmi in prob.lmis].index("brl")
+    a = Fraction(-0.3) + Fraction(-0.7)
+    assert ex.lmis[brl].value(1, P01) == -a and Fraction(float(prob.lmis[brl].coeffs[1, P01])) != -a
+    copy = dataclasses.replace(prob)
+    with pytest.raises(ExactUnavailable, match="test.inline_bounded_real"):
+        exact_of(copy)

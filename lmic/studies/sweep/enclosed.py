@@ -51,10 +51,12 @@ import numpy as np
 import scipy.sparse as sp
 import sympy
 
+from lmic.compile.exact import EXACT_MAKER
 from lmic.errors import LmicError
 from lmic.ir.problem import LinearConstraints, Objective, Problem, Variable
 from lmic.solution import Solution
 from lmic.studies.sweep.ends import certified_end
+from lmic.studies.sweep.exact_lift import exact_lift
 from lmic.studies.sweep.homogeneous import AFFINE_RTOL, _columns, _same_structure, fix_scalar, homogeneous_scalar, unfix
 from lmic.studies.sweep.points import Evaluator, domain, in_domain, setup
 from lmic.studies.sweep.results import PointResult, SupResult, kind_of
@@ -242,7 +244,7 @@ def lift(
             names.append(f"{name} {op}{'' if not inside else '='} {bound:g} (domain)")
     c = np.zeros(n + 2)
     c[-1] = 1.0
-    return Problem(
+    out = Problem(
         variables=[*p0.variables, Variable(var_name, "scalar", (1, 1), offset=n)],
         lmis=lmis,
         linear=LinearConstraints(sp.vstack(rows, format="csr"), kinds, strict, names),
@@ -250,6 +252,9 @@ def lift(
         data=p0.data,
         meta={**p0.meta, "lifted_parameter": name},
     )
+    # its exact counterpart, built when a proof asks for it (the face route of the enclosure)
+    setattr(out, EXACT_MAKER, lambda: exact_lift(p0, p1, v0, v1, out, name))
+    return out
 
 
 def enclose(
