@@ -10,6 +10,7 @@ import scipy.sparse as sp
 
 from lmic.ir.problem import LMI, Check, LinearConstraints, NamedExpr, Objective, Problem, Variable
 from lmic.ir.svec import tril_size, tril_vec
+from lmic.template import STAR, I, block, theorem
 
 
 def lmi_from(name: str, mats: list[np.ndarray], strict: bool = True, relation: str = ">") -> LMI:
@@ -107,3 +108,14 @@ def hinf_norm(A, B, C, tol=1e-12):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if crosses(mid) else (lo, mid)
     return lo, hi
+
+
+@theorem(id="test.inline_bounded_real", title="t", citation="c")
+def inline_brl(t):
+    """The bounded-real lemma as a notebook writes it: a theorem object in no registry."""
+    n, m, q = t.dims("n m q")
+    A, B, C = t.data("A", n, n), t.data("B", n, m), t.data("C", q, n)
+    P = t.symmetric("P", n, pd=True)
+    gamma = t.scalar("gamma", sign="positive")
+    t.lmi("brl", block([[A.T * P + P * A, P * B, C.T], [STAR, -gamma * I(m), 0], [STAR, STAR, -gamma * I(q)]]) < 0)
+    t.minimize(gamma)

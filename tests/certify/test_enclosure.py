@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from certify_helpers import hinf_norm, lmi_from
+from certify_helpers import hinf_norm, inline_brl, lmi_from
 
 import lmic.api
 from lmic.certify import audit_certificate, certify, write_certificate
@@ -165,21 +165,10 @@ def test_an_inline_theorem_gets_the_exact_face_route_of_a_registered_one():
     face route recompiles it exactly from the plan it was bound from, so its lower end is proven
     as the registered plugin's is (before, it had no lower end at all: "unknown theorem"). The
     enclosure contains the H-infinity norm (Hamiltonian bisection)."""
-    from lmic.template import STAR, I, block, theorem
-
-    @theorem(id="test.notebook_brl", title="t", citation="c")
-    def notebook_brl(t):
-        n, m, q = t.dims("n m q")
-        A, B, C = t.data("A", n, n), t.data("B", n, m), t.data("C", q, n)
-        P = t.symmetric("P", n, pd=True)
-        gamma = t.scalar("gamma", sign="positive")
-        t.lmi("brl", block([[A.T * P + P * A, P * B, C.T], [STAR, -gamma * I(m), 0], [STAR, STAR, -gamma * I(q)]]) < 0)
-        t.minimize(gamma)
-
     A, B, C = _stable(20, 0)
     lo, hi = hinf_norm(A, B, C)
     system = {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}
-    e = lmic.api.solve(notebook_brl, system).enclosure
+    e = lmic.api.solve(inline_brl, system).enclosure
     assert e["dual"]["proven"] and "exact" in e["dual"]["reason"], e["reason"]
     assert e["lower"] <= hi and lo <= e["upper"]
     assert e["rel_gap"] <= 1e-6

@@ -10,12 +10,13 @@ from fractions import Fraction
 import numpy as np
 import pytest
 import sympy
+from certify_helpers import inline_brl
 
 from lmic.compile.bind import bind
 from lmic.compile.exact import ExactUnavailable, exact_bind, from_ir
 from lmic.compile.plan import analyse
 from lmic.ir.svec import tril_rows_cols
-from lmic.template import STAR, I, block, theorem
+from lmic.template import block, theorem
 
 
 @theorem(id="test.exact_products", title="t", citation="c")
@@ -148,16 +149,6 @@ def test_exact_of_recompiles_a_theorem_and_declines_an_unknown_one():
     assert exact_of(bare).about == "ir"
 
 
-@theorem(id="test.inline_bounded_real", title="t", citation="c")
-def _inline_brl(t):
-    n, m, q = t.dims("n m q")
-    A, B, C = t.data("A", n, n), t.data("B", n, m), t.data("C", q, n)
-    P = t.symmetric("P", n, pd=True)
-    gamma = t.scalar("gamma", sign="positive")
-    t.lmi("brl", block([[A.T * P + P * A, P * B, C.T], [STAR, -gamma * I(m), 0], [STAR, STAR, -gamma * I(q)]]) < 0)
-    t.minimize(gamma)
-
-
 def test_exact_of_an_unregistered_theorem_uses_the_plan_it_was_bound_from():
     """A theorem passed as an object (a notebook's, a newcomer's) is in no registry: its id
     alone cannot recompile it. The problem keeps the plan it was bound from, and its exact
@@ -173,7 +164,7 @@ def test_exact_of_an_unregistered_theorem_uses_the_plan_it_was_bound_from():
         get_theorem("test.inline_bounded_real")  # not registered: nothing finds it by id
     A = [[-0.3, 0.1], [0.2, -0.7]]
     system = {"data": {"A": A, "B": [[1.0], [0.5]], "C": [[1.0, 0.1]]}}
-    prob = bind(analyse(_inline_brl), system)
+    prob = bind(analyse(inline_brl), system)
     ex = exact_of(prob)
     assert ex.about == "theorem"
     P01 = 1 + prob.variables[0].offset + 1
