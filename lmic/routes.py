@@ -176,6 +176,35 @@ def _solve_on(backend: Any, problem: Problem, options: Any) -> Any:
         return None
 
 
+#: a re-solve of the enclosure on a first-order backend may take this many times the solve it
+#: certifies (and at least FIRST_ORDER_RESOLVE_MIN_S): without a cap each one runs to the
+#: backend's iteration limit (SCS alone on delay_a.thm3_1, 6 states: two polish re-solves of
+#: 47 s each after a 20 s solve, for no tighter end)
+FIRST_ORDER_RESOLVE_FACTOR = 2.0
+FIRST_ORDER_RESOLVE_MIN_S = 2.0
+
+
+def first_order_capped(backend: Any, options: Any, solve_s: float, warm: Any = None) -> Any:
+    """``options`` with a time limit of ``max(MIN, FACTOR x solve_s)`` for a first-order
+    ``backend`` (its re-solves stop at their iteration limit otherwise, which on a hard problem is
+    minutes); unchanged for an interior-point one (whose re-solves converge).
+
+    >>> first_order_capped("scs", None, 10.0).time_limit, first_order_capped("clarabel", None, 10.0)
+    (20.0, None)
+    """
+    if method_of(backend) != "first-order":
+        return options
+    from lmic.options import SolveOptions
+
+    base = options or SolveOptions()
+    cap = max(FIRST_ORDER_RESOLVE_MIN_S, FIRST_ORDER_RESOLVE_FACTOR * float(solve_s))
+    out = SolveOptions(**{k: getattr(base, k) for k in base.__dataclass_fields__})
+    out.time_limit = min(cap, base.time_limit) if base.time_limit is not None else cap
+    if warm is not None and out.warm_start is None:
+        out.warm_start = warm  # the re-solves are the same problem, nearly: start at its answer
+    return out
+
+
 def enclosure_of(
     problem: Problem,
     sol: Any,
@@ -224,6 +253,7 @@ def enclosure_of(
 
     def closures(name: Any, opts: Any) -> tuple[Any, Any]:
         """The enclosure's re-solves (perturbed problems, centring problems) on ``name``."""
+        opts = first_order_capped(name, opts, solve_s, sol if name == backend else None)
 
         def resolve(perturbed: Problem) -> dict[str, Any] | None:
             if deadline() < solve_s:

@@ -109,6 +109,8 @@ def run(args: argparse.Namespace) -> int:
     table.add_column("decision", no_wrap=True)
     table.add_column("strict: margin", no_wrap=True)
     table.add_column("min margin", justify="right", no_wrap=True)
+    if with_objective:
+        table.add_column("proven optimum", justify="right", no_wrap=True)
     table.add_column("time (s)", justify="right", no_wrap=True)
     for r in report.results:
         colour = {
@@ -129,8 +131,10 @@ def run(args: argparse.Namespace) -> int:
             f"[{colour}]{decision}[/{colour}]",
             strict,
             value_text(r["min_margin"], spec=".3g"),
-            value_text(r["solve_s"], spec=".3f"),
         ]
+        if with_objective:  # the backend's proven enclosure of the optimal value
+            cells.append(_interval(r.get("lower"), r.get("upper")))
+        cells.append(value_text(r.get("time_s", r["solve_s"]), spec=".3f"))
         table.add_row(*cells)
     console = Console(soft_wrap=True)
     if not console.is_terminal:
@@ -147,9 +151,23 @@ def run(args: argparse.Namespace) -> int:
         f"{verdict}: {report.decisions} decision(s), {report.failures} failure(s); "
         f"max relative gap of certified optima {value_text(gap, spec='.2e')} (rtol {report.rtol:g})"
     )
+    lo, hi = report.enclosure
+    if with_objective and (lo is not None or hi is not None):
+        console.print(f"  every proven enclosure together: optimum in {_interval(lo, hi)}", markup=False)
     for c in report.conflicts:
         console.print(f"  conflict: {c}", markup=False)
     for r in report.results:
         if r["decision"] not in DECISIONS:
             console.print(f"  failure {r['backend']}: {r['decision']}: {r.get('message') or r['status']}", markup=False)
     return report.exit_code()
+
+
+def _interval(lo: float | None, hi: float | None) -> str:
+    """``[lo, hi]`` with 10 significant digits, ``-`` for a missing end, ``-`` for neither.
+
+    >>> _interval(1.0, 2.5), _interval(None, 2.0), _interval(None, None)
+    ('[1, 2.5]', '[-, 2]', '-')
+    """
+    if lo is None and hi is None:
+        return "-"
+    return "[" + ", ".join("-" if v is None else f"{v:.10g}" for v in (lo, hi)) + "]"

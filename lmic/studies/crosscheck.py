@@ -8,8 +8,12 @@ backend) and gets an outcome verdict (:mod:`lmic.outcome`). One row per backend.
 * ``rejected`` and ``undecided`` rows (and backends that cannot run) are *failures*: listed and
   counted, never a disagreement.
 * Two decisions *conflict* when one certifies a point and another proves the problem infeasible
-  (globally, or within a radius the certified point lies in), or when two certified optima
-  differ by more than ``rtol`` (relative).
+  (globally, or within a radius the certified point lies in), when two certified optima
+  differ by more than ``rtol`` (relative), or when the proven enclosures of the optimal value
+  (each backend's ``[lower, upper]``, :mod:`lmic.certify.enclosure`) do not intersect: two
+  proofs that contradict each other, whatever ``rtol``.
+* Each row has the backend's whole time (``time_s``: solve, certification, enclosure) besides
+  its solve's (``solve_s``). No backed-off second solve runs (the rows report the optimum).
 * ``agree``: at least one decision and no conflict. Exit code 0 then, 1 on a conflict or when
   no backend decided.
 
@@ -25,6 +29,7 @@ from __future__ import annotations
 
 import math
 import os
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -47,6 +52,7 @@ __all__ = [
     "status_class",
     "conflicts",
     "DEFAULT_RTOL",
+    "ENCLOSURE_SLACK",
     "DECISIONS",
     "Progress",
 ]
@@ -60,6 +66,9 @@ Progress = Callable[[int, int, str, "dict[str, Any] | None"], None]
 
 #: default tolerance on the relative objective gap (first-order solvers meet ~1e-3 here)
 DEFAULT_RTOL = 1e-3
+#: two backends' proven enclosures of the optimal value must intersect up to this (relative):
+#: an end proven on the theorem compiled exactly and one on the float IR differ by rounding
+ENCLOSURE_SLACK = 1e-12
 
 
 def status_class(status: str) -> str:
@@ -84,6 +93,15 @@ class CrosscheckReport:
     conflicts: list[str] = field(default_factory=list)
 
     @property
+    def enclosure(self) -> tuple[float | None, float | None]:
+        """The intersection of every certified row's proven enclosure of the optimal value:
+        ``(largest lower end, smallest upper end)``, ``None`` for an end no backend proved."""
+        rows = [r for r in self.results if r["decision"] == "certified"]
+        lows = [r["lower"] for r in rows if r.get("lower") is not None]
+        highs = [r["upper"] for r in rows if r.get("upper") is not None]
+        return (max(lows) if lows else None, min(highs) if highs else None)
+
+    @property
     def decisions(self) -> int:
         """Rows with a decision (:data:`DECISIONS`)."""
         return sum(1 for r in self.results if r["decision"] in DECISIONS)
@@ -103,6 +121,7 @@ class CrosscheckReport:
             "failures": self.failures,
             "conflicts": self.conflicts,
             "max_rel_objective_gap": self.max_rel_objective_gap,
+            "enclosure": list(self.enclosure),
             "rtol": self.rtol,
             "exit_code": self.exit_code(),
         }
@@ -140,6 +159,15 @@ def conflicts(rows: list[dict[str, Any]], sense: str, rtol: float) -> tuple[list
                         f"{r['backend']} certifies a point with ||x||_inf = {r['x_norm']:.3g} but "
                         f"{q['backend']} proves no solution with ||x||_inf <= {q['radius']:.3g}"
                     )
+    # every proven end bounds the one optimal value: a lower end above another backend's upper
+    # end means a wrong proof (ENCLOSURE_SLACK: the exact and the float compilation of one
+    # theorem differ by rounding)
+    lows = [(r["lower"], r["backend"]) for r in points if r.get("lower") is not None]
+    highs = [(r["upper"], r["backend"]) for r in points if r.get("upper") is not None]
+    if lows and highs and sense != "feasibility":
+        (lo, a), (hi, b) = max(lows), min(highs)
+        if lo > hi + ENCLOSURE_SLACK * max(1.0, abs(hi)):
+            found.append(f"{a} proves the optimum >= {lo:.10g} but {b} proves it <= {hi:.10g}")
     gap = None
     optima = [r["objective"] for r in points if r.get("objective") is not None]
     if sense != "feasibility" and len(optima) >= 2:
@@ -234,6 +262,10 @@ def error_row(name: str, message: str, status: str = "error") -> dict[str, Any]:
         "strategy": None,
         "margin": None,
         "solve_s": 0.0,
+        "time_s": 0.0,
+        "lower": None,
+        "upper": None,
+        "rel_gap": None,
         "attempts": [],
         "message": " ".join(str(message).split()),
     }
@@ -254,12 +286,17 @@ def backend_row(
     >>> row["backend"], row["decision"], res.verdict
     ('clarabel', 'certified', 'certified')
     """
+    t0 = time.perf_counter()
     try:
-        res = solve(problem, backend=name, options=options)
+        # no backed-off second solve: a row reports the optimum, its point and its enclosure
+        res = solve(problem, backend=name, options=options, backoff=0.0)
     except LmicError as err:
         return error_row(name, str(err)), None
+    time_s = time.perf_counter() - t0
     x = res.solution.x
     decision = res.verdict
+    # both ends, even inconsistent ones: conflicts() reports a backend that contradicts itself
+    enc = res.enclosure if decision == "certified" and res.enclosure else {}
     row = {
         "backend": res.backend,
         "decision": decision,
@@ -272,6 +309,10 @@ def backend_row(
         "strategy": res.solution.strategy,
         "margin": res.solution.margin,
         "solve_s": res.timings["solve_s"],
+        "time_s": time_s,
+        "lower": enc.get("lower"),
+        "upper": enc.get("upper"),
+        "rel_gap": enc.get("rel_gap"),
         "attempts": res.attempts,
         "message": res.solution.message if decision not in DECISIONS else "",
     }

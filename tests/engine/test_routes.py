@@ -217,3 +217,32 @@ def test_a_backend_cut_by_its_budget_gives_way_and_is_retried_without_one(monkey
     # an explicit budget is the caller's: never exceeded, no retry
     explicit = policy.decide(problem, None, budget_s=5.0)
     assert explicit.verdict == "undecided" and all(a.status == "error" for a in explicit.attempts)
+
+
+def test_the_enclosure_re_solves_on_a_first_order_backend_start_at_its_answer_and_are_capped(monkeypatch):
+    """SCS's re-solves in the enclosure (the polish towards the closed problem, the perturbed and
+    centring problems) start from the answer they certify and stop at twice its solve time: cold,
+    each ran to SCS's iteration limit (delay_a.thm3_1, 6 states: two 47 s re-solves, the same
+    enclosure as warm in 0.6 s). Interior-point re-solves are left alone. The enclosure still
+    contains the H-infinity norm (Hamiltonian bisection)."""
+    import lmic.routes as routes
+
+    calls: list[tuple[str, SolveOptions]] = []
+    solve_on = routes._solve_on
+    monkeypatch.setattr(
+        routes, "_solve_on", lambda name, p, opts: calls.append((name, opts)) or solve_on(name, p, opts)
+    )
+    rng = np.random.default_rng(0)
+    A = rng.standard_normal((4, 4))
+    A -= (max(np.linalg.eigvals(A).real) + 0.5) * np.eye(4)
+    B, C = rng.standard_normal((4, 2)), rng.standard_normal((2, 4))
+    system = {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}
+    prob = lmic.api.load_target("tutorial.bounded_real", system)[0]
+    sol = lmic.api.solve_problem(prob, "scs")
+    enc, _ = routes.enclosure_of(prob, sol, certify(prob, sol), False, "scs", None)
+    assert calls and all(name == "scs" for name, _ in calls)
+    cap = max(routes.FIRST_ORDER_RESOLVE_MIN_S, routes.FIRST_ORDER_RESOLVE_FACTOR * sol.solve_s)
+    assert all(opts.warm_start is sol and opts.time_limit == cap for _, opts in calls)
+    lo, hi = hinf_norm(A, B, C)
+    assert enc["lower"] <= hi and lo <= enc["upper"]
+    assert routes.first_order_capped("cvxopt", None, 5.0, sol) is None

@@ -67,3 +67,52 @@ def test_crosscheck_accepts_a_loaded_system_object():
     report = crosscheck("qib.thm1", load_system(path), backends=["clarabel", "cvxopt"])
     assert report.agree
     assert report.target.endswith("qib.thm1.flexible-joint.yaml")
+
+
+def test_each_row_has_its_backends_proven_enclosure_and_they_intersect():
+    """An optimisation problem: every certified row carries its backend's proven ``[lower,
+    upper]`` and its whole time; the report's enclosure is their intersection and contains
+    the H-infinity norm (Hamiltonian bisection, no LMI). No backed-off second solve runs."""
+    import numpy as np
+    from certify_helpers import hinf_norm
+
+    rng = np.random.default_rng(3)
+    A = rng.standard_normal((4, 4))
+    A -= (max(np.linalg.eigvals(A).real) + 0.5) * np.eye(4)
+    B, C = rng.standard_normal((4, 2)), rng.standard_normal((2, 4))
+    system = {"lmic": 1, "data": {"A": A.tolist(), "B": B.tolist(), "C": C.tolist()}}
+    r = crosscheck("tutorial.bounded_real", system, backends=["clarabel", "cvxopt"])
+    assert r.agree and not r.conflicts
+    lo, hi = hinf_norm(A, B, C)
+    for row in r.results:
+        assert row["decision"] == "certified" and row["lower"] <= hi and lo <= row["upper"]
+        assert row["rel_gap"] <= 1e-6 and row["time_s"] >= row["solve_s"] > 0
+    low, high = r.enclosure
+    assert low == max(row["lower"] for row in r.results) and high == min(row["upper"] for row in r.results)
+    assert low <= hi and lo <= high
+    assert r.to_dict()["enclosure"] == [low, high]
+    assert all(run.backoff is None for run in r.runs)
+
+
+def test_disjoint_enclosures_are_a_conflict_whatever_rtol():
+    """Two proven enclosures that do not intersect mean a wrong proof: a conflict even when the
+    certified objectives agree within rtol; one rounding's worth apart (ENCLOSURE_SLACK) is not."""
+    from lmic.studies.crosscheck import ENCLOSURE_SLACK, conflicts
+
+    def row(name, lower, upper):
+        return {
+            "backend": name,
+            "decision": "certified",
+            "objective": upper,
+            "x_norm": 1.0,
+            "lower": lower,
+            "upper": upper,
+        }
+
+    found, _ = conflicts([row("a", 1.0, 1.0001), row("b", 1.0002, 1.0003)], "min", 1e-2)
+    assert found == ["b proves the optimum >= 1.0002 but a proves it <= 1.0001"]
+    assert (
+        conflicts([row("a", 1.0, 1.0001), row("b", 1.0001 * (1 + ENCLOSURE_SLACK / 2), 1.0003)], "min", 1e-2)[0] == []
+    )
+    # a backend whose own ends contradict each other
+    assert conflicts([row("a", 2.0, 1.0)], "min", 1e-2)[0] == ["a proves the optimum >= 2 but a proves it <= 1"]
