@@ -566,6 +566,18 @@ def bind(plan: Plan | FrozenPlan, system: Any, params: Mapping[str, Any] | None 
     params : mapping, optional
         Parameter overrides (``-p k=v``).
     """
+    from lmic.compile.probe import probe_shapes
+
     sysobj = load_system(system)
     inputs = resolve_inputs(plan, sysobj, params)
-    return _Binder(plan, inputs).problem(sysobj)
+    problem = _Binder(plan, inputs).problem(sysobj)
+    key = (id(plan), tuple(sorted(problem.meta["dims"].items())))
+    if key not in _PROBED:  # once per plan and dimensions (a sweep re-binds the same shapes)
+        probe_shapes(problem)
+        _PROBED.add(key)
+    return problem
+
+
+#: (plan, dimensions) whose derived quantities and checks :func:`lmic.compile.probe.probe_shapes`
+#: has evaluated
+_PROBED: set[tuple[int, tuple]] = set()

@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 NEWBIE = """
 import sympy
-from lmic.template import theorem, block, STAR, I
+from lmic.template import theorem, block, STAR, I, hurwitz
 
 print("newbie plugin loaded")  # a newcomer's debugging print, at import
 
@@ -94,6 +94,24 @@ def baddefault(t):
     t.lmi("L", A.T * P + P * A + a * P < 0)
 
 
+@theorem(id="newbie.gainshape", title="t", citation="c", kind="synthesis")
+def gainshape(t):
+    n, p = t.dims("n p")
+    A, C = t.data("A", n, n), t.data("C", p, n)
+    P = t.symmetric("P", n, pd=True)
+    t.lmi("L", A.T * P + P * A < 0)
+    t.derive("L_gain", P.inv() * C)  # C^T meant: n x n times p x n
+
+
+@theorem(id="newbie.checkshape", title="t", citation="c", kind="analysis")
+def checkshape(t):
+    n, p = t.dims("n p")
+    A, C = t.data("A", n, n), t.data("C", p, n)
+    P = t.symmetric("P", n, pd=True)
+    t.lmi("L", A.T * P + P * A > 0)  # infeasible for a Hurwitz A: the bug must still be named
+    t.check("C Hurwitz", hurwitz(C))  # not square
+
+
 @theorem(id="qib.thm1", title="a clash", citation="c", kind="analysis")
 def clash(t):
     n, A, P = _lyap(t)
@@ -141,9 +159,10 @@ def runs(tmp_path_factory):
     _dist(site, "meta", META)
     system = tmp / "sys.yaml"
     system.write_text("data:\n  A: [[-1, 0.5], [0, -2]]\n  C: [[1, 0]]\n")
-    ids = ["bilinear", "nonsym", "dims", "raises", "noargs", "undeclared", "matobj", "baddefault", "good"]
+    ids = ["bilinear", "nonsym", "dims", "raises", "noargs", "undeclared", "matobj", "baddefault", "gainshape"]
+    ids += ["checkshape", "good"]
     argvs = [["theorems", "--json"], ["theorems", "--json"], ["solve", "qib.thm1", str(system)]]
-    argvs += [["solve", f"newbie.{i}", str(system)] for i in ids]
+    argvs += [["solve", f"newbie.{i}", str(system), "-o", str(tmp / f"{i}.json")] for i in ids]
     argvs += [["solve", "newbie.good", str(system), "--json"]]
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join([str(site), str(ROOT), str(ROOT / "plugins"), env.get("PYTHONPATH", "")])
@@ -161,6 +180,7 @@ def runs(tmp_path_factory):
         "solve": dict(zip(ids, results[3:-1], strict=True)),
         "json": results[-1],
         "cache": tmp / "cache",
+        "written": {i for i in ids if (tmp / f"{i}.json").exists()},
     }
 
 
@@ -192,10 +212,14 @@ def test_a_clash_with_a_shipped_theorem_refuses_the_id(runs):
         ("undeclared", ["theorem newbie.undeclared: LMI 'L' uses Symbol 'mu', which is not declared"]),
         ("matobj", ["newbie.matobj", "the objective 'P' is a matrix"]),
         ("baddefault", ["newbie.baddefault", "the default -1 of parameter 'a' is not a number in its domain"]),
+        # found before any solve (they were a 'rejected' certificate, exit 1, or nothing at exit 3)
+        ("gainshape", ["theorem newbie.gainshape: derived 'L_gain': expression multiplies shapes (2, 2) and (1, 2)"]),
+        ("checkshape", ["theorem newbie.checkshape: check 'C Hurwitz' (hurwitz) needs a square matrix, got 1x2"]),
     ],
 )
 def test_each_newcomer_mistake_is_one_line_exit_2(runs, name, fragments):
     code, _, err = runs["solve"][name]
+    assert name not in runs["written"]  # nothing half-written
     err = "".join(line for line in err.splitlines(keepends=True) if not line.startswith("lmic: note: "))
     assert code == 2 and err.count("\n") == 1 and err.startswith("lmic: error: "), err
     assert "internal error" not in err
@@ -205,7 +229,7 @@ def test_each_newcomer_mistake_is_one_line_exit_2(runs, name, fragments):
 
 def test_the_good_theorem_of_a_plugin_with_mistakes_still_solves(runs):
     code, out, _ = runs["solve"]["good"]
-    assert code == 0 and "certified" in out
+    assert code == 0 and "certified" in out and "good" in runs["written"]
 
 
 def test_what_a_plugin_prints_goes_to_stderr_never_into_json(runs):
