@@ -535,9 +535,10 @@ def decide(
     if best.solution is not None:
         best.solution.info["attempts"] = [a.to_dict() for a in run.attempts]
     if best.verdict == "infeasible-bounded":
-        best.reason += (
-            "; to go further: a larger bound (a more accurate ray), another backend (--backend), "
-            "or an exact proof (--exact)"
+        if exact:  # the exact proof ran and failed (the reason says why): not a way further
+            best.reason = best.reason.replace(" (an exact proof, --exact, decides)", "")
+        best.reason += "; to go further: a larger bound (a more accurate ray), another backend (--backend)" + (
+            "" if exact else ", or an exact proof (--exact)"
         )
     if best.evidence is None:
         best.evidence = Evidence()

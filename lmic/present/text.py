@@ -39,14 +39,24 @@ def print_result(
     head.add_column()
     head.add_row("target", f"{result.target}" + (f" {system}" if system else ""))
     if result.theorem and result.problem.meta.get("citation"):
-        head.add_row("theorem", str(result.problem.meta["citation"]))
+        title = result.problem.meta.get("title")
+        head.add_row(
+            "theorem", (f"{title} ({result.problem.meta['citation']})" if title else result.problem.meta["citation"])
+        )
     head.add_row("backend", result.backend)
     head.add_row("status", result.status + (f" ({sol.native_status})" if sol.native_status else ""))
     if sol.message:
         head.add_row("message", sol.message)
-    if result.objective is not None:
-        # an unbounded problem has no optimum: the value is the certified point's, not an optimum
+    if result.objective is not None and not result.verdict.startswith("infeasible"):
+        # the returned point's value: not an optimum for an unbounded problem, and not inside the
+        # enclosure when its upper end comes from a restored point (the optimal value line below)
         at = " (at the certified point; no optimum)" if result.verdict == "unbounded-certified" else ""
+        enc = result.enclosure or {}
+        lo, hi = enc.get("lower"), enc.get("upper")
+        if not at and (lo is not None and result.objective < lo or hi is not None and result.objective > hi):
+            at = " (the returned point's; the optimal value is enclosed below)"
+        elif not at and result.verdict != "certified":
+            at = " (the solver's point, not certified)"
         head.add_row("objective", f"{result.objective:.10g}{at}")
     if sol.strategy != "none":
         head.add_row("strict", f"{sol.strategy}, margin {format_value(sol.margin)}")
