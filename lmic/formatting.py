@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "domain_text",
     "esc",
     "number_html",
     "number_text",
@@ -229,3 +230,30 @@ def result_latex(result: Any) -> str:
         if v is not None and not isinstance(v, str):
             parts.append(f"{k} = {matrix_latex(v)}")
     return "$" + r",\quad ".join(parts) + "$"
+
+
+_INTERVAL_FORMS = {"Interval.open": "()", "Interval.Lopen": "(]", "Interval.Ropen": "[)", "Interval": "[]"}
+_NAMED_DOMAINS = {
+    "(0, inf)": "positive",
+    "[0, inf)": "nonnegative",
+    "(-inf, 0)": "negative",
+    "(-inf, 0]": "nonpositive",
+}
+
+
+def domain_text(domain: Any) -> str:
+    """A parameter's domain as a user reads it: ``positive (0, inf)`` for sympy's
+    ``Interval.open(0, oo)`` (an analysed plan's domain, or a frozen plan's ``text`` of it).
+
+    >>> domain_text("Interval.open(0, oo)"), domain_text("Interval(1/2, 1)"), domain_text("Naturals")
+    ('positive (0, inf)', '[1/2, 1]', 'Naturals')
+    """
+    text = str(getattr(domain, "text", "") or domain)
+    for name, brackets in sorted(_INTERVAL_FORMS.items(), key=lambda kv: -len(kv[0])):
+        left, right = brackets[0], brackets[1]
+        if text.startswith(name + "(") and text.endswith(")"):
+            ends = [e.strip().replace("oo", "inf") for e in text[len(name) + 1 : -1].split(",")]
+            if len(ends) == 2:
+                text = f"{left}{ends[0]}, {ends[1]}{right}"
+                return f"{_NAMED_DOMAINS[text]} {text}" if text in _NAMED_DOMAINS else text
+    return text

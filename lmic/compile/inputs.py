@@ -18,6 +18,7 @@ import numpy as np
 
 from lmic.compile.frozen import Dim, Domain, normalise_option
 from lmic.errors import DataError, LmicError, TemplateError
+from lmic.formatting import domain_text
 from lmic.system import System, UnusedDataNote, near_miss
 
 if TYPE_CHECKING:  # sympy only for analysed plans (a frozen plan, lmic.compile.frozen, has none)
@@ -170,7 +171,7 @@ def resolve_inputs(plan: Plan | FrozenPlan, system: System, overrides: Mapping[s
         if not np.isfinite(number):
             raise DataError(f"{where}: parameter '{p.name}' is {number}")
         if not _in_domain(number, p.domain):
-            raise DataError(f"{where}: parameter {p.name} = {number:g} is outside its domain {p.domain}")
+            raise DataError(f"{where}: parameter {p.name} = {number:g} is outside its domain {domain_text(p.domain)}")
         out.params[p.name] = number
         out.values[p.name] = number
 

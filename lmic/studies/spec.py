@@ -43,6 +43,7 @@ import numpy as np
 
 from lmic._version import __version__
 from lmic.errors import DataError, LmicError
+from lmic.formatting import domain_text
 from lmic.system import canonical_json, load_system
 
 __all__ = ["Job", "Study", "load_study", "TASKS", "template_hash", "expand_axis"]
@@ -273,9 +274,8 @@ class _TheoremInfo:
                 continue
             if isinstance(decl.domain, Domain):  # a frozen plan's (decisive)
                 if not decl.domain.contains_number(v):
-                    raise DataError(
-                        f"{where}: {what} '{name}' = {v:g} is outside its domain {decl.domain} in {self.id}"
-                    )
+                    dom = domain_text(decl.domain)
+                    raise DataError(f"{where}: {what} '{name}' = {v:g} is outside its domain {dom} in {self.id}")
                 continue
             import sympy
 
@@ -283,7 +283,9 @@ class _TheoremInfo:
             if inside not in (sympy.true, sympy.false) and v.is_integer():
                 inside = decl.domain.contains(sympy.Integer(int(v)))
             if inside == sympy.false:
-                raise DataError(f"{where}: {what} '{name}' = {v:g} is outside its domain {decl.domain} in {self.id}")
+                raise DataError(
+                    f"{where}: {what} '{name}' = {v:g} is outside its domain {domain_text(decl.domain)} in {self.id}"
+                )
 
     def check_names(self, names: list[str], where: str, what: str) -> None:
         for name in names:

@@ -202,7 +202,9 @@ class Template:
     def _var(self, name: str, kind: str, shape: tuple[Any, Any], blocks=(), sign="free", doc=""):
         self._claim(name)
         if sign not in _SIGNS:
-            raise TemplateError(f"{self.theorem_id}: unknown sign '{sign}' for variable '{name}'")
+            raise TemplateError(
+                f"theorem {self.theorem_id}: unknown sign '{sign}' for variable '{name}' (one of: {', '.join(_SIGNS)})"
+            )
         sym = sympy.Symbol(name, real=True) if kind == "scalar" else sympy.MatrixSymbol(name, *shape)
         self.variables.append(VarDecl(name, kind, shape, sym, tuple(blocks), sign, doc))
         return sym

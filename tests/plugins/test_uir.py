@@ -278,7 +278,7 @@ def test_thm5_1_random_matches_cvxpy(seed, lam, gamma0, backend):
 
 def test_bad_input():
     d = _random_plant(5)
-    with pytest.raises(DataError, match=r"uir\.thm5_1.*parameter lambda = 1.5 is outside its domain Interval\(0, 1\)"):
+    with pytest.raises(DataError, match=r"uir\.thm5_1.*parameter lambda = 1.5 is outside its domain \[0, 1\]"):
         compile_theorem("uir.thm5_1", _system(d, gamma0=0.1, **{"lambda": 1.5}))
     with pytest.raises(DataError, match=r"uir\.thm5_1.*parameter gamma0 = -0.1 is outside"):
         compile_theorem("uir.thm5_1", _system(d, gamma0=-0.1, **{"lambda": 0.5}))

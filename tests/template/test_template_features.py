@@ -108,3 +108,15 @@ def test_entries_of_a_variable_in_an_objective():
     v = prob.unpack(x)
     want = v["P"][0, 1] + 3 * v["R"][1, 0] + np.trace(v["P"])
     assert prob.objective.value(x) == pytest.approx(want, rel=1e-12)
+
+
+def test_a_sign_typo_names_the_theorem_and_the_signs_there_are():
+    from lmic.errors import TemplateError
+
+    @theorem(id="test.sign_typo", title="t", citation="c")
+    def typo(t):
+        t.scalar("g", sign="postive")
+
+    with pytest.raises(TemplateError) as info:
+        typo.template({})
+    assert str(info.value).startswith("theorem test.sign_typo: unknown sign 'postive' for variable 'g' (one of: free,")

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from lmic.errors import DataError
+from lmic.formatting import domain_text
 from lmic.studies.sweep.points import Evaluator, domain, in_domain, setup
 from lmic.studies.sweep.results import PointResult, Progress, SweepResult
 
@@ -106,7 +107,7 @@ def sweep(
     dom = domain(decl)
     for v in values:
         if not in_domain(float(v), dom):
-            raise DataError(f"theorem {plan.id}: {param} = {v:g} is outside its domain {decl.domain}")
+            raise DataError(f"theorem {plan.id}: {param} = {v:g} is outside its domain {domain_text(decl.domain)}")
     total = len(values)
 
     def report(event: dict[str, Any]) -> None:
