@@ -393,6 +393,10 @@ def audit_certificate(
             if doc["ir"]["embedded"] is not None
             else "recompiling gives a different IR (the theorem plugin, the compiler or the parameters changed)"
         )
+        recorded, now = (doc.get("system") or {}).get("name"), (problem.meta or {}).get("system")
+        if doc["ir"]["embedded"] is None and recorded is not None and now is not None and recorded != now:
+            # the data are the same (system.sha256 held): the IR records the system's name too
+            why = f"the system file's name changed ({recorded!r} -> {now!r}), and the IR records it"
         return _fail(doc, "ir.sha256", f"ir.sha256 differs: {why}", checked=checked, **common)
     checked.append("ir.sha256")
     # 3. the solver's claims, as recorded, re-certified

@@ -211,6 +211,16 @@ def test_changed_system_file_is_caught(theorem_cert):
     assert not r.ok and r.field == "system.sha256"
 
 
+def test_a_renamed_system_file_is_named_as_the_cause(theorem_cert):
+    """Only the system's ``name:`` changed (same data, system.sha256 holds): the IR records the
+    name, so the certificate no longer matches; the audit says that, not "the plugin changed"."""
+    path, _, sysfile = theorem_cert
+    sysfile.write_text(sysfile.read_text().replace("name: test", "name: renamed"))
+    r = audit_certificate(path)
+    assert not r.ok and r.field == "ir.sha256"
+    assert "the system file's name changed ('test' -> 'renamed'), and the IR records it" in r.message
+
+
 def test_changed_compilation_is_caught_by_the_ir_hash(theorem_cert):
     # a different compilation (here: other parameters; equally a changed plugin) -> other IR
     path, doc, _ = theorem_cert
