@@ -22,7 +22,7 @@ import numpy as np
 
 from lmic.errors import DataError
 
-__all__ = ["as_system", "is_statespace"]
+__all__ = ["as_system", "is_statespace", "TimebaseNote"]
 
 _ROLES = ("A", "B", "C", "D")
 
@@ -53,11 +53,57 @@ def _plant_data(theorem: Any, ss: Any) -> dict[str, Any]:
     return out
 
 
+class TimebaseNote(UserWarning):
+    """A python-control plant whose time base (``dt``) contradicts the theorem's system class."""
+
+
+def _check_timebase(theorem: Any, ss: Any) -> None:
+    """Warn (:class:`TimebaseNote`) when a plant's ``dt`` says continuous time (``dt = 0``) and the
+    theorem's ``system_class`` says discrete time, or the other way round (``dt > 0`` or
+    ``True``). The matrices are taken as they are either way: the theorem decides what they mean.
+
+    >>> import warnings, numpy as np
+    >>> class SS:
+    ...     A, B, C, D, dt = -np.eye(2), np.ones((2, 1)), np.eye(1, 2), np.zeros((1, 1)), 0
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     _ = as_system("uio_dt.thm3_1", SS())
+    >>> print(w[0].message)
+    the plant is continuous-time (dt = 0) but theorem uio_dt.thm3_1 is for discrete time systems (its system class: ...)
+    """
+    import warnings
+
+    from lmic.registry import get_theorem
+    from lmic.template.theorem import Theorem
+
+    dt = getattr(ss, "dt", None)
+    if dt is None or isinstance(dt, str):
+        return
+    thm = theorem if isinstance(theorem, Theorem) else get_theorem(str(theorem))
+    cls = str(getattr(thm, "system_class", "") or "").lower()
+    discrete_plant = dt is True or (not isinstance(dt, bool) and float(dt) > 0)
+    continuous_plant = not discrete_plant and dt is not False and float(dt) == 0
+    has_d, has_c = "discrete" in cls, "continuous" in cls  # a class naming both (sampled data) fits either
+    said = (has_d and not has_c and continuous_plant) or (has_c and not has_d and discrete_plant)
+    if said:
+        kind = "continuous-time (dt = 0)" if continuous_plant else f"discrete-time (dt = {dt})"
+        other = "discrete" if continuous_plant else "continuous"
+        warnings.warn(
+            TimebaseNote(
+                f"the plant is {kind} but theorem {thm.id} is for {other} time systems "
+                f"(its system class: {thm.system_class})"
+            ),
+            stacklevel=3,
+        )
+
+
 def as_system(theorem: Any, system: Any) -> Any:
     """Turn a ``StateSpace`` (or ``{"plant": ss, ...}``) into a system dict; pass anything else on."""
     if is_statespace(system):
+        _check_timebase(theorem, system)
         return {"lmic": 1, "name": "python-control plant", "data": _plant_data(theorem, system)}
     if isinstance(system, dict) and "plant" in system:
+        _check_timebase(theorem, system["plant"])
         rest = {k: v for k, v in system.items() if k != "plant"}
         data = dict(_plant_data(theorem, system["plant"]))
         data.update(rest.get("data") or {})

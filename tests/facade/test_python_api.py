@@ -48,6 +48,31 @@ def test_statespace_plant_fills_the_theorems_data():
     assert sorted(r2.problem.data) >= ["A", "C"]
 
 
+def test_a_plant_of_the_other_time_base_is_noted():
+    """A continuous-time python-control plant given to a discrete-time theorem (and the other
+    way round) is taken as given, with a note naming both: the matrices would mean something else."""
+    import warnings
+
+    from lmic.plant import TimebaseNote
+
+    control = pytest.importorskip("control")
+    with pytest.warns(TimebaseNote, match=r"continuous-time \(dt = 0\) but theorem qib.thm1 is for discrete time"):
+        lmic.compile_theorem(
+            "qib.thm1",
+            {"plant": control.ss(np.diag([0.5, 0.2]), np.zeros((2, 1)), [[1, 0]], 0), "params": {"beta": 0.01}},
+        )
+    with pytest.warns(
+        TimebaseNote, match=r"discrete-time \(dt = 0.1\) but theorem tutorial.bounded_real is for continuous"
+    ):
+        lmic.compile_theorem("tutorial.bounded_real", control.ss([[0.5]], [[1.0]], [[1.0]], [[0.0]], 0.1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", TimebaseNote)  # the right time base: no note
+        lmic.compile_theorem(
+            "qib.thm1",
+            {"plant": control.ss(np.diag([0.5, 0.2]), np.zeros((2, 1)), [[1, 0]], 0, True), "params": {"beta": 0.01}},
+        )
+
+
 def test_a_plant_without_the_theorems_matrices_is_a_clear_error():
     class Plant:
         A = np.eye(2)
