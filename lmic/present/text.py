@@ -28,6 +28,20 @@ _VERDICT_STYLE = {
 }
 
 
+#: what the number of each check kind is (lmic.certify.derived)
+_CHECK_VALUE = {
+    "schur_stable": "spectral radius",
+    "hurwitz": "spectral abscissa",
+    "negative_definite": "lambda_max",
+    "positive_definite": "lambda_min",
+    "negative_semidefinite": "lambda_max",
+    "positive_semidefinite": "lambda_min",
+    "less_than": "value",
+    "greater_than": "value",
+    "finite": "max |entry|",
+}
+
+
 def print_result(
     result: Any, system: str | None = None, output: str | None = None, console: Console | None = None
 ) -> None:
@@ -70,8 +84,8 @@ def print_result(
     c.print(head)
     if cert.get("lmis") or cert.get("checks"):
         t = Table(show_edge=False, header_style="bold")
-        for col in ("constraint", "kind", "min margin", "relative", "ok"):
-            t.add_column(col, justify="right" if col in ("min margin", "relative") else "left")
+        for col in ("constraint", "kind", "min margin / value", "relative", "ok"):
+            t.add_column(col, justify="right" if col in ("min margin / value", "relative") else "left")
         for lmi in cert.get("lmis", []):
             strict = "strict" if lmi.get("strict", True) else "non-strict"
             t.add_row(
@@ -84,9 +98,11 @@ def print_result(
                 else "[red]VIOLATED[/red]",
             )
         for chk in cert.get("checks", []):
+            # a check's number is its own quantity, not a margin: say which
+            what = _CHECK_VALUE.get(str(chk.get("kind", "")), "")
             t.add_row(
                 str(chk.get("name")),
-                f"check {chk.get('kind', '')}".strip(),
+                f"check {chk.get('kind', '')}".strip() + (f" ({what})" if what else ""),
                 format_value(chk.get("value")),
                 "",
                 "[green]ok[/green]" if chk.get("ok") else "[red]FAILED[/red]",

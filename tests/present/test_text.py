@@ -54,3 +54,11 @@ def test_an_objective_outside_the_enclosure_says_whose_it_is():
     assert "the returned point's" not in _text(r)
     r.enclosure["upper"] = r.objective * (1 - 1e-3)  # as when the upper end is a restored point
     assert f"objective  {r.objective:.10g} (the returned point's; the optimal value is enclosed below)" in _text(r)
+
+
+def test_a_checks_number_says_what_it_is():
+    """A Hurwitz check's number is the spectral abscissa, not a margin: the table says so."""
+    system = {"lmic": 1, "data": {"A": [[-1.0, 0.5], [0.0, -2.0]]}}
+    text = _text(lmic.api.solve("thesis.lyapunov", system))
+    assert "min margin / value" in text
+    assert "check hurwitz (spectral abscissa)" in text
