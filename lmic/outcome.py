@@ -11,11 +11,10 @@ verdict                    meaning                                              
 ``undecided``              no decision (solver error, inaccurate, time limit: the       1
                            ``reason`` says which)
 ``bad input``              the input is wrong (one line names what)                     2
-``infeasible-certified``   a GLOBAL proof of infeasibility: an exact Farkas proof, or   3
-                           a verified ray of a homogeneous problem
+``infeasible-certified``   a GLOBAL proof of infeasibility: an exact Farkas proof       3
                            (:func:`lmic.certify.farkas.scope`)
-``infeasible-bounded``     only "no solution with ``||x||_inf <= R``"; never called     4
-                           infeasible
+``infeasible-bounded``     only "no solution with ``||x||_inf <= R``" (scale-free:      4
+                           with margin >= 1); never called infeasible
 ``unbounded-certified``    an optimisation problem with no optimum: a certified         5
                            feasible point and an exact improving ray (the optimal
                            value is ``-inf`` for ``min``, ``+inf`` for ``max``;

@@ -62,8 +62,11 @@ remains is the float residual ``g_k != 0`` (``k >= 1``), and that is what decide
   with margin ``mu``. Since ``x -> s x`` (``s > 0``) maps the feasible cone onto itself, the
   trace normalisation of the reduction loses nothing, and the bound is scale-free: no point
   *at any scale* has relative margin ``mu / ||x||_inf`` above ``rho = ||g_{1:}||_1 / tau``
-  (recorded). lmic treats this as **global** (the coordinator's rule for scale-free cones);
-  the recorded ``rho`` says how far that float statement goes.
+  (recorded). That bounds the relative margin and does not exclude a point with a smaller one,
+  so it is **bounded**: in the normalisation ``margin >= 1`` no solution with ``||x||_inf <
+  1 / rho`` (the radius recorded). It was once called global; a Hurwitz ``A`` (an eigenvalue at
+  ``-3e-8``, ill-conditioned eigenvectors) has Lyapunov solutions of relative margin ``1e-10``,
+  proved in rational arithmetic, where a float certificate with ``rho = 4.5e-8`` verified.
 * **everything else** (an inhomogeneous problem with a float certificate): (*) gives
   ``0 <= g_0 + ||x||_inf ||g_{1:}||_1`` at any feasible ``x``, so only points with
   ``||x||_inf < R = -g_0 / ||g_{1:}||_1`` are excluded: a **bounded** proof, "no solution with

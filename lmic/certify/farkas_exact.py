@@ -47,6 +47,7 @@ def prove_farkas(
     *,
     rel_face: tuple[float, ...] = (1e-9, 1e-7, 1e-5, 1e-3),
     keep_certificate: bool = False,
+    budget_s: float | None = None,
 ) -> dict[str, Any]:
     """Make a (float) Farkas certificate exact on its face and prove it (module docstring).
 
@@ -64,6 +65,8 @@ def prove_farkas(
     keep_certificate : bool
         Also return the exact multipliers (``exact_certificate``: ``lmis`` as lists of
         :class:`fractions.Fraction` matrices, ``linear`` as Fractions). Large; not JSON.
+    budget_s : float, optional
+        No further face or method is tried once this many seconds have passed.
 
     Returns
     -------
@@ -99,9 +102,9 @@ def prove_farkas(
                 attempt["face"]["rational_basis"] = rational
             if not out or attempt["proven"]:
                 out = attempt
-            if attempt["proven"]:
+            if attempt["proven"] or (budget_s is not None and time.perf_counter() - t0 > budget_s):
                 break
-        if out.get("proven"):
+        if out.get("proven") or (budget_s is not None and time.perf_counter() - t0 > budget_s):
             break
     out["time_s"] = time.perf_counter() - t0
     return out
@@ -339,6 +342,7 @@ def prove_infeasible(
     farkas: dict[str, Any],
     verification: dict[str, Any],
     rel_face: tuple[float, ...] | None = None,
+    budget_s: float | None = None,
 ) -> dict[str, Any]:
     """The exact proof :func:`lmic.certify.certify` runs for an ``infeasible`` answer.
 
@@ -370,7 +374,10 @@ def prove_infeasible(
     """
     out: dict[str, Any] = {}
     for source, cand in farkas_candidates(problem, farkas, verification):
-        r = prove_farkas(problem, cand) if rel_face is None else prove_farkas(problem, cand, rel_face=rel_face)
+        kw: dict[str, Any] = (
+            {"budget_s": budget_s} if rel_face is None else {"rel_face": rel_face, "budget_s": budget_s}
+        )
+        r = prove_farkas(problem, cand, **kw)
         r["source"] = source
         if not out or r["proven"]:
             out = r

@@ -1,6 +1,7 @@
 """What a Farkas certificate proves about the ORIGINAL problem: global or bounded (:func:`scope`).
 
-The rules (exact proof or homogeneous problem: global; otherwise "no solution with
+The rules (exact proof: global; a homogeneous problem's float certificate: no point with relative
+margin above ``rho``, a radius ``1 / rho`` in the normalisation margin >= 1; otherwise "no solution with
 ``||x||_inf <= R``") are in the docstring of :mod:`lmic.certify.farkas`. Split out of it; it
 re-exports :func:`scope` and :func:`is_homogeneous`.
 
@@ -77,7 +78,11 @@ def scope(problem: Problem, verification: dict[str, Any] | None, exact: dict[str
     ...             [LMI("p > 0", 1, sp.csc_matrix([[0., 1.]])), LMI("-p > 0", 1, sp.csc_matrix([[0., -1.]]))],
     ...             LinearConstraints.empty(1), Objective("feasibility", [0, 0]))
     >>> f = {"lmis": [np.eye(1), np.eye(1)]}
-    >>> scope(p, verify_farkas(p, f))["scope"]
+    >>> v = verify_farkas(p, f)
+    >>> scope(p, v)["scope"]                    # scale-free: a float certificate bounds the relative margin
+    'bounded'
+    >>> from lmic.certify.farkas_exact import prove_infeasible
+    >>> scope(p, v, prove_infeasible(p, f, v))["scope"]
     'global'
     >>> q = Problem([Variable("p", "scalar", (1, 1))],
     ...             [LMI("p >= 0", 1, sp.csc_matrix([[0., 1.]]), strict=False),
@@ -101,18 +106,26 @@ def scope(problem: Problem, verification: dict[str, Any] | None, exact: dict[str
     g0, tau = float(v.get("g0") or 0.0), float(v.get("tau") or 0.0)
     radius = float(v.get("radius") or 0.0)
     if v.get("kind") == "strict" and tau > 0 and is_homogeneous(problem):
+        # a scale-free problem: every point with margin mu has mu <= rho ||x||_inf, at any scale.
+        # That bounds the RELATIVE margin; it does not exclude a point with a smaller one: a
+        # Hurwitz A with an eigenvalue at -3e-8 and ill-conditioned eigenvectors has Lyapunov
+        # solutions of relative margin 1e-10 below such a rho (tests/certify/test_farkas_scope.py).
+        # In the normalisation margin >= 1 it is a radius, R = 1 / rho: bounded, never global.
         mb = v.get("margin_bound")
         rho = float(mb) if mb is not None else None
-        return {
-            "scope": "global",
-            "radius": math.inf,
-            "basis": "homogeneous",
-            "rho": rho,
-            "statement": (
-                "infeasible: homogeneous (scale-free) problem; at any scale no point has relative "
-                f"margin above {rho:.3g} (strict Farkas certificate)"
-            ),
-        }
+        if rho is not None and rho > 0 and math.isfinite(rho):
+            return {
+                "scope": "bounded",
+                "radius": 1.0 / rho,
+                "basis": "homogeneous",
+                "rho": rho,
+                "statement": (
+                    "homogeneous (scale-free) problem: no point has relative margin above "
+                    f"{rho:.3g} (margin per unit of ||x||_inf, strict Farkas certificate), i.e. no "
+                    f"solution with margin >= 1 and ||x||_inf < {1.0 / rho:.6g}; a point with a "
+                    "smaller relative margin is not excluded (an exact proof, --exact, decides)"
+                ),
+            }
     if g0 < 0 and radius > 0 and not math.isfinite(radius):
         # a float check cannot show g_k = 0 exactly (its own rounding is not accounted for), so
         # an infinite radius is not a statement lmic can make: nothing beyond the float

@@ -75,7 +75,8 @@ def _tolerances(items: list[str]) -> dict[str, float]:
 
 
 def exit_code(result: AuditResult) -> int:
-    """0 consistent and certified, 3 consistent and infeasible-certified, 1 otherwise.
+    """0 consistent and certified, 3 consistent and infeasible-certified, 4 consistent and
+    infeasible-bounded (``lmic solve``'s codes), 1 otherwise.
 
     >>> from lmic.certify.certificate import AuditResult
     >>> exit_code(AuditResult(ok=False, verdict="rejected", recorded_verdict="certified"))
@@ -87,6 +88,8 @@ def exit_code(result: AuditResult) -> int:
         return 0
     if result.verdict == "infeasible-certified":
         return 3
+    if result.verdict == "infeasible-bounded":
+        return 4
     return 1
 
 

@@ -154,7 +154,14 @@ def conflicts(rows: list[dict[str, Any]], sense: str, rtol: float) -> tuple[list
             if q["decision"] == "infeasible-certified":
                 found.append(f"{r['backend']} certifies a point but {q['backend']} proves the problem infeasible")
             elif q["decision"] == "infeasible-bounded" and r.get("x_norm") is not None:
-                if q.get("radius") is not None and r["x_norm"] <= q["radius"]:
+                if q.get("rho") is not None:  # scale-free: the bound is on the relative margin
+                    m = r.get("min_margin")
+                    if m is not None and r["x_norm"] > 0 and m / r["x_norm"] > q["rho"]:
+                        found.append(
+                            f"{r['backend']} certifies a point of relative margin {m / r['x_norm']:.3g} but "
+                            f"{q['backend']} proves none above {q['rho']:.3g}"
+                        )
+                elif q.get("radius") is not None and r["x_norm"] <= q["radius"]:
                     found.append(
                         f"{r['backend']} certifies a point with ||x||_inf = {r['x_norm']:.3g} but "
                         f"{q['backend']} proves no solution with ||x||_inf <= {q['radius']:.3g}"
@@ -257,6 +264,7 @@ def error_row(name: str, message: str, status: str = "error") -> dict[str, Any]:
         "objective": None,
         "verdict": "undecided",
         "radius": None,
+        "rho": None,
         "x_norm": None,
         "min_margin": None,
         "strategy": None,
@@ -304,6 +312,8 @@ def backend_row(
         "objective": res.objective if decision == "certified" else None,
         "verdict": decision,
         "radius": res.outcome.evidence.radius if decision == "infeasible-bounded" else None,
+        # a scale-free problem's bound: no point of relative margin above rho (farkas_scope)
+        "rho": _rho(res) if decision == "infeasible-bounded" else None,
         "x_norm": float(np.max(np.abs(x))) if decision == "certified" and x is not None and len(x) else None,
         "min_margin": res.min_margin,
         "strategy": res.solution.strategy,
@@ -319,6 +329,13 @@ def backend_row(
     if decision not in DECISIONS:
         row["message"] = res.outcome.reason or res.solution.message
     return row, res
+
+
+def _rho(res: Result) -> float | None:
+    """The relative-margin bound of a scale-free problem's bounded answer, else ``None``."""
+    farkas = getattr(getattr(res.outcome, "certificate", None), "farkas", None) or {}
+    sc = farkas.get("scope") or {}
+    return sc.get("rho") if sc.get("basis") == "homogeneous" else None
 
 
 def target_label(target: Any, system: Any = None) -> str:

@@ -71,8 +71,9 @@ def outcome(kind: str, obj: Any) -> str:
             return "rejected"
         if obj.agree and verdicts == {"certified"} and obj.exit_code() == 0:
             return "certified"
-        if obj.agree and verdicts == {"infeasible-certified"}:
-            return "infeasible-certified"
+        if obj.agree and verdicts <= {"infeasible-certified", "infeasible-bounded"}:
+            # one global proof suffices; rays that only bound it (scale-free: the relative margin)
+            return "infeasible-certified" if "infeasible-certified" in verdicts else "infeasible-bounded"
         if obj.agree and verdicts == {"unbounded-certified"}:
             return "unbounded-certified"
         return "undecided"

@@ -110,9 +110,13 @@ def test_zero_certificate_and_bad_shapes():
 
 def test_certify_turns_a_verified_certificate_into_infeasible_certified():
     prob = lyapunov(UNSTABLE)
-    good = certify(prob, Solution("infeasible", farkas=_lyapunov_certificate(UNSTABLE), backend="t"))
+    sol = Solution("infeasible", farkas=_lyapunov_certificate(UNSTABLE), backend="t")
+    good = certify(prob, sol, exact=True)
     assert good.verdict == "infeasible-certified" and good.ok
-    assert good.farkas["kind"] == "strict"
+    assert good.farkas["kind"] == "strict" and good.farkas["scope"]["basis"] == "exact"
+    # the same certificate checked in floating point only: the relative margin is bounded
+    float_only = certify(prob, sol)
+    assert float_only.verdict == "infeasible-bounded" and float_only.farkas["scope"]["basis"] == "homogeneous"
     bogus = certify(prob, Solution("infeasible", farkas={"lmis": [np.eye(2), np.eye(2)], "linear": []}))
     assert bogus.verdict == "unverified"
     assert bogus.reason.startswith("infeasibility not verified: ")
@@ -128,8 +132,11 @@ def test_backends_infeasibility_certificates_verify():
     for name in names:
         sol = solve_with_reductions(get_backend(name), prob)
         assert sol.status == "infeasible", name
-        cert = certify(prob, sol)
-        assert cert.verdict == "infeasible-certified", (name, cert.reason)
+        cert = certify(prob, sol)  # floating point: no point of relative margin above rho
+        assert cert.verdict == "infeasible-bounded" and cert.farkas["verified"], (name, cert.reason)
+        assert cert.farkas["scope"]["rho"] < 1e-6, (name, cert.reason)
+        # the unstable mode e_1 is rational: the exact proof of the backend's ray is global
+        assert certify(prob, sol, exact=True).verdict == "infeasible-certified", (name, cert.reason)
 
 
 # ---- repair of inaccurate certificates -----------------------------------------------------

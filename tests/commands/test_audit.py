@@ -67,9 +67,13 @@ def test_infeasible_certified_exits_3(tmp_path, capsys):
     )
     sol = Solution("infeasible", farkas={"lmis": [np.eye(1), np.eye(1)], "linear": []})
     path = tmp_path / "inf.json"
-    write_certificate(path, prob, sol, certify(prob, sol))
+    write_certificate(path, prob, sol, certify(prob, sol, exact=True))
     assert main(["audit", str(path)]) == 3
     assert "infeasible-certified" in capsys.readouterr().out
+    # checked in floating point only: a scale-free problem's ray bounds the relative margin
+    write_certificate(path, prob, sol, certify(prob, sol))
+    assert main(["audit", str(path)]) == 4
+    assert "infeasible-bounded" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(

@@ -86,8 +86,9 @@ def test_a_float_ray_of_an_inhomogeneous_problem_is_bounded_and_its_radius_is_tr
     assert exit_code(verdict_of(big(), Solution("infeasible"), cert)) == 4
 
 
-def test_homogeneous_ray_is_global():
-    # -p > 0 and p > 0 (homogeneous): Z = 1, 1 proves infeasibility at every scale
+def test_homogeneous_ray_is_proved_exactly():
+    # -p > 0 and p > 0 (homogeneous): the float ray bounds the relative margin only; the policy
+    # proves the bounded ray exactly (Z = 1, 1 is rational), and that is global
     p = Problem(
         [Variable("p", "scalar", (1, 1))],
         [LMI("p > 0", 1, sp.csc_matrix([[0.0, 1.0]])), LMI("-p > 0", 1, sp.csc_matrix([[0.0, -1.0]]))],
@@ -96,9 +97,7 @@ def test_homogeneous_ray_is_global():
     )
     r = solve(p)
     assert r.verdict == "infeasible-certified" and r.exit_code() == 3
-    # no exact proof was asked for (and only bounded rays get one): the float ray of this
-    # homogeneous problem is global by itself
-    assert r.outcome.evidence.kind == "global-ray"
+    assert r.outcome.evidence.kind == "exact-proof"
 
 
 def test_unverified_infeasible_status_does_not_exit_3():

@@ -25,14 +25,15 @@ def test_problem_target_certified():
 
 def test_infeasible_exit_code():
     # the truth, in closed form: A has the eigenvalue 0.5 > 0, so no P > 0 has A'P + PA < 0
-    # (Lyapunov). The LMIs have no constant term (homogeneous), so a verified strict Farkas ray
-    # proves it at every scale: the verdict is infeasible-certified, and its exit code is 3.
+    # (Lyapunov). The LMIs have no constant term (homogeneous): a float ray bounds the relative
+    # margin only; its exact proof (the unstable mode e_1 is rational) makes it global: the
+    # verdict is infeasible-certified, and its exit code is 3.
     A = np.array([[0.5, 1.0, 0.0], [0.0, -1.0, 1.0], [0.0, 0.0, -2.0]])
     assert max(np.linalg.eigvals(A).real) == pytest.approx(0.5)
     r = solve(lyapunov_problem(A))
     assert r.status == "infeasible"
     assert r.verdict == "infeasible-certified"
-    assert r.outcome.evidence.kind == "global-ray"
+    assert r.outcome.evidence.kind == "exact-proof"
     assert r.exit_code() == 3
 
 

@@ -16,7 +16,7 @@ import subprocess
 import sys
 
 import pytest
-from study_helpers import REPO, env, lyapunov_truth
+from study_helpers import REPO, decision, env, lyapunov_truth
 
 from lmic.crosscheck import DECISIONS, crosscheck
 from lmic.options import SolveOptions
@@ -155,6 +155,6 @@ def test_a_backend_that_cannot_run_is_the_same_failure_row_in_a_worker():
     )
     par = _json(rep)
     _assert_same(seq, par)
-    assert [r["decision"] for r in par["results"]] == [lyapunov_truth(system), "undecided"]
+    assert [decision(r["decision"]) for r in par["results"]] == [lyapunov_truth(system), "undecided"]
     assert par["failures"] == 1 and par["agree"] and par["exit_code"] == 0
     assert "no-such-backend" in par["results"][1]["message"]

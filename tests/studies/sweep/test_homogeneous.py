@@ -130,7 +130,7 @@ def test_maximize_encloses_the_closed_form_with_a_proof_at_each_end(n, seed):
     # the other end: a global infeasibility proof at that value, verified again here
     assert res.upper_kind in PROVEN_KINDS and res.upper_proven == res.upper
     up = next(p for p in res.points if p.value == res.upper)
-    cert = certify(_problem(gevp, system, res.upper), up.solution)
+    cert = certify(_problem(gevp, system, res.upper), up.solution, exact=True)  # the exact proof is global
     assert cert.verdict == "infeasible-certified"
 
 
