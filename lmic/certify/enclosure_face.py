@@ -475,7 +475,8 @@ def face_bound(problem: Problem, duals: dict[str, Any] | None, *, tries: int = 2
         ``lower_exact``, ``method`` (``"exact"``), ``route`` (``"face"``), ``reason``,
         ``problem`` (``"ir"``: the bound holds for the IR's own coefficients; ``"exact"``: for
         the theorem compiled exactly from the system's numbers, :mod:`lmic.compile.exact`),
-        ``dual`` (``{"form": "face", "problem", "block", "pivot", "K", "S_rest"}``).
+        ``dual`` (``{"form": "face", "problem", "block", "pivot", "K", "S_rest"}``; the Stein
+        form records ``U`` as rational strings and ``"structure": "stein"`` instead of ``K``).
     """
     from lmic.certify.multipliers import parse_multipliers
 

@@ -291,7 +291,19 @@ def rational_rotation(theta: float, max_den: int = MAX_DEN) -> list[list[Fractio
 
 def stein_pivot_g(structure: dict[str, Any], N: Any, D: int) -> Any:
     """``g`` of each pivot row (by tril entry of ``P``), exactly, for ``S = N / D`` (python-flint
-    ``fmpz_mat``): ``sigma tr(E_ab (Abar X Abar^T - E X E^T))``, ``X = S S^T``."""
+    ``fmpz_mat``): ``sigma tr(E_ab (Abar X Abar^T - E X E^T))``, ``X = S S^T``.
+
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> F = sp.csc_matrix(np.array([[0, .75, 0], [0, -.5, 0], [-1, 0, 0], [0, -1, 1], [0, 0, 0], [0, 0, 1]]))
+    >>> p = Problem([Variable("p", "scalar", (1, 1)), Variable("g", "scalar", (1, 1), offset=1)],
+    ...             [LMI("p > 0", 1, sp.csc_matrix([[0.0, 1.0, 0.0]])), LMI("dbrl", 3, F)],
+    ...             LinearConstraints.empty(2), Objective("min", [0.0, 0.0, 1.0]))  # 1 / (z - 1/2)
+    >>> from lmic.certify.psd import load_flint
+    >>> g = stein_pivot_g(stein_structure(p), load_flint().fmpz_mat([[2], [1], [1]]), 1)
+    >>> g(0)  # Abar S = 2 / 2 + 1 = 2 = (E S) U with U = 1: on the face
+    Fraction(0, 1)
+    """
     from lmic.certify.psd import load_flint
 
     flint = load_flint()
@@ -338,7 +350,18 @@ def stein_candidates(
     """``(float bound, U, S_R)`` (``U`` exactly orthogonal), best first: ``U = +-1`` and the
     best rotations of a search over ``theta`` in ``[0, pi]`` (a grid with the angles of
     ``A_E``'s eigenvalues and the solver's, refined by golden section), each with its best
-    ``S_R``, plus the solver's own rank-1 point (``X0``, the main block's multiplier)."""
+    ``S_R``, plus the solver's own rank-1 point (``X0``, the main block's multiplier).
+
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> F = sp.csc_matrix(np.array([[0, .75, 0], [0, -.5, 0], [-1, 0, 0], [0, -1, 1], [0, 0, 0], [0, 0, 1]]))
+    >>> p = Problem([Variable("p", "scalar", (1, 1)), Variable("g", "scalar", (1, 1), offset=1)],
+    ...             [LMI("p > 0", 1, sp.csc_matrix([[0.0, 1.0, 0.0]])), LMI("dbrl", 3, F)],
+    ...             LinearConstraints.empty(2), Objective("min", [0.0, 0.0, 1.0]))  # 1 / (z - 1/2)
+    >>> best = stein_candidates(p, stein_structure(p))[0]
+    >>> round(best[0], 12), best[1]  # the norm 2, at theta = 0
+    (2.0, [[Fraction(1, 1)]])
+    """
     forms = _forms(problem, structure)
     if forms is None:
         return []
