@@ -39,8 +39,12 @@ candidate is only a candidate: the exact checks decide. The coefficients checked
 IR's own when they have the structure exactly, else the theorem's exact compilation
 (:mod:`lmic.compile.exact`, :func:`structure_for`; the bound is then about that problem).
 
-The record (``dual`` of the result, ``form`` ``"face"``) holds ``K``, ``S_R``, the block and
-the pivot block; :func:`verify_face` re-runs the exact proof from it alone.
+The discrete-time (Stein) form ``sigma (Abar^T P Abar - E^T P E)`` is the same with ``U``
+exactly orthogonal in place of ``K`` (``Abar S = (E S) U``: :mod:`lmic.certify.enclosure_face_stein`).
+
+The record (``dual`` of the result, ``form`` ``"face"``) holds ``K`` (or ``U`` as rationals,
+``structure`` ``"stein"``), ``S_R``, the block and the pivot block; :func:`verify_face`
+re-runs the exact proof from it alone.
 
 Examples
 --------
@@ -69,7 +73,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from lmic.certify.enclosure_float import down
-from lmic.certify.enclosure_repair import jacobian
+from lmic.certify.enclosure_repair import jacobian, pivot_blocks
 from lmic.compile.exact import ExactProblem, ExactUnavailable, exact_of, from_ir
 from lmic.errors import CertificateError
 from lmic.ir.problem import Problem
@@ -95,35 +99,6 @@ GRID_SLACK = 1e-6
 def _target(problem: Problem) -> np.ndarray:
     s = -1.0 if problem.objective.sense == "max" else 1.0
     return s * np.asarray(problem.objective.c, dtype=float)
-
-
-def pivot_blocks(problem: Problem, J: sp.spmatrix, ranges: list[tuple[int, int]]) -> dict[int, np.ndarray]:
-    """LMI blocks whose every entry appears in exactly one dual equality row (``k >= 1``), all
-    rows distinct: ``{block: row of each tril entry}`` (the multiplier of ``P > 0``, each
-    entry of which absorbs one equality of ``P`` with an exact coefficient).
-
-    >>> import scipy.sparse as sp
-    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
-    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0.0, 1.0]]))],
-    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
-    >>> J, ranges = jacobian(p)
-    >>> {k: v.tolist() for k, v in pivot_blocks(p, J, ranges).items()}
-    {0: [1]}
-    """
-    J1 = sp.csc_matrix(J)[1:]
-    J1.eliminate_zeros()
-    J1 = sp.csc_matrix(J1)
-    counts = np.diff(J1.indptr)
-    out: dict[int, np.ndarray] = {}
-    used: set[int] = set()
-    for i, (a, b) in enumerate(ranges):
-        if a == b or not np.all(counts[a:b] == 1):
-            continue
-        rows = (J1.indices[J1.indptr[a:b]] + 1).astype(int)
-        if np.unique(rows).size == rows.size and not used.intersection(rows.tolist()):
-            out[i] = rows
-            used.update(rows.tolist())
-    return out
 
 
 def _float_structure(problem: Problem) -> dict[str, Any] | None:
@@ -266,8 +241,10 @@ def structure_for(problem: Problem) -> tuple[dict[str, Any] | None, str]:
     (:func:`lmic.compile.exact.exact_of`): ``(structure or None, reason)``; the structure's
     ``problem`` is ``"ir"`` or ``"exact"`` (what a bound proved on it is about)."""
     cand = _float_structure(problem)
-    if cand is None:
-        return None, "no Lyapunov structure for the face route"
+    if cand is None:  # the discrete-time (Stein) form, else none
+        from lmic.certify.enclosure_face_stein import stein_structure_for
+
+        return stein_structure_for(problem)
     if cand["exact_ir"]:
         st = _exact_structure(problem, cand, from_ir(problem))
         if st is not None:
@@ -287,11 +264,12 @@ def _fq(flint: Any, v: float) -> Any:
     return flint.fmpq(f.numerator, f.denominator)
 
 
-def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_rest: np.ndarray) -> dict[str, Any]:
+def prove_face(problem: Problem, structure: dict[str, Any], K: Any, S_rest: np.ndarray) -> dict[str, Any]:
     """The exact proof of the module docstring from ``K`` (``r x r``, skew) and ``S_rest``
     (the non-state rows of ``S``, ``(d - n_P) x r``), on the exact coefficients of
-    ``structure`` (:func:`lyapunov_structure`). Returns ``proven``, ``lower`` (rounded
-    down), ``lower_exact`` and ``reason``."""
+    ``structure`` (:func:`lyapunov_structure`; for a Stein structure ``K`` is ``U``, rationals
+    exactly orthogonal). Returns ``proven``, ``lower`` (rounded down), ``lower_exact`` and
+    ``reason``."""
     from lmic.certify.psd import load_flint, prove_psd
 
     flint = load_flint()
@@ -301,13 +279,24 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
     AN, Aden = structure["AbarN"], int(structure["Abar_den"])
     npv, d = P.lmis[pi].dim, P.lmis[xi].dim
     rest = np.setdiff1d(np.arange(d), state)
+    stein = structure.get("form") == "stein"  # K is then U, exactly orthogonal (enclosure_face_stein)
+    if stein:
+        from lmic.certify.enclosure_face_stein import exact_orthogonal, stein_pivot_g
+
+        Uq = exact_orthogonal(K)
+        if Uq is None:
+            return {"proven": False, "reason": "U is not an exactly orthogonal rational matrix"}
+        Kq: list[list[Fraction]] = Uq
+        K = np.array([[float(v) for v in row_] for row_ in Uq])
     K = np.asarray(K, dtype=float)
     S_rest = np.asarray(S_rest, dtype=float)
     r = K.shape[0] if K.ndim == 2 else -1
     if r < 1 or K.shape != (r, r) or S_rest.shape != (rest.size, r):
         return {"proven": False, "reason": "the face point's K or S_R has the wrong shape"}
-    if not (np.all(np.isfinite(K)) and np.all(np.isfinite(S_rest))) or np.any(K != -K.T):
+    if not (np.all(np.isfinite(K)) and np.all(np.isfinite(S_rest))) or (not stein and np.any(K != -K.T)):
         return {"proven": False, "reason": "K is not a finite skew-symmetric matrix"}
+    if not stein:
+        Kq = [[Fraction(float(v)) for v in row_] for row_ in K]
     # A_E S_E - S_E K = -A_R S_R, as (I (x) A_E - K^T (x) I) vec(S_E) = vec(-A_R S_R)
     AE, AR = AN[:, state], AN[:, rest]
     nr = npv * r
@@ -319,8 +308,8 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
                 if AE[i, j] != 0:
                     M[row, c * npv + j] = flint.fmpq(int(AE[i, j]), Aden)
             for c2 in range(r):
-                if K[c2, c] != 0:
-                    M[row, c2 * npv + i] = M[row, c2 * npv + i] - _fq(flint, K[c2, c])
+                if Kq[c2][c] != 0:
+                    M[row, c2 * npv + i] -= flint.fmpq(Kq[c2][c].numerator, Kq[c2][c].denominator)
     SRq = [[_fq(flint, S_rest[i, c]) for c in range(r)] for i in range(rest.size)]
     rhs = flint.fmpq_mat(nr, 1)
     for c in range(r):
@@ -366,13 +355,17 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
     # on a pivot row (P_ab) the coefficients are E^T E_ab Abar + Abar^T E_ab E (checked exactly
     # by lyapunov_structure): g = <F, X> = 2 (Abar X)[b, s_a] + 2 (Abar X)[a, s_b] (once if a = b)
     # Abar X = MN / (Aden D^2), MN = (AN N) N^T: two thin products (AN XN costs seconds at 50 states)
-    MN = (flint.fmpz_mat([[int(v) for v in row_] for row_ in AN]) * N) * N.transpose()
     pa_, pb_ = tril_rows_cols(npv)
+    if stein:  # sigma tr(E_ab (Abar X Abar^T - E X E^T))
+        g_pivot = stein_pivot_g(structure, N, D)
+    else:
+        MN = (flint.fmpz_mat([[int(v) for v in row_] for row_ in AN]) * N) * N.transpose()
 
-    def g_pivot(t: int) -> int:
-        """``g`` of the pivot row of tril entry ``t``, times ``Aden D^2 / 2`` (an integer)."""
-        a_, b_ = int(pa_[t]), int(pb_[t])
-        return int(MN[b_, int(state[a_])]) + (int(MN[a_, int(state[b_])]) if a_ != b_ else 0)
+        def g_pivot(t: int) -> Fraction:
+            """``g`` of the pivot row of tril entry ``t``."""
+            a_, b_ = int(pa_[t]), int(pb_[t])
+            gn = int(MN[b_, int(state[a_])]) + (int(MN[a_, int(state[b_])]) if a_ != b_ else 0)
+            return Fraction(2 * gn, Aden * D2) if gn else Fraction(0)
 
     others = [k for k in range(1, 1 + P.n) if k not in prow]
     gv = {k: g(k) for k in others}
@@ -394,7 +387,7 @@ def prove_face(problem: Problem, structure: dict[str, Any], K: np.ndarray, S_res
     for k, tt in prow.items():
         gn = g_pivot(tt)
         if gn or q[k]:  # on the face g = 0 (W = 0): no rational arithmetic unless needed
-            w[tt] = (q[k] - Fraction(2 * gn, Aden * D2) / t) / (int(pw[tt]) * Lp.value(tt, k))
+            w[tt] = (q[k] - gn / t) / (int(pw[tt]) * Lp.value(tt, k))
     if any(w):
         den = 1
         for f in w:
@@ -482,7 +475,8 @@ def face_bound(problem: Problem, duals: dict[str, Any] | None, *, tries: int = 2
         ``lower_exact``, ``method`` (``"exact"``), ``route`` (``"face"``), ``reason``,
         ``problem`` (``"ir"``: the bound holds for the IR's own coefficients; ``"exact"``: for
         the theorem compiled exactly from the system's numbers, :mod:`lmic.compile.exact`),
-        ``dual`` (``{"form": "face", "problem", "block", "pivot", "K", "S_rest"}``).
+        ``dual`` (``{"form": "face", "problem", "block", "pivot", "K", "S_rest"}``; the Stein
+        form records ``U`` as rational strings and ``"structure": "stein"`` instead of ``K``).
     """
     from lmic.certify.multipliers import parse_multipliers
 
@@ -491,7 +485,15 @@ def face_bound(problem: Problem, duals: dict[str, Any] | None, *, tries: int = 2
     st, why = structure_for(problem)
     if st is None:
         return {"proven": False, "route": "face", "reason": why}
-    if duals and duals.get("lmis") is not None:
+    stein, cands = st.get("form") == "stein", []  # type: tuple[bool, list[Any]]
+    if stein:  # the discrete-time form: U exactly orthogonal (enclosure_face_stein)
+        from lmic.certify.enclosure_face_stein import stein_candidates
+
+        X0 = None
+        if duals and duals.get("lmis") is not None:
+            X0 = parse_multipliers(problem, duals, "dual point", missing_is_zero=False)[0][st["block"]]
+        cands = stein_candidates(problem, st, X0)
+    elif duals and duals.get("lmis") is not None:
         mats, y = parse_multipliers(problem, duals, "dual point", missing_is_zero=False)
         cands = _ranked(problem, st, mats, y)
     else:  # no dual point: the frequency search alone
@@ -508,9 +510,12 @@ def face_bound(problem: Problem, duals: dict[str, Any] | None, *, tries: int = 2
                 "problem": st["problem"],
                 "block": int(st["block"]),
                 "pivot": int(st["pivot"]),
-                "K": K.tolist(),
                 "S_rest": SR.tolist(),
             }
+            if stein:
+                res["dual"].update(structure="stein", U=[[str(v) for v in row_] for row_ in K])
+            else:
+                res["dual"]["K"] = np.asarray(K).tolist()
             return res
         best = res
     return best
@@ -526,8 +531,14 @@ def verify_face(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
     about = d.get("problem", "ir")
     if about not in ("ir", "exact"):
         return {"ok": False, "lower": None, "reason": f"unknown problem {about!r} of the face point"}
+    stein = d.get("structure", "kyp") == "stein"
     try:
-        st = lyapunov_structure(problem, exact_of(problem) if about == "exact" else None)
+        if stein:
+            from lmic.certify.enclosure_face_stein import stein_structure
+
+            st = stein_structure(problem, exact_of(problem) if about == "exact" else None)
+        else:
+            st = lyapunov_structure(problem, exact_of(problem) if about == "exact" else None)
     except ExactUnavailable as exc:
         return {"ok": False, "lower": None, "reason": f"the exact problem cannot be recompiled: {exc}"}
     if about == "exact" and st is not None and st["exact"].about != "theorem":
@@ -535,9 +546,9 @@ def verify_face(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
     if st is None or d.get("block") != st["block"] or d.get("pivot") != st["pivot"]:
         return {"ok": False, "lower": None, "reason": "the recorded face does not match the problem's structure"}
     try:
-        K = np.asarray(d.get("K"), dtype=float)
+        K: Any = d.get("U") if stein else np.asarray(d.get("K"), dtype=float)
         SR = np.asarray(d.get("S_rest"), dtype=float)
-        if K.ndim != 2 or SR.ndim != 2:
+        if (not stein and np.ndim(K) != 2) or SR.ndim != 2:
             raise ValueError("K and S_rest must be matrices")
         res = prove_face(problem, st, K, SR)
     except (ValueError, TypeError) as exc:

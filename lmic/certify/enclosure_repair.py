@@ -31,7 +31,7 @@ from lmic.certify.multipliers import parse_multipliers
 from lmic.ir.problem import Problem
 from lmic.ir.svec import tril_rows_cols, tril_unvec
 
-__all__ = ["SHIFTS", "PERTURBATIONS", "DROP", "jacobian", "perturbed_problem"]
+__all__ = ["SHIFTS", "PERTURBATIONS", "DROP", "jacobian", "pivot_blocks", "perturbed_problem"]
 
 #: relative shifts ``eps_rel`` tried, smallest first (step 2 of the module docstring)
 SHIFTS = (1e-15, 1e-14, 1e-13, 3e-13, 1e-12, 1e-11, 1e-10, 1e-9, 1e-8, 1e-7, 1e-6)
@@ -446,3 +446,32 @@ def _default_active(problem: Problem, ranges: list, u: np.ndarray) -> np.ndarray
 
 #: public name of the Jacobian builder
 jacobian = _jacobian
+
+
+def pivot_blocks(problem: Problem, J: sp.spmatrix, ranges: list[tuple[int, int]]) -> dict[int, np.ndarray]:
+    """LMI blocks whose every entry appears in exactly one dual equality row (``k >= 1``), all
+    rows distinct: ``{block: row of each tril entry}`` (the multiplier of ``P > 0``, each
+    entry of which absorbs one equality of ``P`` with an exact coefficient).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0.0, 1.0]]))],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+    >>> J, ranges = jacobian(p)
+    >>> {k: v.tolist() for k, v in pivot_blocks(p, J, ranges).items()}
+    {0: [1]}
+    """
+    J1 = sp.csc_matrix(J)[1:]
+    J1.eliminate_zeros()
+    J1 = sp.csc_matrix(J1)
+    counts = np.diff(J1.indptr)
+    out: dict[int, np.ndarray] = {}
+    used: set[int] = set()
+    for i, (a, b) in enumerate(ranges):
+        if a == b or not np.all(counts[a:b] == 1):
+            continue
+        rows = (J1.indices[J1.indptr[a:b]] + 1).astype(int)
+        if np.unique(rows).size == rows.size and not used.intersection(rows.tolist()):
+            out[i] = rows
+            used.update(rows.tolist())
+    return out
