@@ -101,7 +101,8 @@ MAX_RAY_PROOFS = 3
 #: ... while the proofs so far took less than this many CPU seconds (the first is always tried)
 RAY_PROOF_BUDGET_S = 15.0
 #: ... and one proof stops trying further faces after this many seconds (a 20-state scale-free
-#: bisection point spent 12 s a proof on an irrational face, 48 s in all, before it was bounded)
+#: bisection point spent 12 s a proof on an irrational face, 48 s in all, before it was bounded;
+#: tests/studies/sweep/test_sweep_fast.py 285 s -> 120 s)
 RAY_PROOF_ATTEMPT_S = 2.0
 
 #: per-backend time budget of an escalating route (seconds, for a problem of size 1e6 or less;

@@ -70,7 +70,6 @@ def decide(
     value: float = math.nan,
     scale: float | None = None,
     budget_s: float | None = None,
-    ray_budget_s: float | None = None,
 ) -> PointResult:
     """Decide one compiled problem: feasible (certified), infeasible, or undecided.
 
@@ -102,8 +101,6 @@ def decide(
         radius).
     budget_s : float, optional
         Seconds each backend may take (:func:`lmic.policy.decide`).
-    ray_budget_s : float, optional
-        Seconds of exact proofs of bounded rays (:func:`lmic.policy.decide`; ``0``: none).
 
     Returns
     -------
@@ -133,7 +130,6 @@ def decide(
         reference=reference,
         rescue=exact,
         budget_s=budget_s,
-        ray_budget_s=ray_budget_s,
     )
     total = time.perf_counter() - t0
     cert = out.certificate
@@ -377,9 +373,6 @@ class Evaluator:
         #: screens may start with the route's first-order backend (off once it failed to
         #: decide: the bracket only narrows towards the supremum, where it is slow)
         self.first_order = True
-        #: seconds of exact proofs of bounded rays an interior point may take (``None``: the
-        #: policy's; 0 once one point's proof failed, see ``__call__``)
-        self.ray_budget_s: float | None = None
         self.last_value = math.nan
         #: the problems bound at the last few values (``stretch`` needs two of them)
         self._bound: dict[float, Problem] = {}
@@ -494,13 +487,7 @@ class Evaluator:
                 exact=self.exact,
                 value=float(value),
                 scale=self.scale,
-                ray_budget_s=self.ray_budget_s,
             )
-            if res.outcome == "infeasible-bounded":
-                # its ray's exact proof failed: the rays of the other values of the same theorem
-                # live on the same kind of face (an irrational unstable mode of a scale-free
-                # theorem: 12 s a point in a bisection); the final end's proof still tries
-                self.ray_budget_s = 0.0
         res.bind_s = bind_s
         if not res.reused and res.solution is not None and res.solution.x is not None:
             self.warm = res.solution
