@@ -36,6 +36,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -198,11 +199,12 @@ def first_order_capped(backend: Any, options: Any, solve_s: float, warm: Any = N
 
     base = options or SolveOptions()
     cap = max(FIRST_ORDER_RESOLVE_MIN_S, FIRST_ORDER_RESOLVE_FACTOR * float(solve_s))
-    out = SolveOptions(**{k: getattr(base, k) for k in base.__dataclass_fields__})
-    out.time_limit = min(cap, base.time_limit) if base.time_limit is not None else cap
-    if warm is not None and out.warm_start is None:
-        out.warm_start = warm  # the re-solves are the same problem, nearly: start at its answer
-    return out
+    return dataclasses.replace(
+        base,
+        time_limit=min(cap, base.time_limit) if base.time_limit is not None else cap,
+        # the re-solves are the same problem, nearly: start at its answer
+        warm_start=base.warm_start if base.warm_start is not None else warm,
+    )
 
 
 def enclosure_of(

@@ -64,11 +64,7 @@ def probe_shapes(problem: Problem, seed: int = 0) -> None:
     tid = (problem.meta or {}).get("theorem") or "the problem"
     dims = ", ".join(f"{k} = {v}" for k, v in sorted((problem.meta or {}).get("dims", {}).items()))
     where = f" (the plugin's expression does not fit the system's dimensions{': ' + dims if dims else ''})"
-    x = np.random.default_rng(seed).standard_normal(problem.n)
-    env: dict = {}
-    for k, v in problem.data.items():
-        env[k] = np.asarray(v, dtype=float) if isinstance(v, list | np.ndarray) else float(v)
-    env.update(problem.unpack(x))
+    env = problem.inputs(np.random.default_rng(seed).standard_normal(problem.n))
     for what, name, expr in [("derived", d.name, d.expr) for d in problem.derived] + [
         ("check", c.name, c.expr) for c in problem.checks
     ]:

@@ -466,10 +466,15 @@ class Problem:
         """
         from lmic.ir.expr import evaluate
 
+        env = self.inputs(x)
+        for d in self.derived:
+            env[d.name] = evaluate(d.expr, env)
+        return env
+
+    def inputs(self, x: np.ndarray) -> dict[str, Any]:
+        """Names -> values of the data and of the variables at ``x`` (no derived quantity)."""
         env: dict[str, Any] = {}
         for k, v in self.data.items():
             env[k] = np.asarray(v, dtype=float) if isinstance(v, list | np.ndarray) else float(v)
         env.update(self.unpack(x))
-        for d in self.derived:
-            env[d.name] = evaluate(d.expr, env)
         return env

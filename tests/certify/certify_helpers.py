@@ -119,3 +119,20 @@ def inline_brl(t):
     gamma = t.scalar("gamma", sign="positive")
     t.lmi("brl", block([[A.T * P + P * A, P * B, C.T], [STAR, -gamma * I(m), 0], [STAR, STAR, -gamma * I(q)]]) < 0)
     t.minimize(gamma)
+
+
+@theorem(
+    id="test.inline_discrete_bounded_real", title="Discrete-time bounded-real lemma", citation="de Souza & Xie (1992)"
+)
+def inline_dbrl(t):
+    """The discrete-time bounded-real lemma as a newcomer writes it (D = 0), in no registry."""
+    n, m, q = t.dims("n m q")
+    A, B, C = t.data("A", n, n), t.data("B", n, m), t.data("C", q, n)
+    P = t.symmetric("P", n, pd=True)
+    gamma = t.scalar("gamma", sign="positive")
+    t.lmi(
+        "dbrl",
+        block([[A.T * P * A - P, A.T * P * B, C.T], [STAR, B.T * P * B - gamma * I(m), 0], [STAR, STAR, -gamma * I(q)]])
+        < 0,
+    )
+    t.minimize(gamma)

@@ -12,7 +12,7 @@ from fractions import Fraction
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from certify_helpers import inline_brl, stable_system
+from certify_helpers import inline_brl, inline_dbrl, stable_system
 
 import lmic.api
 from lmic.certify import audit_certificate, write_certificate
@@ -21,22 +21,6 @@ from lmic.certify.enclosure_face import face_bound, lyapunov_structure, prove_fa
 from lmic.certify.enclosure_face_stein import exact_orthogonal, rational_rotation, stein_structure
 from lmic.compile.exact import exact_of
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
-from lmic.template import STAR, I, block, theorem
-
-
-@theorem(id="test.inline_discrete_bounded_real", title="discrete bounded-real lemma", citation="c")
-def inline_dbrl(t):
-    """The discrete-time bounded-real lemma as a newcomer writes it (D = 0)."""
-    n, m, q = t.dims("n m q")
-    A, B, C = t.data("A", n, n), t.data("B", n, m), t.data("C", q, n)
-    P = t.symmetric("P", n, pd=True)
-    gamma = t.scalar("gamma", sign="positive")
-    t.lmi(
-        "dbrl",
-        block([[A.T * P * A - P, A.T * P * B, C.T], [STAR, B.T * P * B - gamma * I(m), 0], [STAR, STAR, -gamma * I(q)]])
-        < 0,
-    )
-    t.minimize(gamma)
 
 
 def _plant(n: int, seed: int):

@@ -10,25 +10,11 @@ from __future__ import annotations
 
 import io
 
+from certify_helpers import inline_dbrl
 from rich.console import Console
 
 import lmic.api
 from lmic.present.text import print_result
-from lmic.template import STAR, I, block, theorem
-
-
-@theorem(id="test.dt_bounded_real", title="Discrete-time bounded-real lemma", citation="de Souza & Xie (1992)")
-def dt_brl(t):
-    n, m, q = t.dims("n m q")
-    A, B, C = t.data("A", n, n), t.data("B", n, m), t.data("C", q, n)
-    P = t.symmetric("P", n, pd=True)
-    gamma = t.scalar("gamma", sign="positive")
-    t.lmi(
-        "DT bounded real",
-        block([[A.T * P * A - P, A.T * P * B, C.T], [STAR, B.T * P * B - gamma * I(m), 0], [STAR, STAR, -gamma * I(q)]])
-        < 0,
-    )
-    t.minimize(gamma)
 
 
 def _text(result) -> str:
@@ -39,7 +25,7 @@ def _text(result) -> str:
 
 def test_an_infeasible_answer_prints_no_objective_and_no_exact_after_the_exact_proof():
     system = {"lmic": 1, "data": {"A": [[1.1, 0.0], [0.3, 0.5]], "B": [[1.0], [0.0]], "C": [[1.0, 1.0]]}}
-    r = lmic.api.solve(dt_brl, system, exact=True)
+    r = lmic.api.solve(inline_dbrl, system, exact=True)
     assert r.verdict.startswith("infeasible")
     text = _text(r)
     assert "objective" not in text
@@ -49,7 +35,7 @@ def test_an_infeasible_answer_prints_no_objective_and_no_exact_after_the_exact_p
 
 def test_an_objective_outside_the_enclosure_says_whose_it_is():
     system = {"lmic": 1, "data": {"A": [[0.5, 0.2], [0.0, 0.3]], "B": [[1.0], [0.5]], "C": [[1.0, 0.0]]}}
-    r = lmic.api.solve(dt_brl, system)
+    r = lmic.api.solve(inline_dbrl, system)
     assert r.verdict == "certified" and r.enclosure["lower"] <= r.objective
     assert "the returned point's" not in _text(r)
     r.enclosure["upper"] = r.objective * (1 - 1e-3)  # as when the upper end is a restored point
