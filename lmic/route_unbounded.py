@@ -172,7 +172,15 @@ def _certified_point(problem: Problem, feas: Outcome) -> tuple[Any, Any] | None:
         solve_s=src.solve_s,
     )
     cert = certify(problem, sol)
-    return (sol, cert) if cert.verdict == "certified" else None
+    if cert.verdict != "certified":
+        return None
+    # the certifier's "certified" grants non-strict LMIs and rows a tolerance (1e-8 relative): a
+    # point of an infeasible problem may pass it. An exact improving ray proves "unbounded" only
+    # with a point that IS feasible: proved with rigorous rounding (rows exactly), or exactly
+    from lmic.certify.enclosure_float import primal_end
+    from lmic.certify.snap import exact_primal_end
+
+    return (sol, cert) if exact_primal_end(problem, x, primal_end(problem, x))["proven"] else None
 
 
 def unbounded_checked(problem: Problem, out: Outcome, options: Any) -> Outcome:

@@ -477,6 +477,14 @@ def audit_certificate(
         unb = audit_unbounded(problem, doc["unbounded"])
         if not unb["ok"]:
             return _fail(doc, unb["field"], unb["message"], cert, **kw)
+        # the ray proves "unbounded" only with a point that is feasible, not feasible within
+        # the certifier's tolerance (lmic.route_unbounded._certified_point)
+        from lmic.certify.enclosure_float import primal_end
+        from lmic.certify.snap import exact_primal_end
+
+        if x is None or not exact_primal_end(problem, x, primal_end(problem, x))["proven"]:
+            why = "the point is not proved feasible with rigorous rounding or exactly: no proof of unboundedness"
+            return _fail(doc, "unbounded", f"unbounded: {why}", cert, **kw)
         checked.append("unbounded (exact ray)")
     if hashed is not None:
         return _fail(doc, hashed[0], hashed[1], cert, **kw)
