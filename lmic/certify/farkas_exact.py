@@ -40,6 +40,12 @@ __all__ = ["prove_farkas", "prove_infeasible", "farkas_candidates", "EXACT_MAX_E
 #: largest exact Jacobian ((1 + n) x (tril entries) x (face unknowns)) an exact proof builds
 EXACT_MAX_ENTRIES = 50_000_000
 
+#: seconds per unit of ``n^2 m`` (``n`` variables, ``m`` unknowns of the face) of the exact
+#: linear algebra (``rref`` and the projection onto the trace conditions); measured: ``n = 210``,
+#: ``m = 400`` took 6-9 s, about 10 s with the PSD proofs. Under a time budget an attempt whose
+#: estimate exceeds twice the budget is not started: it cannot be stopped once it runs.
+EXACT_WORK_S = 5e-7
+
 
 def prove_farkas(
     problem: Problem,
@@ -66,7 +72,8 @@ def prove_farkas(
         Also return the exact multipliers (``exact_certificate``: ``lmis`` as lists of
         :class:`fractions.Fraction` matrices, ``linear`` as Fractions). Large; not JSON.
     budget_s : float, optional
-        No further face or method is tried once this many seconds have passed.
+        No further face or method is tried once this many seconds have passed, or when the
+        longest attempt so far would take it beyond them (the first attempt always runs).
 
     Returns
     -------
@@ -93,18 +100,28 @@ def prove_farkas(
 
     t0 = time.perf_counter()
     out: dict[str, Any] = {}
+    longest = 0.0  # the longest attempt so far: the next is not started if it would overrun the budget
+
+    def spent() -> bool:
+        return budget_s is not None and time.perf_counter() - t0 + longest > budget_s
+
     for rel in _face_thresholds(problem, farkas, rel_face):
         for center, rational in ((False, False), (False, True), (True, False), (True, True), ("schur", False)):
-            attempt = _prove_farkas(problem, farkas, rel, keep_certificate, center, rational)
+            if out and spent():
+                break
+            t_try = time.perf_counter()
+            left = None if budget_s is None else budget_s - (time.perf_counter() - t0)
+            attempt = _prove_farkas(problem, farkas, rel, keep_certificate, center, rational, left)
+            longest = max(longest, time.perf_counter() - t_try)
             if attempt["face"] is not None:
                 attempt["face"]["threshold"] = rel
                 attempt["face"]["centered"] = center
                 attempt["face"]["rational_basis"] = rational
             if not out or attempt["proven"]:
                 out = attempt
-            if attempt["proven"] or (budget_s is not None and time.perf_counter() - t0 > budget_s):
+            if attempt["proven"] or spent():
                 break
-        if out.get("proven") or (budget_s is not None and time.perf_counter() - t0 > budget_s):
+        if out.get("proven") or spent():
             break
     out["time_s"] = time.perf_counter() - t0
     return out
@@ -117,6 +134,7 @@ def _prove_farkas(
     keep: bool,
     center: bool | str = False,
     rational: bool = False,
+    budget_s: float | None = None,
 ) -> dict[str, Any]:
     from fractions import Fraction
 
@@ -223,6 +241,15 @@ def _prove_farkas(
     if not columns:
         return dict(fail, reason="the certificate has an empty face")
     m = len(columns)
+    if budget_s is not None and EXACT_WORK_S * n * n * m > 2.0 * max(budget_s, 0.0):
+        return dict(
+            fail,
+            face={"ranks": ranks, "rows": len(rows)},
+            reason=(
+                f"the exact system on the face ({n} equations, {m} unknowns, about "
+                f"{EXACT_WORK_S * n * n * m:.0f} s) does not fit the time budget of {budget_s:.1f} s"
+            ),
+        )
     Jall = flint.fmpq_mat([[columns[j][k] for j in range(m)] for k in range(1 + n)])
     Jx = flint.fmpq_mat([[columns[j][k] for j in range(m)] for k in range(1, 1 + n)])
     u = flint.fmpq_mat([[v] for v in u0])
@@ -349,7 +376,8 @@ def prove_infeasible(
     Tries the repaired certificate (when :func:`verify_farkas` repaired one), then the
     solver's certificate in the orientation that verified (or both when none did). ``rel_face``
     (default: :func:`prove_farkas`'s) limits the face thresholds tried (each try costs seconds on
-    problems with a few dozen variables).
+    problems with a few dozen variables). ``budget_s`` is shared by the candidates: none starts
+    after it has run out (the first always runs), and none runs a further face or method.
 
     Returns
     -------
@@ -372,11 +400,15 @@ def prove_infeasible(
     >>> r["proven"], r["kind"], r["source"]
     (True, 'strict', 'solver')
     """
+    import time
+
+    t0 = time.perf_counter()
     out: dict[str, Any] = {}
     for source, cand in farkas_candidates(problem, farkas, verification):
-        kw: dict[str, Any] = (
-            {"budget_s": budget_s} if rel_face is None else {"rel_face": rel_face, "budget_s": budget_s}
-        )
+        left = None if budget_s is None else budget_s - (time.perf_counter() - t0)
+        if out and left is not None and left <= 0:
+            break  # one budget for every candidate: the first is always tried
+        kw: dict[str, Any] = {"budget_s": left} if rel_face is None else {"rel_face": rel_face, "budget_s": left}
         r = prove_farkas(problem, cand, **kw)
         r["source"] = source
         if not out or r["proven"]:
