@@ -39,3 +39,30 @@ def test_an_exactly_infeasible_problem_is_not_certified():
 
     assert Fraction(C) < 1  # x >= 1 and x <= C < 1: infeasible
     assert decide(_problem(), "clarabel").verdict != "certified"
+
+
+@pytest.mark.xfail(strict=True, reason="documented equality-row tolerance rel = 1e-8 (lmic.certify.margins)")
+def test_a_point_off_an_equality_row_does_not_certify_an_infeasible_strict_problem():
+    """``x1 = x2`` (row), ``x1 - x2 - 1e-9 > 0`` and ``x1 - 1 > 0``: infeasible (the row forces
+    ``x1 - x2 = 0``). At ``x = (1.5, 1.5 - 2e-9)`` both LMIs hold strictly with margin and the row
+    is off by ``2e-9 <= 1e-8 * 3``: ``certified``, even with ``exact=True`` (the row "within
+    tolerance"). SCS returns such a point (``decide(p, "scs")``: certified) where Clarabel and
+    CVXOPT prove the problem infeasible exactly."""
+    import numpy as np
+
+    from lmic.certify import certify
+    from lmic.solution import Solution
+
+    lin = LinearConstraints(sp.csr_matrix(np.array([[0.0, 1.0, -1.0]])), ["eq"], [False], ["x1 = x2"])
+    p = Problem(
+        [Variable("x1", "scalar", (1, 1), 0), Variable("x2", "scalar", (1, 1), 1)],
+        [
+            LMI("x1 - x2 - 1e-9 > 0", 1, sp.csc_matrix([[-1e-9, 1.0, -1.0]])),
+            LMI("x1 - 1 > 0", 1, sp.csc_matrix([[-1.0, 1.0, 0.0]])),
+        ],
+        lin,
+        Objective("feasibility", [0.0, 0.0, 0.0]),
+    )
+    assert Fraction(-1e-9) < 0  # on the row x1 - x2 = 0 the first LMI is -1e-9 > 0: false
+    x = np.array([1.5, 1.5 - 2e-9])
+    assert certify(p, Solution("optimal", x=x), exact=True).verdict != "certified"
