@@ -515,7 +515,9 @@ def _attempt(problem: Problem, x: np.ndarray, K: int, K_full: int, rel: float, p
             float(abs(Fraction(v, point.den) - Fraction(float(xk)))) for v, xk in zip(point.num, x, strict=True)
         )
     where = "the solver's float point x itself" if not rounded else f"max |x_q - x| = {distance:.3g}"
-    statement = f"every LMI and linear row holds exactly at the rational point x_q (exact.point), {where}" if proven else ""
+    statement = (
+        f"every LMI and linear row holds exactly at the rational point x_q (exact.point), {where}" if proven else ""
+    )
     if proven:
         reason = f"every LMI and row proved at the rational point (denominator {point.describe()})"
     else:

@@ -170,7 +170,8 @@ def lmi_reason(r: dict, optimisation: bool = False) -> str:
         return (
             f"LMI '{r['name']}' holds only within the tolerance: lambda_min = {_g(r['min_eig'])} (relative "
             f"{_g(r['rel_margin'])}) is not above its float error bound {_g(r['float_err'])}, so the point is not "
-            "proved positive semidefinite" + (" and the exact proof failed" if "exact proof failed" in r["note"] else "")
+            "proved positive semidefinite"
+            + (" and the exact proof failed" if "exact proof failed" in r["note"] else "")
         )
     need = "> 0 (strict)" if r["strict"] else f">= {_g(r['threshold'])}"
     if r["strict"] and r["min_eig"] > 0:
