@@ -31,14 +31,20 @@ strict LMI (``F(x) > 0``)
     times the coefficient scale ``|| |F0| + sum_k |F_k| ||``) is "~0" and rejected: a
     homogeneous LMI says nothing at ``x = 0``.
 non-strict LMI (``F(x) >= 0``)
-    ``lambda_min >= -rel * T`` (``rel = 1e-8``, a typical solver tolerance). When the solver
-    itself reported ``inaccurate`` no tolerance is granted: ``lambda_min`` must be ``>= 0`` up
-    to the floating-point error bound. A marginally infeasible problem comes back as
-    ``inaccurate`` with a small violation (Clarabel, +1.6e-7 at ``||P|| ~ 7.5``); it must not
-    pass as a certificate.
+    proved in float when ``lambda_min >= 10 (k + d + 2) u T`` (above its error bound). Between
+    ``-rel * T`` (``rel = 1e-8``, a typical solver tolerance) and that bound it *holds within
+    tolerance*, which proves nothing: the exact proof is then run (below, also without
+    ``exact``, up to :data:`AUTO_PROOF_MAX`), and the point is rejected unless it proves it
+    (at ``x`` itself, at an exact projection onto the equality rows, or at the exactly feasible
+    point next to it, :mod:`lmic.certify.snap`). When the solver itself reported
+    ``inaccurate``, ``lambda_min`` below ``-10 (k + d + 2) u T`` is a violation outright. A
+    marginally infeasible problem comes back as ``inaccurate`` with a small violation
+    (Clarabel, +1.6e-7 at ``||P|| ~ 7.5``); it must not pass as a certificate.
 linear rows
-    ``eq``: ``|r| <= rel * s``; ``ge``: ``r >= -rel * s``; strict ``ge``:
-    ``r > max(strict_rel, 10 (k + 2) u) * s``, with ``s = |a0| + sum_k |a_k x_k|``.
+    ``eq``: a float residual never proves an equality: ``|r| <= rel * s`` holds within
+    tolerance and goes to the exact proof like a non-strict LMI; ``ge``: proved when ``r`` is
+    above its rounding error ``10 (k + 2) u s``, within tolerance down to ``-rel * s``; strict
+    ``ge``: ``r > max(strict_rel, 10 (k + 2) u) * s``, with ``s = |a0| + sum_k |a_k x_k|``.
 objective
     The IR's ``c0 + c . x`` must agree with the solver's claim to ``objective_rel`` (relative to
     ``max(1, |value|)``); a disagreement rejects the answer.
@@ -55,16 +61,16 @@ Exact mode (``exact=True``)
 The float rules above are a test; an exact proof (:func:`lmic.certify.exact.prove`) is a
 theorem, so in exact mode it decides the LMIs and the linear rows:
 
-* when the whole proof holds (every LMI and inequality row exactly, every equality row exactly
-  or within ``rel``), every LMI and row is accepted, whatever its float margin: a strict LMI
-  whose relative margin is below ``strict_rel`` (e.g. ``uio_dt.thm3_2`` near its supremum,
-  ~2e-13) is certified. The proof holds at the *recorded* rational point ``x_q``
-  (``exact.point``), which is the solver's float point itself whenever that can be proved
-  (``exact.at_x``), and otherwise a rounding or an exact projection onto the equality rows,
-  at distance ``exact.distance`` from ``x``;
+* when the whole proof holds (every LMI and row exactly, equalities with residual zero),
+  every LMI and row is accepted, whatever its float margin: a strict LMI whose relative margin
+  is below ``strict_rel`` (e.g. ``uio_dt.thm3_2`` near its supremum, ~2e-13) is certified. The
+  proof holds at the *recorded* rational point ``x_q`` (``exact.point``), which is the solver's
+  float point itself whenever that can be proved (``exact.at_x``), and otherwise a rounding or
+  an exact projection onto the equality rows, at distance ``exact.distance`` from ``x``;
 * otherwise, if ``x_q`` is the float point, each LMI or row proved on its own is accepted and
-  a strict LMI disproved exactly is rejected; elsewhere the float rules stay;
-* a non-strict LMI accepted within the float tolerance stays accepted when exactly disproved.
+  an LMI disproved exactly (strict or not) is rejected; elsewhere the float rules stay;
+* whatever holds only within the float tolerance and is not proved exactly is rejected:
+  ``certified`` never rests on a tolerance.
 
 Every LMI and row entry reports both: ``float_ok`` (the float rule), ``exact`` (``proved``,
 ``disproved``, ``not proven``; ``within tolerance`` for equality rows; ``None`` outside exact
@@ -162,26 +168,47 @@ def _apply_exact(cert: Certificate, ex: dict[str, Any]) -> None:
     * the whole proof holds (at ``x_q``, recorded): every LMI and row is accepted, whatever its
       float margin;
     * otherwise, when ``x_q`` is the float point itself, each LMI or row proved exactly is
-      accepted, and a strict LMI disproved exactly is rejected;
-    * a non-strict LMI accepted by the float tolerance stays accepted even when exactly
-      disproved (the tolerance is documented; the label then stays ``certified``).
+      accepted (the others are proved in float at the same point, or fail), and an LMI disproved
+      exactly is rejected, strict or not;
+    * what holds only within the float tolerance and is not proved exactly is rejected later
+      (:func:`_unproved`).
     """
     whole, at_x = bool(ex["proven"]), bool(ex["at_x"])
     for r, e in zip(cert.lmis, ex.get("lmis", []), strict=True):
         r["exact"] = "proved" if e["proven"] else ("disproved" if e["disproved"] else "not proven")
-        if (whole or (at_x and e["proven"])) and not r["ok"]:
+        if (whole or (at_x and e["proven"])) and (not r["ok"] or r.get("within_tolerance")):
             r["ok"], r["decided_by"] = True, "exact"
             what = "positive definite" if r["strict"] else "positive semidefinite"
             r["note"] = (
                 f"below the float threshold (relative margin {_g(r['rel_margin'])}); {what} by the exact proof at x_q"
             )
-        elif e["disproved"] and r["strict"] and r["ok"]:
+        elif e["disproved"] and r["ok"]:
             r["ok"], r["decided_by"] = False, "exact"
-            r["note"] = f"is not positive definite at the solver's point ({e['detail']})"
+            what = "positive definite" if r["strict"] else "positive semidefinite"
+            r["note"] = f"is not {what} at the solver's point ({e['detail']})"
     for r, e in zip(cert.linear, ex.get("linear", []), strict=True):
         r["exact"] = "proved" if e["proven"] else ("within tolerance" if e["within_tolerance"] else "not proven")
-        if (whole or (at_x and e["proven"])) and not r["ok"]:
+        if (whole or (at_x and e["proven"])) and (not r["ok"] or r.get("within_tolerance")):
             r["ok"], r["decided_by"] = True, "exact"
+
+
+def _tolerance_only(cert: Certificate) -> list[dict[str, Any]]:
+    """The LMIs and rows accepted by the float tolerance alone (not proved in float or exactly)."""
+    return [r for r in cert.lmis + cert.linear if r["ok"] and r.get("within_tolerance") and r["decided_by"] == "float"]
+
+
+def _unproved(cert: Certificate) -> None:
+    """Reject what holds only within the tolerance: ``certified`` means proved."""
+    for r in _tolerance_only(cert):
+        r["ok"], r["decided_by"] = False, "float"
+        r["note"] = "holds within tolerance, not proved" + (
+            " (the exact proof failed too)" if cert.exact is not None else ""
+        )
+
+
+#: the largest ``sum_i d_i^2`` (LMI orders) at which a point that holds only within the float
+#: tolerance is given an exact proof automatically (:func:`certify` without ``exact``)
+AUTO_PROOF_MAX = 250_000
 
 
 # --------------------------------------------------------------------------------------------
@@ -323,11 +350,21 @@ def certify(
             "achieved": min(strict_eigs) if strict_eigs else None,
         }
 
-    if exact:
+    # only an exact proof turns "within tolerance" into "holds": it runs without ``exact`` too
+    # when that is all that is missing (and the LMIs are not too large)
+    auto = (
+        not exact
+        and bool(_tolerance_only(cert))
+        and not _reasons(cert)
+        and sum(lmi.dim**2 for lmi in problem.lmis) <= AUTO_PROOF_MAX
+    )
+    if exact or auto:
         from lmic.certify.exact import prove
 
         cert.exact = prove(problem, x, inaccurate=inaccurate, tol=tolr, min_eigs=[r["min_eig"] for r in cert.lmis])
         _apply_exact(cert, cert.exact)
+    if not _reasons(cert):
+        _unproved(cert)  # after every genuine failure: those are named first
     reasons = _reasons(cert)
     if reasons and solution.strategy != "snapped":
         snapped = _snapped(problem, solution, cert, exact, tol, reasons[0])  # no interior: x_q on the face

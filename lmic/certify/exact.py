@@ -22,17 +22,17 @@ When the IR has equality rows the point is projected exactly onto them
 (``x_q - A^T (A A^T)^-1 (A x_q + a0)`` in rational arithmetic, python-flint ``fmpq_mat``, over
 a maximal independent subset of the rows when they are rank deficient); the common
 denominator ``D`` is then no longer a power of two, and ``x_q != x``. An equality row that is
-still not exactly zero at ``x_q`` (rows inconsistent in exact arithmetic) is accepted within
-the documented tolerance ``|r| <= rel * s`` (``s = |a0| + sum_k |a_k x_k|``, exactly at ``x_q``)
-and listed in ``rows_within_tolerance``. When the projected point fails (nearly dependent rows
-can move it far), the same grid is tried without the projection, the equality rows then
-holding within that tolerance.
+still not exactly zero at ``x_q`` (rows inconsistent in exact arithmetic) is *not* proven: its
+residual is reported, and ``within_tolerance`` (listed in ``rows_within_tolerance``) says
+whether it is below the float rule's tolerance ``|r| <= rel * s`` (``s = |a0| + sum_k |a_k
+x_k|``, exactly at ``x_q``), which is information, never a proof. When the projected point
+fails (nearly dependent rows can move it far), the same grid is tried without the projection.
 
 A successful proof (``proven``) is the statement: *every LMI holds exactly at the rational
-point ``x_q`` (strict ones positive definite, the others positive semidefinite), every
-inequality row holds exactly, and every equality row holds exactly (or within tolerance, as
-listed)*. ``statement`` says it in one line. The objective at ``x_q`` is computed exactly and
-reported (``objective``, rounded to float64 for display).
+point ``x_q`` (strict ones positive definite, the others positive semidefinite) and every
+linear row holds exactly (equalities with residual zero)*. ``statement`` says it in one line.
+The objective at ``x_q`` is computed exactly and reported (``objective``, rounded to float64
+for display).
 
 How positive (semi)definiteness of ``M`` is proved or disproved exactly (congruence and
 diagonal dominance, exact LDL^T, characteristic polynomial) is :mod:`lmic.certify.psd`.
@@ -507,7 +507,7 @@ def _attempt(problem: Problem, x: np.ndarray, K: int, K_full: int, rel: float, p
         )
     linear = _linear_exact(problem, point, rel)
     within = [e["name"] for e in linear if e["within_tolerance"]]
-    proven = all(e["proven"] for e in lmis) and all(e["proven"] or e["within_tolerance"] for e in linear)
+    proven = all(e["proven"] for e in lmis) and all(e["proven"] for e in linear)  # equalities exactly
     disproved = any(e["disproved"] for e in lmis)
     distance = 0.0
     if rounded and point.num:
@@ -515,12 +515,9 @@ def _attempt(problem: Problem, x: np.ndarray, K: int, K_full: int, rel: float, p
             float(abs(Fraction(v, point.den) - Fraction(float(xk)))) for v, xk in zip(point.num, x, strict=True)
         )
     where = "the solver's float point x itself" if not rounded else f"max |x_q - x| = {distance:.3g}"
-    rows = (
-        "every LMI and linear row holds exactly"
-        if not within
-        else (f"every LMI and inequality row holds exactly, {len(within)} equality row(s) within tolerance {rel:g}")
+    statement = (
+        f"every LMI and linear row holds exactly at the rational point x_q (exact.point), {where}" if proven else ""
     )
-    statement = f"{rows} at the rational point x_q (exact.point), {where}" if proven else ""
     if proven:
         reason = f"every LMI and row proved at the rational point (denominator {point.describe()})"
     else:
@@ -532,8 +529,9 @@ def _attempt(problem: Problem, x: np.ndarray, K: int, K_full: int, rel: float, p
             else:
                 reason = f"LMI '{bad['name']}' not proven ({bad['detail']})"
         else:
-            row = next(e for e in linear if not (e["proven"] or e["within_tolerance"]))
-            reason = f"row '{row['name']}' not proven at the rational point (value {row['value']:.3g})"
+            row = next(e for e in linear if not e["proven"])
+            held = ", within tolerance only" if row["within_tolerance"] else ""
+            reason = f"row '{row['name']}' not proven at the rational point (value {row['value']:.3g}{held})"
         if proj and not proj.startswith("projected"):
             reason += "; " + proj
     return {

@@ -137,8 +137,13 @@ def lmi_report(lmi: LMI, x: np.ndarray, tol: Tolerances, *, inaccurate: bool = F
     else:
         thr = -tol.rel * T
         ok = lmin >= thr
-        note = "" if lmin >= 0 else "holds within tolerance"
-    out.update(threshold=thr, ok=bool(ok), note=note)
+        note = ""
+    # a non-strict LMI is proved positive semidefinite in float only when lambda_min exceeds its
+    # error bound; between the tolerance and that bound it holds within tolerance, not proved
+    within = bool(ok and not lmi.strict and lmin < err_rel * T)
+    if within:
+        note = (note + "; " if note else "") + "holds within tolerance, not proved"
+    out.update(threshold=thr, ok=bool(ok), note=note, within_tolerance=within)
     return _decided_by_float(out)
 
 
@@ -160,6 +165,13 @@ def lmi_reason(r: dict, optimisation: bool = False) -> str:
         return (
             f"LMI '{r['name']}' not certified: lambda_min = {_g(r['min_eig'])} "
             f"(relative {_g(r['rel_margin'])}) is zero to float64 accuracy, needs > 0 (strict)"
+        )
+    if r.get("within_tolerance") and r["note"].startswith("holds within tolerance"):
+        return (
+            f"LMI '{r['name']}' holds only within the tolerance: lambda_min = {_g(r['min_eig'])} (relative "
+            f"{_g(r['rel_margin'])}) is not above its float error bound {_g(r['float_err'])}, so the point is not "
+            "proved positive semidefinite"
+            + (" and the exact proof failed" if "exact proof failed" in r["note"] else "")
         )
     need = "> 0 (strict)" if r["strict"] else f">= {_g(r['threshold'])}"
     if r["strict"] and r["min_eig"] > 0:
@@ -205,12 +217,15 @@ def linear_reports(problem: Problem, x: np.ndarray, tol: Tolerances, inaccurate:
         allowed = err if inaccurate else max(tol.rel * s, err)
         if kind == "eq":
             ok, thr = abs(r) <= allowed, allowed
+            within = bool(ok)  # a float residual never proves an equality: only the exact proof does
         elif strict:
             thr = max(tol.strict_rel * s, err)
             ok = r > thr and s > 0
+            within = False
         else:
             thr = -allowed
             ok = r >= thr
+            within = bool(ok and r < err)  # not above its rounding error: holds within tolerance
         out.append(
             {
                 "name": lin.names[i],
@@ -221,6 +236,7 @@ def linear_reports(problem: Problem, x: np.ndarray, tol: Tolerances, inaccurate:
                 "rel_residual": (r / s if s > 0 else 0.0),
                 "threshold": thr,
                 "ok": bool(ok and math.isfinite(r)),
+                "within_tolerance": bool(within and math.isfinite(r)),
             }
         )
         _decided_by_float(out[-1])
@@ -228,6 +244,12 @@ def linear_reports(problem: Problem, x: np.ndarray, tol: Tolerances, inaccurate:
 
 
 def linear_reason(r: dict) -> str:
+    if r.get("within_tolerance") and r.get("note", "").startswith("holds within tolerance"):
+        what = "equality" if r["kind"] == "eq" else "inequality"
+        return (
+            f"{what} '{r['name']}' holds only within the tolerance: value {_g(r['residual'])} "
+            f"(allowed {_g(abs(r['threshold']))}) is not proved {'zero' if r['kind'] == 'eq' else 'non-negative'}"
+        )
     if r["kind"] == "eq":
         res, allowed = _g(r["residual"]), _g(r["threshold"])
         return f"equality '{r['name']}' violated: residual {res} (allowed {allowed})"

@@ -32,7 +32,9 @@ class Tolerances:
     Parameters
     ----------
     rel : float
-        Tolerance for non-strict LMIs, equality rows and non-strict ``ge`` rows.
+        Float tolerance of non-strict LMIs, equality rows and non-strict ``ge`` rows: within
+        it a constraint is not violated but not proved either, and only an exact proof makes
+        the point ``certified`` (:mod:`lmic.certify.check`); beyond it, a violation.
     strict_rel : float
         Minimum relative margin of a strict LMI or a strict row (never below the float64
         error bound of the evaluation).

@@ -92,12 +92,15 @@ def test_inaccurate_status_with_small_violation_is_not_certified():
 def test_non_strict_tolerance_is_not_granted_to_inaccurate_solves():
     prob, x = _marginal_problem(strict=False)
     # relative violation ~2e-8: inside a 1e-7 tolerance when the solver claims success ...
-    ok = certify(prob, Solution("optimal", x=x), tol=1e-7)
-    assert ok.verdict == "certified"
-    assert ok.lmis[0]["note"] == "holds within tolerance"
-    # ... but not when the solver itself says the answer is inaccurate
+    # ... but "within tolerance" proves nothing: the exact proof runs and disproves it, so the
+    # point is rejected as holding only within the tolerance ...
+    held = certify(prob, Solution("optimal", x=x), tol=1e-7)
+    assert held.verdict == "rejected"
+    assert held.lmis[0]["within_tolerance"] and held.lmis[0]["exact"] == "disproved"
+    assert "LMI 'marginal' is not positive semidefinite at the solver's point" in held.reason
+    # ... and when the solver itself says the answer is inaccurate, it is a plain violation
     bad = certify(prob, Solution("inaccurate", x=x), tol=1e-7)
-    assert bad.verdict == "rejected"
+    assert bad.verdict == "rejected" and "violated" in bad.reason
     assert "inaccurate" in bad.lmis[0]["note"]
 
 

@@ -175,10 +175,14 @@ def test_exact_disproof_of_a_tolerated_non_strict_violation():
         Objective("feasibility", np.zeros(2)),
     )
     x = np.array([1.0 - 2.0**-52])  # violation 2.2e-16: within every float tolerance
+    plain = certify(prob, Solution("optimal", x=x, strategy="snapped"), exact=True)  # no snapping
+    assert plain.verdict == "rejected"  # within tolerance only, and exactly violated
+    assert plain.lmis[0]["decided_by"] == "exact" and not plain.lmis[0]["ok"]
+    assert plain.exact["disproved"] and not plain.exact["proven"]
+    # the exactly feasible point next to it (p = 1) is certified instead, and says so
     cert = certify(prob, Solution("optimal", x=x), exact=True)
-    assert cert.verdict == "certified" and cert.label == "certified"  # within tolerance only
-    assert cert.exact["disproved"] and not cert.exact["proven"]
-    assert cert.exact["reason"].startswith("LMI 'p - 1 >= 0' is not positive semidefinite at the solver's point")
+    assert cert.verdict == "certified" and cert.x == [1.0] and "moved to x_q" in cert.reason
+    assert plain.exact["reason"].startswith("LMI 'p - 1 >= 0' is not positive semidefinite at the solver's point")
 
 
 def test_exact_disproof_of_a_strict_lmi_rejects(monkeypatch):
@@ -273,18 +277,17 @@ def test_rank_deficient_equality_rows_are_projected_on_an_independent_subset():
     assert not r["at_x"] and 0 < r["distance"] < 1e-16
 
 
-def test_equality_rows_that_cannot_be_met_exactly_hold_within_tolerance():
+def test_equality_rows_that_cannot_be_met_exactly_are_not_proven():
     # 0.1 x + y = 1 and 0.3 x + 3 y = 3: nearly but not exactly dependent in float, so the exact
     # projection lands on their intersection x = 0, where diag(x, y) > 0 fails; at the float
-    # point itself both rows hold within the tolerance rel = 1e-8
+    # point itself both rows hold within the tolerance rel = 1e-8, which proves nothing: the
+    # float problem is infeasible (its rows force x = 0)
     prob = _two_variable_problem(np.array([[-1.0, 0.1, 1.0], [-3.0, 0.3, 3.0]]), ["r1", "r2"])
+    a, b = Fraction(0.1), Fraction(0.3)
+    assert a * 3 != b  # the rows are independent in exact arithmetic: x = 0 on both
     x = np.array([1.0, 0.9])
     r = prove(prob, x)
-    assert r["proven"] and r["at_x"] and r["projection"] == ""
-    assert r["rows_within_tolerance"] == ["r1", "r2"]
-    assert "2 equality row(s) within tolerance 1e-08" in r["statement"]
-    tight = prove(prob, x, tol=0.0)
-    assert not tight["proven"]
+    assert not r["proven"] and r["statement"] == ""
     cert = certify(prob, Solution("feasible", x=x), exact=True)
-    assert cert.label == "certified (exact)"
-    assert [e["exact"] for e in cert.linear] == ["within tolerance", "within tolerance"]
+    assert cert.verdict == "rejected"
+    assert cert.reason.startswith("equality 'r1' holds only within the tolerance")

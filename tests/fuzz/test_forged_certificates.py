@@ -112,7 +112,10 @@ def test_forged_truss1_point_at_minus_1000(tmp_path, capsys):
 
     assert not all(psd(lmi) for lmi in prob.lmis)
     forged = certify(prob, sol, tol={"rel": 1e300})
-    assert forged.verdict == "certified"
+    assert forged.verdict == "rejected"  # even an absurd tolerance certifies nothing: only proofs do
+    forged.verdict, forged.reason = "certified", "every constraint and check holds"  # the forger's edit
+    for entry in forged.lmis:
+        entry["ok"] = True
     path = tmp_path / "truss1.json"
     write_certificate(path, prob, sol, forged)
     code, out = _audit_json(path, capsys)

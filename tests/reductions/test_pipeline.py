@@ -67,4 +67,9 @@ def test_settle_leaves_other_answers_alone():
 def test_auto_is_its_routes_first_backend():
     problem = CASES["max_sense"].build()
     sol = solve(get_backend("auto"), problem)
-    assert sol.info["auto_route"][0] == sol.backend and certify_solution(problem, sol).verdict == "certified"
+    assert sol.info["auto_route"][0] == sol.backend
+    from lmic.testing.conformance import _C
+
+    # the optimum lambda_min(C), computed by numpy (the point itself is on the boundary of the
+    # non-strict LMI: what certifies it is lmic.api.solve's enclosure, not this raw solve)
+    assert sol.objective is not None and abs(sol.objective - float(np.linalg.eigvalsh(_C)[0])) < 1e-6
