@@ -45,6 +45,11 @@ def audit_enclosure(
     sense = problem.objective.sense
     if record.get("sense") != sense:
         return {"ok": False, "field": "enclosure.sense", "message": "enclosure.sense differs from the IR's objective"}
+    strict = any(lmi.strict for lmi in problem.lmis) or any(problem.linear.strict)
+    kind = ("infimum" if sense == "min" else "supremum") if strict else ("minimum" if sense == "min" else "maximum")
+    if record.get("kind", kind) != kind:
+        # "minimum" says the optimum is attained; a strict problem's need not be
+        return {"ok": False, "field": "enclosure.kind", "message": f"enclosure.kind is not the IR's ({kind})"}
     why = exact_counterpart(problem, record)  # record["problem"] "exact": both ends re-proved for it too
     if why is not None:
         return {"ok": False, "field": "enclosure.problem", "message": f"enclosure.problem: {why}"}
@@ -85,6 +90,14 @@ def audit_enclosure(
         v = verify_any(problem, dual)
         if not v["ok"]:
             return {"ok": False, "field": "enclosure.dual", "message": "enclosure.dual: " + v["reason"]}
+        if dual.get("lower_exact") is not None and not _exact_not_above(dual["lower_exact"], v.get("lower_exact")):
+            # the exact bound recorded next to the rounded one is a claim of its own
+            return {
+                "ok": False,
+                "field": "enclosure.dual",
+                "message": "enclosure.dual: the recorded lower_exact is not the exact bound the dual point proves "
+                f"({v.get('lower_exact')})",
+            }
     cond = record.get("conditional") or {}
     if cond.get("value") is not None:
         box = cond.get("bound") or {}
@@ -100,4 +113,23 @@ def audit_enclosure(
             return {"ok": False, "field": "enclosure", "message": "enclosure: lower end above upper end"}
         if record.get("gap") is not None and float(record["gap"]) != float(hi) - float(lo):
             return {"ok": False, "field": "enclosure.gap", "message": "enclosure.gap differs from upper - lower"}
+        from lmic.certify.enclosure import relative_gap
+
+        if record.get("rel_gap") is not None and float(record["rel_gap"]) < relative_gap(float(lo), float(hi)):
+            return {"ok": False, "field": "enclosure.rel_gap", "message": "enclosure.rel_gap is below the ends' gap"}
     return {"ok": True, "field": None, "message": "enclosure re-verified (both recorded ends)"}
+
+
+def _exact_not_above(recorded: Any, proved: Any) -> bool:
+    """Whether the recorded exact bound (``"p/q"``) is a rational not above the re-proved one
+    (``None``: no exact bound was re-proved, so a recorded one is unsupported).
+
+    >>> _exact_not_above("3/2", "3/2"), _exact_not_above("2", "3/2"), _exact_not_above("1", None)
+    (True, False, False)
+    """
+    from fractions import Fraction
+
+    try:
+        return proved is not None and Fraction(str(recorded)) <= Fraction(str(proved))
+    except (ValueError, ZeroDivisionError, TypeError):
+        return False

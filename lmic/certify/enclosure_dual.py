@@ -339,4 +339,9 @@ def verify_dual_bound(problem: Problem, record: dict[str, Any], *, exact: bool =
             "lower": res["lower"],
             "reason": f"recorded lower bound {rec:.17g} exceeds the bound the dual point proves ({res['lower']:.17g})",
         }
-    return {"ok": True, "lower": res["lower"], "reason": "lower bound re-proved from the recorded dual point"}
+    return {
+        "ok": True,
+        "lower": res["lower"],
+        "lower_exact": res.get("lower_exact"),
+        "reason": "lower bound re-proved from the recorded dual point",
+    }

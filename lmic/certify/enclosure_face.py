@@ -564,4 +564,9 @@ def verify_face(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
             "reason": f"recorded lower bound {rec:.17g} exceeds the bound the dual point proves ({res['lower']:.17g})",
         }
     where = "the theorem's exact compilation" if about == "exact" else "the IR"
-    return {"ok": True, "lower": res["lower"], "reason": f"lower bound re-proved exactly on the face ({where})"}
+    return {
+        "ok": True,
+        "lower": res["lower"],
+        "lower_exact": res["lower_exact"],
+        "reason": f"lower bound re-proved exactly on the face ({where})",
+    }

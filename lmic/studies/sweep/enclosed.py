@@ -101,17 +101,91 @@ def _terms(plan: Any) -> Iterator[tuple[Any, Any, tuple[Any, ...]]]:
 
 
 def _template_affine(plan: Any, p: sympy.Symbol) -> str:
-    """``""`` when ``p`` enters the plan affinely and multiplies no decision variable, else why not."""
+    """``""`` when ``p`` enters the plan affinely and multiplies no decision variable, else why not.
+
+    Every term is checked: a coefficient of a decision variable that is not affine in ``p`` (or
+    ``p`` in a matrix factor) is refused even after a term where ``p`` multiplies a variable (the
+    scale-free route, :func:`affine_parameter`, lifts only an affine coefficient; its check of
+    the bound data at three values cannot show affinity: a cubic through them passes it)."""
+    multiplies = ""
     for coef, var, factors in _terms(plan):
         if any(p in getattr(f, "free_symbols", set()) for f in factors):
             return f"'{p}' appears in a matrix factor"
         if p not in getattr(coef, "free_symbols", set()):
             continue
-        if var is not None:
-            return f"'{p}' multiplies the decision variable {var}"
         if not _coef_affine(coef, p):
             return f"'{p}' enters non-affinely ({coef})"
+        if var is not None and not multiplies:
+            multiplies = f"'{p}' multiplies the decision variable {var}"
+    return multiplies
+
+
+class _Reads(Mapping[str, Any]):
+    """The values a constant's function sees, recording which it reads (``"*"``: all of them,
+    for a function that iterates over the mapping)."""
+
+    def __init__(self, values: Mapping[str, Any]) -> None:
+        self._values, self.read = dict(values), set()
+
+    def __getitem__(self, key: str) -> Any:
+        self.read.add(key)
+        return self._values[key]
+
+    def __iter__(self) -> Iterator[str]:
+        self.read.add("*")
+        return iter(self._values)
+
+    def __len__(self) -> int:
+        self.read.add("*")
+        return len(self._values)
+
+    def __contains__(self, key: object) -> bool:
+        self.read.add(str(key))
+        return key in self._values
+
+
+def _constants_free_of(plan: Any, sysobj: Any, overrides: Mapping[str, Any], name: str, value: float) -> str:
+    """``""`` when no data-derived constant (``t.const``) reads the parameter ``name``, directly
+    or through another constant, else why not.
+
+    A constant is a function the template cannot see into: the bound data at three values of
+    the parameter can agree with an affine function there and not elsewhere (a constant ``p -
+    p (p - 1) (p - 1/2) / 10`` at the sample values 0, 1, 1/2), and the lifted problem would then
+    not be the theorem's at any other value (tests/studies/sweep/test_enclosed.py). So a
+    parameter that reaches a constant is never lifted: the bisection decides each value on the
+    theorem's own problem."""
+    from lmic.compile.inputs import resolve_inputs
+
+    consts = list(getattr(plan.template, "consts", []) or [])
+    if not consts:
+        return ""
+    try:
+        values = dict(resolve_inputs(plan, sysobj, {**overrides, name: value}).values)
+    except LmicError as err:
+        return f"the constants cannot be computed at {name} = {value:g}: {err}"
+    computed = {c.name for c in consts}
+    for c in consts:  # the first constant that reads the parameter (or everything) decides
+        before = _Reads({k: v for k, v in values.items() if k not in computed or k in _done(consts, c)})
+        try:
+            c.fn(before)
+        except Exception:  # noqa: BLE001 - a function that needs a real dict: assume it reads everything
+            before.read.add("*")
+        if "*" in before.read or name in before.read:
+            return (
+                f"'{name}' reaches the data-derived constant '{c.name}' (t.const): "
+                "not affine as far as the template shows"
+            )
     return ""
+
+
+def _done(consts: list[Any], c: Any) -> set[str]:
+    """The names of the constants computed before ``c``."""
+    out: set[str] = set()
+    for d in consts:
+        if d is c:
+            break
+        out.add(d.name)
+    return out
 
 
 def _data_affine(probs: list[Problem], values: list[float]) -> str:
@@ -185,6 +259,9 @@ def affine_parameter(plan: Any, sysobj: Any, overrides: Mapping[str, Any], decl:
     values = _sample_values(dom, float(start) if isinstance(start, int | float) else None)
     if values is None:
         return False, "no three values inside the parameter's domain", None
+    hidden = _constants_free_of(plan, sysobj, overrides, decl.name, values[0])
+    if hidden:
+        return False, hidden, None
     try:
         probs = [bind(plan, sysobj, {**overrides, decl.name: v}) for v in values]
     except LmicError as err:
