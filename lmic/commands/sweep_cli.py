@@ -194,12 +194,15 @@ def _print_sup(r: SupResult, written: str | None = None) -> None:
         out.print(f"[red]no certified value of {r.param}[/]: {r.message}")
     else:
         lo_hi = (c, o) if is_max else (o, c)
+        assumed = "" if r.interval_proven else "   (if the feasible values form an interval: see the note)"
         if r.upper_kind in ("infeasible-certified", "dual-bound"):
-            out.print(f"[bold]{op} {r.param} in [{value_text(lo_hi[0], 10)}, {value_text(lo_hi[1], 10)}][/]   ({tol})")
+            a, b = value_text(lo_hi[0], 10), value_text(lo_hi[1], 10)
+            out.print(f"[bold]{op} {r.param} in [{a}, {b}][/]   ({tol}){assumed}")
         elif r.upper_proven is not None:
             ends = (c, r.upper_proven) if is_max else (r.upper_proven, c)
             out.print(
-                f"[bold]{op} {r.param} in [{value_text(ends[0], 10)}, {value_text(ends[1], 10)}][/]   (proven ends)"
+                f"[bold]{op} {r.param} in [{value_text(ends[0], 10)}, {value_text(ends[1], 10)}][/]   "
+                f"(proven ends){assumed}"
             )
         else:
             rel, more = (">=", "larger, even infinite") if is_max else ("<=", "smaller")

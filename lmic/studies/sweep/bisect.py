@@ -295,6 +295,7 @@ def _bisect(
         raise LmicError("--xtol and --rtol must be non-negative and not both 0")
     t0 = time.perf_counter()
     sysobj, plan, overrides, decl = setup(theorem, system, param, params)
+    interval = _interval_proven(plan, sysobj, overrides, decl)
     plan_s = time.perf_counter() - t0
     dom_v = domain(decl)
     for name, v in (("--lo", lo_v), ("--hi", hi_v)):
@@ -491,6 +492,12 @@ def _bisect(
             message += f"in [{lo_v:g}, {hi_v:g}] ({sign * min(proven):g}: infeasible-certified)"
         else:
             message += f"{rel_op} {vv(lower) if lower is not None else '-'} and may be {more}"
+    if lower is not None and (upper_kind == "infeasible-certified" or proven) and not interval:
+        message = (message + "; " if message else "") + (
+            f"the bracket assumes that the feasible values of '{param}' form an interval, which lmic "
+            f"does not prove ('{param}' does not enter affinely): proven are a certified point at "
+            f"{vv(lower):g} and infeasibility at {vv(min(proven)) if proven else vv(upper):g}"
+        )
     lower_v, upper_v = bracket_v(lower, upper)
     return SupResult(
         theorem=plan.id,
@@ -512,4 +519,16 @@ def _bisect(
         end=end,
         sense="max" if is_max else "min",
         system=sysobj,
+        interval_proven=interval,
     )
+
+
+def _interval_proven(plan: Any, sysobj: Any, overrides: Any, decl: Any) -> bool:
+    """The feasible values of the parameter form an interval: it enters affinely (then the feasible
+    set in ``(x, p)`` is convex and its projection on ``p`` an interval)."""
+    from lmic.studies.sweep.enclosed import affine_parameter
+
+    try:
+        return bool(affine_parameter(plan, sysobj, overrides, decl)[0])
+    except (LmicError, ValueError, ArithmeticError):
+        return False

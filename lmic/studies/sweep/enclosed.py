@@ -125,7 +125,8 @@ class _Reads(Mapping[str, Any]):
     for a function that iterates over the mapping)."""
 
     def __init__(self, values: Mapping[str, Any]) -> None:
-        self._values, self.read = dict(values), set()
+        self._values: dict[str, Any] = dict(values)
+        self.read: set[str] = set()
 
     def __getitem__(self, key: str) -> Any:
         self.read.add(key)
@@ -464,6 +465,7 @@ def enclose(
             method="enclosure",
             enclosure=summary(enc) if enc is not None else None,
             method_note=fixed_note,
+            interval_proven=True,  # affine in the parameter: the feasible values form an interval
         ),
         "",
     )

@@ -238,6 +238,20 @@ class SupResult:
     enclosure: dict[str, Any] | None = None
     #: why the method was chosen (e.g. why the enclosure could not replace the bisection)
     method_note: str = ""
+    #: the feasible values of the parameter are proven to form an interval (it enters affinely,
+    #: :func:`lmic.studies.sweep.enclosed.affine_parameter`): only then do a certified value and a
+    #: proven infeasible one bracket the supremum; otherwise the bisection assumes it
+    interval_proven: bool = False
+
+    @property
+    def bracket_proven(self) -> bool:
+        """Both ends proven *and* the feasible values an interval: ``sup in [lower, upper]`` is a theorem."""
+        return self.ends_proven and self.interval_proven
+
+    @property
+    def ends_proven(self) -> bool:
+        """A certified value and a proven bound (global infeasibility or dual bound) at the other end."""
+        return self.certified is not None and self.upper_kind in PROVEN_KINDS
 
     @property
     def certified(self) -> float | None:
@@ -324,7 +338,9 @@ class SupResult:
             "upper": self.upper,
             "upper_kind": self.upper_kind,
             "upper_proven": self.upper_proven,
-            "bracket_proven": self.upper_kind in PROVEN_KINDS,
+            "bracket_proven": self.bracket_proven,
+            "ends_proven": self.ends_proven,
+            "interval_proven": self.interval_proven,
             "method": self.method,
             "method_note": self.method_note,
             "enclosure": self.enclosure,
