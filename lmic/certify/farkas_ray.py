@@ -55,14 +55,16 @@ def _evaluate(problem: Problem, mats: list[np.ndarray], y: np.ndarray, tol: floa
     eta_in += float(np.sum(np.abs(y)))
     if eta_in == 0:
         return {"verified": False, "reason": "the certificate is zero", "eta": 0.0}
-    proj, removed = [], 0.0
+    proj, removed, tops = [], 0.0, []
     for Z in mats:
         if not Z.size:
             proj.append(Z)
+            tops.append(0.0)
             continue
         w, V = np.linalg.eigh(Z)
         removed += float(np.sum(-w[w < 0]))
         proj.append((V * np.maximum(w, 0.0)) @ V.T)
+        tops.append(float(max(np.max(w), 0.0)))
     yy = y.copy()
     neg = ge & (yy < 0)
     y_removed = float(np.sum(-yy[neg]))
@@ -110,8 +112,15 @@ def _evaluate(problem: Problem, mats: list[np.ndarray], y: np.ndarray, tol: floa
     # ~ d eps per entry of Z, and the sum of its nonzero terms, ~ eps per term, each bounded
     # by c_k since |<F^(k), Z>| <= ||F^(k)||_F ||Z||_F <= c_k tr Z), so the radius is taken
     # with |g_k| + (that bound) in place of |g_k|
-    res1_floor = float(np.sum(_ROUNDING_TERMS * np.finfo(float).eps * _terms(problem)[1:] * sk))
+    terms = _terms(problem)
+    res1_floor = float(np.sum(_ROUNDING_TERMS * np.finfo(float).eps * terms[1:] * sk))
     res1 = res1 + res1_floor
+    # the statements below need Z_i PSD exactly: the reconstructed V diag(w+) V^T is PSD only
+    # up to delta_i = 8 d eps max(w), so they are made for Z_i + delta_i I, which is: g_k grows
+    # by at most delta_i |tr F_i^(k)|; g_0's own rounding is added as well
+    shift = _psd_shift(problem, tops, eta)
+    g0_safe = g0 + float(shift[0]) + _ROUNDING_TERMS * float(np.finfo(float).eps) * float(terms[0]) * s0
+    res1_safe = res1 + float(np.sum(shift[1:]))
     closed = g0 < -tol * s0 and g0 < 0
     strict_ok = tau >= tol and g0 <= tol * s0
     out: dict[str, Any] = {
@@ -122,9 +131,9 @@ def _evaluate(problem: Problem, mats: list[np.ndarray], y: np.ndarray, tol: floa
         "c0": s0,
         "tau": tau,
         "eta": 1.0,
-        "radius": (-g0 / res1 if res1 > 0 else math.inf) if g0 < 0 else 0.0,
+        "radius": (-g0_safe / res1_safe if res1_safe > 0 else math.inf) if g0_safe < 0 else 0.0,
         "residual_floor": res1_floor,
-        "margin_bound": (g0 + res1) / tau if tau > 0 else None,
+        "margin_bound": (g0_safe + res1_safe) / tau if tau > 0 else None,
         "kind": "closed" if closed else ("strict" if strict_ok else None),
     }
     problems = []
@@ -165,6 +174,20 @@ def _evaluate(problem: Problem, mats: list[np.ndarray], y: np.ndarray, tol: floa
 
 #: safety factor on the rounding level of a float ``g_k`` (:func:`_evaluate`)
 _ROUNDING_TERMS = 2.0
+
+
+def _psd_shift(problem: Problem, tops: list[float], eta: float) -> np.ndarray:
+    """For ``k = 0 .. n``: ``sum_i delta_i |tr F_i^(k)|``, ``delta_i = 8 d_i eps max(w_i) / eta``
+    the bound on how far the reconstructed (normalised) ``Z_i`` may be from PSD."""
+    eps = float(np.finfo(float).eps)
+    out = np.zeros(1 + problem.n)
+    for lmi, top in zip(problem.lmis, tops, strict=True):
+        if not top or not lmi.dim:
+            continue
+        r, c = tril_rows_cols(lmi.dim)
+        trace = np.asarray(lmi.coeffs.tocsr()[np.flatnonzero(r == c), :].sum(axis=0)).ravel()
+        out += 8.0 * lmi.dim * eps * (top / eta) * np.abs(trace)
+    return out
 
 
 def _terms(problem: Problem) -> np.ndarray:
