@@ -110,7 +110,7 @@ from typing import Any
 
 import numpy as np
 
-from lmic.certify.enclosure_about import about_of, one_problem
+from lmic.certify.enclosure_about import about_of, one_problem, relative_gap
 from lmic.certify.enclosure_centre import centred_bound, centring_problem
 from lmic.certify.enclosure_conditional import RADIUS_FACTOR, best_box_bound, box_bound, verify_box_bound
 from lmic.certify.enclosure_dual import dual_bound, verify_dual_bound
@@ -394,16 +394,6 @@ def search_budget(solve_s: float) -> float:
 GAP_TARGET = 1e-6
 #: the solver tolerance of that re-solve (interior-point backends)
 TIGHT_TOL = 1e-10
-
-
-def relative_gap(lo: float, hi: float) -> float:
-    """VSDP's relative gap of an enclosure ``[lo, hi]``: ``(hi - lo) / max(1, (|hi| + |lo|) / 2)``
-    (absolute for ends below 1 in size; negative when the ends cross).
-
-    >>> relative_gap(1.0, 3.0), relative_gap(0.0, 0.25)
-    (1.0, 0.25)
-    """
-    return (hi - lo) / max(1.0, 0.5 * (abs(hi) + abs(lo)))
 
 
 def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dict[str, Any]:

@@ -20,7 +20,7 @@ from typing import Any
 from lmic.compile.exact import ExactUnavailable, exact_of
 from lmic.ir.problem import Problem
 
-__all__ = ["about_of", "one_problem", "exact_counterpart"]
+__all__ = ["about_of", "one_problem", "exact_counterpart", "relative_gap"]
 
 
 def about_of(dual: dict[str, Any], pe: dict[str, Any] | None) -> str | None:
@@ -69,3 +69,13 @@ def exact_counterpart(problem: Problem, record: dict[str, Any]) -> str | None:
     except ExactUnavailable as exc:
         return str(exc)
     return None if ex.about == "theorem" else "the enclosure is about an exact compilation, the IR has no theorem"
+
+
+def relative_gap(lo: float, hi: float) -> float:
+    """VSDP's relative gap of an enclosure ``[lo, hi]``: ``(hi - lo) / max(1, (|hi| + |lo|) / 2)``
+    (absolute for ends below 1 in size; negative when the ends cross).
+
+    >>> relative_gap(1.0, 3.0), relative_gap(0.0, 0.25)
+    (1.0, 0.25)
+    """
+    return (hi - lo) / max(1.0, 0.5 * (abs(hi) + abs(lo)))

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from lmic.certify.enclosure_about import exact_counterpart
+from lmic.certify.enclosure_about import exact_counterpart, relative_gap
 from lmic.certify.enclosure_conditional import verify_box_bound
 from lmic.certify.enclosure_facial import verify_any
 from lmic.certify.enclosure_float import primal_end
@@ -113,8 +113,6 @@ def audit_enclosure(
             return {"ok": False, "field": "enclosure", "message": "enclosure: lower end above upper end"}
         if record.get("gap") is not None and float(record["gap"]) != float(hi) - float(lo):
             return {"ok": False, "field": "enclosure.gap", "message": "enclosure.gap differs from upper - lower"}
-        from lmic.certify.enclosure import relative_gap
-
         if record.get("rel_gap") is not None and float(record["rel_gap"]) < relative_gap(float(lo), float(hi)):
             return {"ok": False, "field": "enclosure.rel_gap", "message": "enclosure.rel_gap is below the ends' gap"}
     return {"ok": True, "field": None, "message": "enclosure re-verified (both recorded ends)"}

@@ -113,6 +113,7 @@ def _evaluate(problem: Problem, mats: list[np.ndarray], y: np.ndarray, tol: floa
     # by c_k since |<F^(k), Z>| <= ||F^(k)||_F ||Z||_F <= c_k tr Z), so the radius is taken
     # with |g_k| + (that bound) in place of |g_k|
     terms = _terms(problem)
+    res1_raw = res1
     res1_floor = float(np.sum(_ROUNDING_TERMS * np.finfo(float).eps * terms[1:] * sk))
     res1 = res1 + res1_floor
     # the statements below need Z_i PSD exactly: the reconstructed V diag(w+) V^T is PSD only
@@ -133,6 +134,7 @@ def _evaluate(problem: Problem, mats: list[np.ndarray], y: np.ndarray, tol: floa
         "eta": 1.0,
         "radius": (-g0_safe / res1_safe if res1_safe > 0 else math.inf) if g0_safe < 0 else 0.0,
         "residual_floor": res1_floor,
+        "residual_raw": res1_raw,
         "margin_bound": (g0_safe + res1_safe) / tau if tau > 0 else None,
         "kind": "closed" if closed else ("strict" if strict_ok else None),
     }

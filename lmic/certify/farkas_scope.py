@@ -142,11 +142,9 @@ def scope(problem: Problem, verification: dict[str, Any] | None, exact: dict[str
         }
     if g0 < 0 and radius > 0:
         floor = float(v.get("residual_floor") or 0.0)
-        limit = (
-            "; the radius is set by the rounding of the float check itself"
-            if -g0 / radius <= floor * (1 + 1e-9)
-            else ""
-        )
+        raw = v.get("residual_raw")  # sum |g_k| before the rounding floor (older records: from the radius)
+        by_rounding = float(raw) <= floor if raw is not None else -g0 / radius <= floor * (1 + 1e-9)
+        limit = "; the radius is set by the rounding of the float check itself" if by_rounding else ""
         return {
             "scope": "bounded",
             "radius": radius,
