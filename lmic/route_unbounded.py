@@ -174,9 +174,9 @@ def _certified_point(problem: Problem, feas: Outcome) -> tuple[Any, Any] | None:
     cert = certify(problem, sol)
     if cert.verdict != "certified":
         return None
-    # the certifier's "certified" grants non-strict LMIs and rows a tolerance (1e-8 relative): a
-    # point of an infeasible problem may pass it. An exact improving ray proves "unbounded" only
-    # with a point that IS feasible: proved with rigorous rounding (rows exactly), or exactly
+    # an exact improving ray proves "unbounded" only with a point that IS feasible: the solver's
+    # point itself, proved with rigorous rounding (rows exactly) or exactly (the certifier may
+    # have certified a projected or snapped x_q instead; and it once granted a 1e-8 tolerance)
     from lmic.certify.enclosure_float import primal_end
     from lmic.certify.snap import exact_primal_end
 

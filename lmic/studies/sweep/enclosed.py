@@ -152,7 +152,7 @@ def _constants_free_of(plan: Any, sysobj: Any, overrides: Mapping[str, Any], nam
     A constant is a function the template cannot see into: the bound data at three values of
     the parameter can agree with an affine function there and not elsewhere (a constant ``p -
     p (p - 1) (p - 1/2) / 10`` at the sample values 0, 1, 1/2), and the lifted problem would then
-    not be the theorem's at any other value (tests/studies/sweep/test_enclosed.py). So a
+    not be the theorem's at any other value (tests/studies/sweep/test_lift_soundness.py). So a
     parameter that reaches a constant is never lifted: the bisection decides each value on the
     theorem's own problem."""
     from lmic.compile.inputs import resolve_inputs
