@@ -525,10 +525,13 @@ def _bisect(
 
 def _interval_proven(plan: Any, sysobj: Any, overrides: Any, decl: Any) -> bool:
     """The feasible values of the parameter form an interval: it enters affinely (then the feasible
-    set in ``(x, p)`` is convex and its projection on ``p`` an interval)."""
-    from lmic.studies.sweep.enclosed import affine_parameter
+    set in ``(x, p)`` is convex and its projection on ``p`` an interval), or affinely through a
+    power ``p^k`` that multiplies no decision variable, ``p >= 0`` (``gamma^2``)."""
+    from lmic.studies.sweep.enclosed import affine_parameter, monotone_affine
 
     try:
-        return bool(affine_parameter(plan, sysobj, overrides, decl)[0])
+        return bool(
+            affine_parameter(plan, sysobj, overrides, decl)[0] or monotone_affine(plan, sysobj, overrides, decl)
+        )
     except (LmicError, ValueError, ArithmeticError):
         return False

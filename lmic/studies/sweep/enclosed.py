@@ -61,7 +61,7 @@ from lmic.studies.sweep.homogeneous import AFFINE_RTOL, _columns, _same_structur
 from lmic.studies.sweep.points import Evaluator, domain, in_domain, setup
 from lmic.studies.sweep.results import PointResult, SupResult, kind_of
 
-__all__ = ["affine_parameter", "lift", "enclose", "fix_scalar", "unfix"]
+__all__ = ["affine_parameter", "monotone_affine", "lift", "enclose", "fix_scalar", "unfix"]
 
 #: the other end is first proven infeasible this fraction of the tolerance beyond the certified
 #: value (one max-margin solve, :func:`lmic.studies.sweep.points._prove`)
@@ -187,6 +187,52 @@ def _done(consts: list[Any], c: Any) -> set[str]:
             break
         out.add(d.name)
     return out
+
+
+#: the powers ``h = p^k`` tried when ``p`` itself does not enter affinely (:func:`monotone_affine`)
+MONOTONE_POWERS = (2, 3, 4, -1, -2)
+
+
+def monotone_affine(plan: Any, sysobj: Any, overrides: Mapping[str, Any], decl: Any) -> str:
+    """The power ``p^k`` (as text) in which the theorem is affine, ``""`` when there is none.
+
+    ``p`` must be non-negative on its domain, in no matrix factor and in no coefficient of a
+    decision variable, and read by no data-derived constant; every coefficient that holds it must
+    be affine in ``g = p^k``. The feasible set in ``(x, g)`` is then convex, so the feasible values
+    of ``g`` form an interval, and so do those of ``p`` (``p -> p^k`` is monotone for ``p > 0``):
+    ``gamma^2`` in an H-infinity bound.
+
+    >>> from lmic.studies.sweep.points import setup
+    >>> s, plan, o, d = setup("thesis.thm3_2_2", "examples/thesis.thm3_2_2.ex3_2_2.yaml", "gamma", None)
+    >>> monotone_affine(plan, s, o, d)
+    'gamma**2'
+    """
+    p = decl.symbol
+    lo, _hi, lo_in, _ = domain(decl)
+    if not lo >= 0.0:
+        return ""
+    coefs = []
+    for coef, var, factors in _terms(plan):
+        if any(p in getattr(f, "free_symbols", set()) for f in factors):
+            return ""
+        if p in getattr(coef, "free_symbols", set()):
+            if var is not None:
+                return ""
+            coefs.append(coef)
+    start = sysobj.params.get(decl.name, decl.default)
+    value = float(start) if isinstance(start, int | float) and not isinstance(start, bool) else 1.0
+    if not coefs or _constants_free_of(plan, sysobj, overrides, decl.name, value):
+        return ""
+    g = sympy.Symbol("_g", positive=True)
+    for k in MONOTONE_POWERS:
+        if k < 0 and lo == 0.0 and lo_in:
+            continue  # p^k is not defined at p = 0
+        try:
+            if all(_coef_affine(sympy.expand(c.subs(p, g ** sympy.Rational(1, k))), g) for c in coefs):
+                return f"{p}**{k}"
+        except (TypeError, ValueError):
+            return ""
+    return ""
 
 
 def _data_affine(probs: list[Problem], values: list[float]) -> str:
