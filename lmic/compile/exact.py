@@ -479,16 +479,12 @@ class _ExactBinder(_Binder):
 
 
 def _check_match(ex: ExactProblem, problem: Problem) -> None:
-    """The exact problem rounds to the IR (a sanity check: it must be the same problem)."""
-    if len(ex.lmis) != len(problem.lmis) or len(ex.linear) != len(problem.linear):
-        raise ExactUnavailable("the theorem's exact compilation does not match the IR")
-    for e, lmi in zip(ex.lmis, problem.lmis, strict=True):
-        if e.dim != lmi.dim or e.indptr.size != lmi.coeffs.shape[1] + 1:
-            raise ExactUnavailable(f"LMI '{lmi.name}' of the exact compilation does not match the IR")
-        D = abs(e.rounded() - lmi.coeffs.tocsc())
-        scale = max(1.0, float(abs(lmi.coeffs).max()) if lmi.coeffs.nnz else 1.0)
-        if D.nnz and float(D.max()) > 1e-9 * scale:
-            raise ExactUnavailable(f"LMI '{lmi.name}' of the exact compilation differs from the IR's")
+    """The exact problem rounds to the IR: LMIs, rows and objective (:mod:`lmic.compile.exact_match`)."""
+    from lmic.compile.exact_match import mismatch
+
+    why = mismatch(ex, problem)
+    if why is not None:
+        raise ExactUnavailable(why)
 
 
 def exact_bind(plan: Any, system: Any, params: Mapping[str, Any] | None = None) -> ExactProblem:

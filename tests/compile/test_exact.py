@@ -174,3 +174,32 @@ def test_exact_of_an_unregistered_theorem_uses_the_plan_it_was_bound_from():
     copy = dataclasses.replace(prob)
     with pytest.raises(ExactUnavailable, match="test.inline_bounded_real"):
         exact_of(copy)
+
+
+def test_a_derived_problem_with_another_objective_or_row_has_no_exact_counterpart():
+    """A problem derived from a compiled one (a cut, a lifted or backed-off problem) keeps the
+    theorem's metadata; if its objective or a row changed, the theorem compiled exactly is another
+    problem, and a bound proved on it would not be this one's: it declines by name."""
+    import dataclasses
+
+    import scipy.sparse as sp
+
+    from lmic.api import load_target
+    from lmic.compile.exact import exact_of
+    from lmic.ir.problem import LinearConstraints, Objective
+
+    system = {"data": {"A": [[-0.3, 0.1], [0.2, -0.7]], "B": [[1.0], [0.5]], "C": [[1.0, 0.1]]}}
+    prob = load_target("tutorial.bounded_real", system)[0]
+    assert exact_of(prob).about == "theorem"
+    c = np.asarray(prob.objective.c, dtype=float).copy()
+    c[-1] *= 2.0
+    other = dataclasses.replace(prob, objective=Objective(prob.objective.sense, c))
+    with pytest.raises(ExactUnavailable, match="objective differs"):
+        exact_of(other)
+    lin = prob.linear
+    A = sp.csr_matrix(lin.A).toarray()
+    assert lin.names == ["gamma > 0"]
+    A[0, 0] += 1.0  # gamma > 0 becomes gamma + 1 > 0
+    moved = dataclasses.replace(prob, linear=LinearConstraints(sp.csr_matrix(A), lin.kinds, lin.strict, lin.names))
+    with pytest.raises(ExactUnavailable, match="row 'gamma > 0'"):
+        exact_of(moved)
