@@ -15,12 +15,13 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
-from lmic.compile.exact import ExactUnavailable, exact_of
+from lmic.compile.exact import ExactProblem, ExactUnavailable, exact_of
 from lmic.ir.problem import Problem
 
-__all__ = ["about_of", "one_problem", "exact_counterpart", "relative_gap"]
+__all__ = ["about_of", "one_problem", "exact_counterpart", "relative_gap", "structure_on_exact"]
 
 
 def about_of(dual: dict[str, Any], pe: dict[str, Any] | None) -> str | None:
@@ -79,3 +80,27 @@ def relative_gap(lo: float, hi: float) -> float:
     (1.0, 0.25)
     """
     return (hi - lo) / max(1.0, 0.5 * (abs(hi) + abs(lo)))
+
+
+def structure_on_exact(
+    problem: Problem, check: Callable[[ExactProblem], dict[str, Any] | None], form: str
+) -> tuple[dict[str, Any] | None, str]:
+    """A face route's structure ``check``-ed on the problem's exact compilation
+    (:func:`~lmic.compile.exact.exact_of`): ``(structure or None, reason)``, the structure's
+    ``problem`` ``"exact"`` (the theorem compiled exactly) or ``"ir"`` (the IR's own floats).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))], [LMI("p > 0", 1, sp.csc_matrix([[0.0, 1.0]]))],
+    ...             LinearConstraints.empty(1), Objective("min", [0.0, 1.0]))
+    >>> structure_on_exact(p, lambda ex: {"form": "demo"}, "demo")
+    ({'form': 'demo', 'problem': 'ir'}, '')
+    """
+    try:
+        ex = exact_of(problem)
+    except ExactUnavailable as exc:
+        return None, f"the face route needs the exact coefficients: {exc}"
+    st = check(ex)
+    if st is None:
+        return None, f"the exact coefficients have no {form} structure"
+    return dict(st, problem="exact" if ex.about == "theorem" else "ir"), ""

@@ -72,6 +72,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from lmic.certify.enclosure_about import structure_on_exact
 from lmic.certify.enclosure_float import down
 from lmic.certify.enclosure_repair import jacobian, pivot_blocks
 from lmic.compile.exact import ExactProblem, ExactUnavailable, exact_of, from_ir
@@ -249,14 +250,7 @@ def structure_for(problem: Problem) -> tuple[dict[str, Any] | None, str]:
         st = _exact_structure(problem, cand, from_ir(problem))
         if st is not None:
             return dict(st, problem="ir"), ""
-    try:
-        ex = exact_of(problem)
-    except ExactUnavailable as exc:
-        return None, f"the face route needs the exact coefficients: {exc}"
-    st = _exact_structure(problem, cand, ex)
-    if st is None:
-        return None, "the exact coefficients have no Lyapunov structure"
-    return dict(st, problem="exact" if ex.about == "theorem" else "ir"), ""
+    return structure_on_exact(problem, lambda ex: _exact_structure(problem, cand, ex), "Lyapunov")
 
 
 def _fq(flint: Any, v: float) -> Any:

@@ -46,9 +46,10 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from lmic.certify.enclosure_about import structure_on_exact
 from lmic.certify.enclosure_face_kyp import _best, _forms, _golden, estimate
 from lmic.certify.enclosure_repair import jacobian, pivot_blocks
-from lmic.compile.exact import ExactProblem, ExactUnavailable, exact_of, from_ir
+from lmic.compile.exact import ExactProblem, from_ir
 from lmic.ir.problem import Problem
 from lmic.ir.svec import tril_index, tril_rows_cols, tril_unvec
 
@@ -243,14 +244,7 @@ def stein_structure_for(problem: Problem) -> tuple[dict[str, Any] | None, str]:
     cand = _float_stein(problem)
     if cand is None:
         return None, "no Lyapunov or Stein structure for the face route"
-    try:
-        ex = exact_of(problem)
-    except ExactUnavailable as exc:
-        return None, f"the face route needs the exact coefficients: {exc}"
-    st = _exact_stein(cand, ex)
-    if st is None:
-        return None, "the exact coefficients have no Stein structure"
-    return dict(st, problem="exact" if ex.about == "theorem" else "ir"), ""
+    return structure_on_exact(problem, lambda ex: _exact_stein(cand, ex), "Stein")
 
 
 def exact_orthogonal(U: Any) -> list[list[Fraction]] | None:

@@ -110,7 +110,7 @@ def prove_farkas(
             if out and spent():
                 break
             t_try = time.perf_counter()
-            left = None if budget_s is None else budget_s - (time.perf_counter() - t0)
+            left = None if budget_s is None else budget_s - (t_try - t0)
             attempt = _prove_farkas(problem, farkas, rel, keep_certificate, center, rational, left)
             longest = max(longest, time.perf_counter() - t_try)
             if attempt["face"] is not None:
@@ -119,7 +119,7 @@ def prove_farkas(
                 attempt["face"]["rational_basis"] = rational
             if not out or attempt["proven"]:
                 out = attempt
-            if attempt["proven"] or spent():
+            if attempt["proven"]:
                 break
         if out.get("proven") or spent():
             break

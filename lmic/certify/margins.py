@@ -153,6 +153,12 @@ def _decided_by_float(entry: dict[str, Any]) -> dict[str, Any]:
     return entry
 
 
+def _only_within_tolerance(r: dict) -> bool:
+    """Rejected only because it holds within the tolerance and nothing proved it
+    (:func:`lmic.certify.check.certify`)."""
+    return bool(r.get("within_tolerance")) and not r["ok"] and r["decided_by"] == "float"
+
+
 def lmi_reason(r: dict, optimisation: bool = False) -> str:
     if r["note"].startswith("the point is ~0"):
         return (
@@ -166,12 +172,11 @@ def lmi_reason(r: dict, optimisation: bool = False) -> str:
             f"LMI '{r['name']}' not certified: lambda_min = {_g(r['min_eig'])} "
             f"(relative {_g(r['rel_margin'])}) is zero to float64 accuracy, needs > 0 (strict)"
         )
-    if r.get("within_tolerance") and r["note"].startswith("holds within tolerance"):
+    if _only_within_tolerance(r):
         return (
             f"LMI '{r['name']}' holds only within the tolerance: lambda_min = {_g(r['min_eig'])} (relative "
             f"{_g(r['rel_margin'])}) is not above its float error bound {_g(r['float_err'])}, so the point is not "
-            "proved positive semidefinite"
-            + (" and the exact proof failed" if "exact proof failed" in r["note"] else "")
+            "proved positive semidefinite" + (" and the exact proof failed" if r.get("exact") else "")
         )
     need = "> 0 (strict)" if r["strict"] else f">= {_g(r['threshold'])}"
     if r["strict"] and r["min_eig"] > 0:
@@ -244,7 +249,7 @@ def linear_reports(problem: Problem, x: np.ndarray, tol: Tolerances, inaccurate:
 
 
 def linear_reason(r: dict) -> str:
-    if r.get("within_tolerance") and r.get("note", "").startswith("holds within tolerance"):
+    if _only_within_tolerance(r):
         what = "equality" if r["kind"] == "eq" else "inequality"
         return (
             f"{what} '{r['name']}' holds only within the tolerance: value {_g(r['residual'])} "
