@@ -495,7 +495,7 @@ def _bisect(
     if lower is not None and (upper_kind == "infeasible-certified" or proven) and not interval:
         message = (message + "; " if message else "") + (
             f"the bracket assumes that the feasible values of '{param}' form an interval, which lmic "
-            f"does not prove ('{param}' does not enter affinely): proven are a certified point at "
+            f"does not prove ('{param}' is not shown to enter affinely): proven are a certified point at "
             f"{vv(lower):g} and infeasibility at {vv(min(proven)) if proven else vv(upper):g}"
         )
     lower_v, upper_v = bracket_v(lower, upper)

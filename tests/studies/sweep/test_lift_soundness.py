@@ -91,7 +91,7 @@ def non_monotone(t):
     t.constraint("x <= c", x <= c)
 
 
-def test_a_bisection_bracket_is_not_called_proven_where_feasibility_is_not_monotone():
+def test_a_bisection_bracket_is_not_called_proven_where_feasibility_is_not_monotone(capsys):
     assert (10.0 - 1.1) * (10.0 - 3.0) >= 0.0  # x = 0 is feasible at p = 10: sup p = +inf
     r = maximize(non_monotone, {"data": {}}, "p", rtol=1e-3, max_evals=20)
     d = r.to_dict()
@@ -100,3 +100,9 @@ def test_a_bisection_bracket_is_not_called_proven_where_feasibility_is_not_monot
     # ... but the supremum is not bracketed: p enters non-affinely, and is feasible again from 3
     assert not d["interval_proven"] and not d["bracket_proven"]
     assert "assumes that the feasible values of 'p' form an interval" in r.message
+    from lmic.commands.sweep_cli import _print_sup
+
+    _print_sup(r)  # what `lmic solve --maximize` prints
+    out = " ".join(capsys.readouterr().out.split())
+    assert "(xtol 1e-06, rtol 0.001) (if the feasible values form an interval: see the note)" in out
+    assert "the bracket assumes that the feasible values of 'p' form an interval" in out

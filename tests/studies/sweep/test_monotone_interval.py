@@ -52,8 +52,13 @@ def test_a_square_is_recognised_and_a_mixture_or_a_product_is_not():
     assert _check(times_var) == (False, "")  # gamma^2 multiplies x: not jointly affine
 
 
-def test_the_bracket_of_a_square_is_a_proven_supremum():
+def test_the_bracket_of_a_square_is_a_proven_supremum(capsys):
     r = maximize(square, {"data": {}}, "gamma", rtol=1e-4)
     d = r.to_dict()
     assert d["interval_proven"] and d["ends_proven"] and d["bracket_proven"]
     assert r.lower <= math.sqrt(2.0) <= r.upper and "assumes" not in r.message
+    from lmic.commands.sweep_cli import _print_sup
+
+    _print_sup(r)  # what `lmic solve --maximize` prints: the bracket, without the caveat
+    out = " ".join(capsys.readouterr().out.split())
+    assert "sup gamma in [" in out and "if the feasible values form an interval" not in out
