@@ -365,9 +365,10 @@ def _given(problem: Problem, x: Any, bound: float) -> tuple[np.ndarray, Any, Any
 def _certified(problem: Problem, sol: Any) -> tuple[np.ndarray, Any, Any]:
     """``(x, solution, certificate)``: a solve's point (its first ``problem.n`` entries: the
     backed-off and margin problems append variables) certified against ``problem``."""
-    from lmic.certify import certify
+    from lmic.certify import certified_solution, certify
     from lmic.solution import Solution
 
     x = np.asarray(sol.x, dtype=float)[: problem.n]
     mine = Solution(status=sol.status, x=x, objective=problem.objective.value(x), backend=sol.backend)
-    return x, mine, certify(problem, mine)
+    mine, cert = certified_solution(problem, mine, certify(problem, mine))
+    return np.asarray(mine.x, dtype=float), mine, cert

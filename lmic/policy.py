@@ -228,6 +228,12 @@ def _certify(problem: Problem, sol: Solution, exact: bool) -> Any:
     return certify(problem, sol, exact=exact)
 
 
+def _proven_point(problem: Problem, sol: Solution, cert: Any) -> tuple[Solution, Any]:
+    from lmic.certify import certified_solution
+
+    return certified_solution(problem, sol, cert)
+
+
 def exact_rescue_point(problem: Problem, sol: Solution, cert: Any) -> Any | None:
     """An exact proof at a point the float certificate rejected only for its tiny margins.
 
@@ -290,6 +296,7 @@ class _Run:
     def record(self, backend: str, label: str, sol: Solution, t0: float, infeasibility_only: bool = False) -> Outcome:
         t1 = time.perf_counter()
         cert = _certify(self.problem, sol, self.exact)
+        sol, cert = _proven_point(self.problem, sol, cert)  # a moved point is the one returned
         verdict = verdict_of(self.problem, sol, cert)
         note = ""
         if infeasibility_only and verdict in ("certified", "rejected"):

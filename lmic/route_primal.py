@@ -170,7 +170,7 @@ def decided_by_enclosure(
     proven_optimum = x_enc is not None and enc.get("rel_gap") is not None and enc["rel_gap"] <= gap
     if x_enc is None or (point_holds and not proven_optimum):
         return None  # nothing proven to adopt, or the answer's own point already holds
-    from lmic.certify import certify
+    from lmic.certify import certified_solution, certify
     from lmic.outcome import Outcome, evidence_of
 
     x = np.asarray(x_enc, dtype=float)
@@ -186,6 +186,7 @@ def decided_by_enclosure(
     cert2 = certify(problem, sol2)
     if cert2.verdict != "certified":
         return None
+    sol2, cert2 = certified_solution(problem, sol2, cert2)
     if proven_optimum:
         verdict = "certified"
         why = f"the enclosure proves the optimum: {enc['reason']}"

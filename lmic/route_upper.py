@@ -170,7 +170,7 @@ def upper_route(
         return out, enc, 0.0
     if enc is not None and enc.get("rel_gap") is not None and enc["rel_gap"] <= GAP_TARGET:
         return out, enc, 0.0
-    from lmic.certify import certify
+    from lmic.certify import certified_solution, certify
     from lmic.certify.enclosure import enclosure, with_primal
     from lmic.upper_end import upper_from_boxes, upper_from_lower
 
@@ -249,7 +249,7 @@ def upper_route(
     xc = np.asarray(r["checked_x"], dtype=float)
     what = r.get("what", "most interior point near the proven dual end")
     sol2 = _solution(problem, sol, xc, f"the {what} at objective {r['checked_value']:.10g} (lmic.upper_end)")
-    cert2 = certify(problem, sol2)
+    sol2, cert2 = certified_solution(problem, sol2, certify(problem, sol2))
     new = Outcome(
         "certified",
         evidence_of("certified", cert2),

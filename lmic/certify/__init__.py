@@ -19,13 +19,14 @@ Examples
 
 from __future__ import annotations
 
-from lmic.certify.check import VERDICTS, Certificate, Tolerances, certify
+from lmic.certify.check import VERDICTS, Certificate, Tolerances, certified_solution, certify
 
 __all__ = [
     "VERDICTS",
     "Certificate",
     "Tolerances",
     "certify",
+    "certified_solution",
     "write_certificate",
     "read_certificate",
     "audit_certificate",

@@ -27,7 +27,7 @@ import numpy as np
 from lmic.certify.certificate_format import read_certificate
 from lmic.certify.certificate_hash import CLAIMED, INFORMATIONAL, _integrity_finding, _matches, ir_hash
 from lmic.certify.certificate_write import _json, certificate_document, theorem_changes
-from lmic.certify.check import Certificate, Tolerances, certify
+from lmic.certify.check import Certificate, Tolerances, certified_solution, certify
 from lmic.errors import CertificateError, LmicError
 from lmic.ir.problem import Problem
 from lmic.solution import STATUSES, Solution
@@ -423,6 +423,12 @@ def audit_certificate(
     # (a strict LMI below the float threshold, proved exactly), so the proof is re-run
     recorded_exact = recorded.get("exact") is not None
     cert = certify(problem, solution, exact=recorded_exact, tol=file_tol)
+    moved, _ = certified_solution(problem, solution, cert)
+    if moved is not solution:
+        # the proof holds at another point (snapped or rounded): the file's point is not proved
+        why = "solution.x is not the proven point: the certifier proves a point moved from it"
+        dist = float(np.max(np.abs(np.asarray(moved.x) - np.asarray(x))))
+        return _fail(doc, "solution.x", f"{why} (max |x_q - x| = {dist:.3g})", cert, checked=checked, **common)
     fresh = certificate_document(
         problem, solution, cert, system=system, path=p, embed_ir=doc["ir"]["embedded"] is not None
     )

@@ -138,7 +138,7 @@ from lmic.errors import LmicError
 from lmic.ir.problem import Problem
 from lmic.solution import Solution
 
-__all__ = ["VERDICTS", "Tolerances", "Certificate", "certify", "lmi_report", "evaluate_checks"]
+__all__ = ["VERDICTS", "Tolerances", "Certificate", "certify", "certified_solution", "lmi_report", "evaluate_checks"]
 
 
 def _reasons(cert: Certificate) -> list[str]:
@@ -394,3 +394,68 @@ def certify(
                 cert.reason += f"; below the float threshold but proved exactly: {', '.join(repr(n) for n in rescued)}"
     cert.time_s = time.perf_counter() - t0
     return cert
+
+
+def _exact_floats(point: dict[str, Any] | None) -> np.ndarray | None:
+    """The rational point ``{"den", "num"}`` of an exact proof as floats, or ``None`` unless
+    every coordinate is a float exactly (a dyadic rounding of ``x``; a projection onto the
+    equality rows usually is not)."""
+    from fractions import Fraction
+
+    if not point or "den" not in point:
+        return None
+    den = int(point["den"])
+    values = [Fraction(int(n), den) for n in point["num"]]
+    floats = [float(v) for v in values]
+    if any(Fraction(f) != v for f, v in zip(floats, values, strict=True)):
+        return None
+    return np.array(floats)
+
+
+def certified_solution(problem: Problem, solution: Solution, cert: Certificate) -> tuple[Solution, Certificate]:
+    """``(solution, certificate)`` at the point the certificate proves, for every caller that
+    reports a point: the variables, the objective, the derived gains and a certificate file
+    must be those of the proven point, never of a solver's point that was moved.
+
+    * a point moved by the certifier (``cert.x`` differs from ``solution.x``: the snap of
+      :func:`_snapped` onto an exactly feasible point) replaces the solver's;
+    * a proof that holds only at a rounding ``x_q`` of ``x`` (``exact.at_x`` false) moves the
+      point to ``x_q`` when every coordinate of ``x_q`` is a float, and certifies it again
+      there (the proof then holds at ``x`` itself); an ``x_q`` that floats cannot represent
+      (a projection onto the equality rows) stays in the certificate (``exact.point``), and
+      ``solution`` is returned unchanged with its distance recorded;
+    * anything not ``certified`` is returned unchanged.
+
+    Examples
+    --------
+    >>> import numpy as np, scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+    >>> p = Problem([Variable("p", "scalar", (1, 1))],
+    ...             [LMI("1 - p >= 0", 1, sp.csc_matrix([[1., -1.]]), strict=False)],
+    ...             LinearConstraints.empty(1), Objective("max", [0, 1]))
+    >>> sol = Solution("optimal", x=np.array([0.5]), objective=0.5)
+    >>> s2, c2 = certified_solution(p, sol, certify(p, sol))
+    >>> s2 is sol, c2.verdict
+    (True, 'certified')
+    """
+    import dataclasses
+
+    if cert.verdict != "certified" or solution.x is None or cert.x is None:
+        return solution, cert
+    x = np.asarray(cert.x, dtype=float)
+    old = np.asarray(solution.x, dtype=float)
+    if x.shape != old.shape or not np.array_equal(x, old):
+        moved = dataclasses.replace(solution, x=x, objective=problem.objective.value(x))
+        return moved, cert
+    ex = cert.exact or {}
+    if not ex.get("proven") or ex.get("at_x", True):
+        return solution, cert
+    xq = _exact_floats(ex.get("point"))
+    if xq is None or xq.shape != old.shape:
+        return solution, cert
+    moved = dataclasses.replace(solution, x=xq, objective=problem.objective.value(xq))
+    again = certify(problem, moved, exact=True, tol=cert.tolerances)
+    if again.verdict != "certified":
+        return solution, cert
+    again.reason += "; the point returned is x_q, the rounding of the solver's point the proof holds at"
+    return moved, again

@@ -52,7 +52,7 @@ Examples
 >>> r["proven"], r["at_x"], r["denominator"]
 (True, True, '2^54')
 >>> r["statement"]
-"every LMI and linear row holds exactly at the rational point x_q (exact.point), the solver's float point x itself"
+'every LMI and linear row holds exactly at the rational point x_q (exact.point), the returned float point x itself'
 >>> prove(p, np.array([0.3]), bits=6)["point"]
 {'den': '64', 'num': ['19']}
 """
@@ -514,7 +514,7 @@ def _attempt(problem: Problem, x: np.ndarray, K: int, K_full: int, rel: float, p
         distance = max(
             float(abs(Fraction(v, point.den) - Fraction(float(xk)))) for v, xk in zip(point.num, x, strict=True)
         )
-    where = "the solver's float point x itself" if not rounded else f"max |x_q - x| = {distance:.3g}"
+    where = "the returned float point x itself" if not rounded else f"max |x_q - x| = {distance:.3g}"
     statement = (
         f"every LMI and linear row holds exactly at the rational point x_q (exact.point), {where}" if proven else ""
     )

@@ -116,7 +116,7 @@ def test_prove_at_the_float_point_itself_first(lyapunov_point):
     den = int(r["point"]["den"])
     assert [Fraction(int(v), den) for v in r["point"]["num"]] == [Fraction(float(v)) for v in x]
     assert r["attempts"] == [{"denominator": r["denominator"], "proven": True, "disproved": False}]
-    assert "the solver's float point x itself" in r["statement"]
+    assert "the returned float point x itself" in r["statement"]
     assert all(e["method"] == "congruence" for e in r["lmis"])
 
 
