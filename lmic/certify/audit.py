@@ -528,9 +528,14 @@ def audit_certificate(
     label_out = cert.label
     if shown is not cert and shown.verdict == cert.verdict:
         label_out = shown.label  # e.g. 'certified (exact)' from the proof run on request
+    verdict = cert.verdict
+    if doc.get("unbounded") is not None and cert.verdict == "certified":
+        # the certified point and the re-proved improving ray: lmic solve's verdict (exit 5)
+        verdict = "unbounded-certified"
+        label_out = label_out.replace("certified", "unbounded-certified", 1)
     return AuditResult(
         ok=True,
-        verdict=cert.verdict,
+        verdict=verdict,
         recorded_verdict=recorded["verdict"],
         message=msg,
         certificate=shown,

@@ -4,8 +4,10 @@ The audit decides with lmic's default tolerances, or stricter ones given with ``
 recording looser ones is rejected, naming the tolerance. ``--json`` lists the informational
 fields (the only ones a certificate may change freely).
 
-Exit codes: 0 the certificate is consistent and certifies a solution; 3 it is consistent and
-certifies infeasibility; 1 it was tampered with, no longer matches its system file or theorem,
+Exit codes, as ``lmic solve``'s: 0 the certificate is consistent and certifies a solution; 3 it
+is consistent and certifies infeasibility; 4 it is consistent and records a bounded
+infeasibility certificate; 5 it is consistent and certifies unboundedness (a certified point and
+the improving ray, both re-proved); 1 it was tampered with, no longer matches its system file or theorem,
 or records a verdict that certifies nothing (``rejected``/``unverified``); 2 the file is
 malformed, truncated, of an unknown schema version, or its theorem or system file is missing
 (one line on stderr).
@@ -76,7 +78,8 @@ def _tolerances(items: list[str]) -> dict[str, float]:
 
 def exit_code(result: AuditResult) -> int:
     """0 consistent and certified, 3 consistent and infeasible-certified, 4 consistent and
-    infeasible-bounded (``lmic solve``'s codes), 1 otherwise.
+    infeasible-bounded, 5 consistent and unbounded-certified (``lmic solve``'s codes), 1
+    otherwise.
 
     >>> from lmic.certify.certificate import AuditResult
     >>> exit_code(AuditResult(ok=False, verdict="rejected", recorded_verdict="certified"))
@@ -90,6 +93,8 @@ def exit_code(result: AuditResult) -> int:
         return 3
     if result.verdict == "infeasible-bounded":
         return 4
+    if result.verdict == "unbounded-certified":
+        return 5
     return 1
 
 

@@ -113,6 +113,11 @@ def test_the_certificate_of_an_unbounded_problem_audits_and_tampering_is_named(t
     path, doc = _write_unbounded_certificate(tmp_path)
     good = audit_certificate(path)
     assert good.ok and "unbounded (exact ray)" in good.checked and "unbounded below" in good.message
+    # the audit's verdict and exit code are lmic solve's (a newcomer saw "consistent: certified", exit 0)
+    from lmic.commands.audit import exit_code
+
+    assert good.verdict == "unbounded-certified" and exit_code(good) == 5
+    assert good.label.startswith("unbounded-certified")
     for edit, field in [
         (lambda d: d["unbounded"].__setitem__("ray", ["-1"]), "unbounded.ray"),  # objective increases
         (lambda d: d["unbounded"].__setitem__("ray", ["0"]), "unbounded.ray"),

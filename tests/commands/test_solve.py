@@ -181,7 +181,7 @@ def test_crosscheck_progress_and_margins(capsys):
 def test_unbounded_problem_exits_5_and_its_certificate_audits(ir_file, tmp_path, capsys):
     """``max x1`` s.t. ``[[1 + x1, x2], [x2, 1]] >= 0`` (x1 -> +inf along (1, 0), closed form):
     ``lmic solve`` exits 5 with the ray in its JSON, ``-o`` records the ray, and ``lmic audit``
-    re-proves it (exit 0); a file whose ray is edited is rejected (exit 1)."""
+    re-proves it (exit 5, lmic solve's code for the same verdict); a file whose ray is edited is rejected (exit 1)."""
     cert = tmp_path / "unbounded.cert.json"
     code = main(["solve", ir_file("unbounded"), "--json", "-o", str(cert)])
     d = _json(capsys)
@@ -189,7 +189,7 @@ def test_unbounded_problem_exits_5_and_its_certificate_audits(ir_file, tmp_path,
     assert d["unbounded"]["sense"] == "max" and d["unbounded"]["slope"] < 0 and d["enclosure"] is None
     doc = json.loads(cert.read_text())
     assert doc["unbounded"]["ray"] == d["unbounded"]["ray"]
-    assert main(["audit", str(cert)]) == 0
+    assert main(["audit", str(cert)]) == 5
     assert "unbounded above" in capsys.readouterr().out
     doc["unbounded"]["ray"] = ["0", "1"]  # along x2 the objective does not improve (and the LMI is left)
     cert.write_text(json.dumps(doc))
