@@ -307,7 +307,10 @@ class _Run:
             more = mine < MAX_RAY_PROOFS and (not self.rays_tried or self.ray_s < RAY_PROOF_BUDGET_S)
         else:
             more = mine < MAX_RAY_PROOFS and self.ray_s < self.ray_budget_s
-        if verdict == "infeasible-bounded" and self.rescue and not self.exact and more:
+        # a separation below the float tolerance (x >= 1 and x <= 1 - 1e-6: g0 = -5e-7 against
+        # 1e-6 x scale 2) is undecided in floats; the same exact proof decides it
+        faint = verdict == "undecided" and sol.status == "infeasible" and bool(sol.farkas)
+        if (verdict == "infeasible-bounded" or faint) and self.rescue and not self.exact and more:
             # an exact proof costs seconds: a few rays per backend, one face each, within one
             # CPU budget per decision (another backend's ray often proves where the first's fail)
             self.rays_tried += 1

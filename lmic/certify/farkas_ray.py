@@ -154,8 +154,15 @@ def _evaluate(problem: Problem, mats: list[np.ndarray], y: np.ndarray, tol: floa
                 f"no separation: sum <F_i^(0), Z_i> + a0 . y = {g0:.3g} is not < 0 and the "
                 "certificate does not weigh any strict constraint"
             )
+        elif g0 < 0:
+            problems.append(
+                f"separation too small: sum <F_i^(0), Z_i> + a0 . y = {g0:.3g} is not below "
+                f"-{tol:g} x the constant-term scale {s0:.3g} (an exact proof may still decide)"
+            )
         else:
-            problems.append(f"no separation: sum <F_i^(0), Z_i> + a0 . y = {g0:.3g} > 0 (constant-term scale {s0:.3g})")
+            problems.append(
+                f"no separation: sum <F_i^(0), Z_i> + a0 . y = {g0:.3g} >= 0 (constant-term scale {s0:.3g})"
+            )
     out["verified"] = not problems
     if problems:
         out["reason"] = "; ".join(problems)

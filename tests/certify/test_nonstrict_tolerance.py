@@ -51,13 +51,16 @@ def _on_row(shift: float, upper: float) -> Problem:
     )
 
 
-def test_a_point_within_the_tolerance_of_an_infeasible_problem_is_rejected():
+def test_a_point_within_the_tolerance_of_an_infeasible_problem_is_not_certified():
+    """Clarabel's point ``x ~ 1 - 5e-10`` is rejected (exactly violated); its infeasibility
+    certificate (separation ``-5e-10``, below the float rule) is then proved exactly."""
     from lmic.policy import decide
 
     assert Fraction(C) < 1  # x >= 1 and x <= C < 1: infeasible
     out = decide(_interval(1.0, C), "clarabel")
-    assert out.verdict == "rejected"
-    assert "not positive semidefinite" in out.reason
+    assert out.verdict == "infeasible-certified", out.reason
+    first = out.attempts[0]
+    assert first.verdict == "rejected" and "not positive semidefinite" in first.note
 
 
 def test_the_float_tolerance_alone_never_certifies():
@@ -97,3 +100,24 @@ def test_a_point_near_an_equality_row_of_a_feasible_problem_is_projected_onto_it
     assert c.exact is not None and c.exact["proven"] and not c.exact["at_x"]
     num = [Fraction(int(v), int(c.exact["point"]["den"])) for v in c.exact["point"]["num"]]
     assert num[0] == num[1] and num[0] > 1 and 3 - num[1] > 0  # on the row, inside the LMIs
+
+
+def test_a_separation_below_the_float_tolerance_is_decided_exactly():
+    """``x >= 1`` and ``x <= 1 - 1e-6``: every interior point says infeasible, with a separation
+    ``g0 = -5e-7`` below the float rule's ``1e-6 x scale 2``. The float check cannot verify it
+    and used to say "-5e-07 > 0", and the route ended ``rejected``; the exact proof decides."""
+    from lmic.api import solve
+    from lmic.certify.farkas import verify_farkas
+
+    hi = 1.0 - 1e-6
+    assert Fraction(hi) < 1  # the truth: infeasible
+    p = _interval(1.0, hi)
+    r = solve(p)
+    assert r.verdict == "infeasible-certified", r.certificate.reason
+    assert r.certificate.exact is not None and r.certificate.exact["proven"]
+    # the float verification's own words about such a certificate
+    farkas = next(a for a in r.attempts if a["status"] == "infeasible")
+    assert farkas["note"] == "exact proof of the ray"
+    z = {"lmis": [[[0.5]], [[0.5]]], "y": []}
+    f = verify_farkas(p, z, tol=1e-6)
+    assert not f["verified"] and "separation too small" in f["reason"] and "> 0" not in f["reason"]
