@@ -81,7 +81,9 @@ class LmiSpec:
 
 def _check_zero(other: Any, rel: str) -> None:
     if not (isinstance(other, int | float) and other == 0):
-        raise TemplateError(f"an LMI is compared with 0 (write 'M - N {rel} 0' instead of 'M {rel} N')")
+        raise TemplateError(
+            f"an LMI is compared with 0 (write 'M - N {rel} 0' instead of 'M {rel} N', declared with t.lmi)"
+        )
 
 
 class Block:

@@ -265,9 +265,24 @@ class Template:
         self.lmis.append(LmiDecl(name, spec, doc))
 
     def constraint(self, name: str, relation: Any, doc: str = "") -> None:
-        """Add a scalar linear constraint, e.g. ``t.constraint("xi > 1", xi > 1)``."""
+        """Add a scalar linear constraint, e.g. ``t.constraint("xi > 1", xi > 1)``.
+
+        A matrix inequality is an LMI (``t.lmi``); a matrix equality is refused by name (write
+        its entries, e.g. ``sympy.Eq(P[0, 1], 0)``, one constraint each).
+        """
+        if isinstance(relation, LmiSpec):
+            raise TemplateError(
+                f"{self.theorem_id}: constraint '{name}' is a matrix inequality: declare it with "
+                f"t.lmi('{name}', ...); t.constraint takes scalar relations"
+            )
         if not isinstance(relation, sympy.core.relational.Relational) or isinstance(relation, sympy.core.relational.Ne):
             raise TemplateError(f"{self.theorem_id}: constraint '{name}' is not a relation (<, <=, >, >=, Eq)")
+        if any(getattr(side, "is_Matrix", False) or isinstance(side, sympy.MatrixExpr) for side in relation.args):
+            raise TemplateError(
+                f"{self.theorem_id}: constraint '{name}' relates matrices; t.constraint takes scalar "
+                "relations: write the entries (e.g. sympy.Eq(P[0, 1], 0)), one constraint each, or a "
+                "matrix inequality with t.lmi"
+            )
         self.constraints.append(ConstraintDecl(name, relation, doc))
 
     def minimize(self, expr: Any) -> None:

@@ -216,3 +216,36 @@ def test_a_dims_tuple_used_as_a_dimension_names_the_theorem_and_the_fix():
 
     with pytest.raises(TemplateError, match=r"^theorem test.bad: the shape of 'A': \(n,\) .*write n, = t.dims"):
         analyse(_thm(build))
+
+
+def test_matrix_relations_in_a_scalar_constraint_name_the_fix():
+    """A newcomer's ``t.constraint("mat", Eq(P, I(n)))`` was an internal TypeError; ``P <= I(n)``
+    suggested ``P - I(n) <= 0``, which t.constraint then called "not a relation"."""
+    import sympy
+
+    def equality(t):
+        (n,) = t.dims("n")
+        t.data("A", n, n)
+        P = t.symmetric("P", n)
+        t.constraint("mat", sympy.Eq(P, I(n)))
+
+    with pytest.raises(TemplateError, match=r"constraint 'mat' relates matrices.*write the entries"):
+        analyse(_thm(equality))
+
+    def inequality(t):
+        (n,) = t.dims("n")
+        t.data("A", n, n)
+        P = t.symmetric("P", n)
+        t.constraint("b", P - I(n) <= 0)
+
+    with pytest.raises(TemplateError, match=r"constraint 'b' is a matrix inequality: declare it with t.lmi\('b'"):
+        analyse(_thm(inequality))
+
+    def compared(t):
+        (n,) = t.dims("n")
+        t.data("A", n, n)
+        P = t.symmetric("P", n)
+        t.constraint("b", P <= I(n))
+
+    with pytest.raises(TemplateError, match=r"write 'M - N <= 0' instead of 'M <= N', declared with t.lmi"):
+        analyse(_thm(compared))
