@@ -213,12 +213,14 @@ def _print_sup(r: SupResult, written: str | None = None) -> None:
         cert_pt = next((p for p in r.points if p.value == c and p.outcome == "feasible"), None)
         how = cert_pt.proof if cert_pt else "certified"
         side, other_side = ("lower", "upper") if is_max else ("upper", "lower")
+        article = "an" if other_side == "upper" else "a"
         out.print(f"  {side:<8} {value_text(c, 10)}  {how} (evidence: a certified point)")
         if o is not None:
             kind = {
-                "undecided": f"not certified (neither certified nor proven infeasible): not an {other_side} bound",
+                "undecided": "not certified (neither certified nor proven infeasible): "
+                f"not {article} {other_side} bound",
                 "infeasible-bounded": "infeasible-bounded (no solution with ||x||_inf <= R only): "
-                f"not an {other_side} bound",
+                f"not {article} {other_side} bound",
                 "infeasible-certified": "infeasible-certified (global proof)",
                 "dual-bound": "proven dual bound (dual point proved feasible: no value beyond it)",
             }.get(r.upper_kind, r.upper_kind)

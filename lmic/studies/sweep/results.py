@@ -336,7 +336,10 @@ class SupResult:
             "backend": self.backend,
             "lower": self.lower,
             "upper": self.upper,
-            "upper_kind": self.upper_kind,
+            # the evidence of each end by its side (the attribute upper_kind is the end opposite
+            # the certified one: for an infimum that is the lower end)
+            "lower_kind": "certified point" if self.sense == "max" else self.upper_kind,
+            "upper_kind": self.upper_kind if self.sense == "max" else "certified point",
             "upper_proven": self.upper_proven,
             "bracket_proven": self.bracket_proven,
             "ends_proven": self.ends_proven,

@@ -50,9 +50,12 @@ def test_minimize_encloses_the_hinf_norm(n, seed):
     # the certified end: the theorem's own problem at gamma = upper, certified again here
     assert r.end is not None and r.end.value == r.upper
     assert certify(r.end.problem, r.end.solution).verdict == "certified"
-    ends = r.to_dict()["ends"]
+    d = r.to_dict()
+    ends = d["ends"]
     assert ends["lower"]["is_bound"] is True and "dual point" in ends["lower"]["proof"]
     assert ends["upper"]["evidence"] == "certified point"
+    # each side's kind under its own name (upper_kind once named the lower end of an infimum)
+    assert (d["lower_kind"], d["upper_kind"]) == ("dual-bound", "certified point")
 
 
 @pytest.mark.parametrize(("n", "seed"), [(4, 0), (6, 1)])
