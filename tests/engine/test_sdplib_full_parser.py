@@ -53,3 +53,22 @@ def test_a_directory_without_problems_is_one_line_and_exit_2(tmp_path, capsys):
     (tmp_path / "a.dat-s").write_text("1\n1\n1\n1.0\n0 1 1 1 1.0\n")
     assert bench.main(["--dir", str(tmp_path), "--only", "b"]) == 2
     assert capsys.readouterr().err.strip() == f"sdplib_full: no file b.dat-s in {tmp_path}"
+
+
+def test_exact_point_check_reads_every_block_exactly(tmp_path):
+    # min x1 + x2 s.t. [[x1, 1, 0], [1, x2, 1], [0, 1, x1]] - 0 >= 0 (F0 = 0) and diag(x1 - 1) >= 0
+    text = (
+        "2\n2\n3 -1\n1.0 1.0\n1 1 1 1 1.0\n1 1 3 3 1.0\n2 1 2 2 1.0\n"
+        "0 1 1 2 -1.0\n0 1 2 3 -1.0\n0 2 1 1 1.0\n1 2 1 1 1.0\n"
+    )
+    path = tmp_path / "toy.dat-s"
+    path.write_text(text)
+    # at x = (2, 1.01): pivots 2, 1.01 - 1/2, 2 - 1/0.51 > 0 and x1 - 1 = 1 > 0
+    objective, feasible = bench.exact_point_check(path, [2.0, 1.01])
+    assert feasible
+    assert abs(float(objective) - 3.01) < 1e-15
+    # x = (2, 0.9): the 3 x 3 block's determinant 2 * (1.8 - 1) - 2 = -0.4 < 0 although its
+    # first two pivots are positive
+    assert bench.exact_point_check(path, [2.0, 0.9])[1] is False
+    # x = (1, 5): the diagonal block x1 - 1 = 0 is not positive
+    assert bench.exact_point_check(path, [1.0, 5.0])[1] is False
