@@ -55,6 +55,21 @@ SKIP = {
 INACCURATE_OK = {
     ("sdpa", "qap5"): "SDPA stops at phase pFEAS on qap5 at -435.9998 (published -436.0)",
 }
+#: (backend, problem) -> why the solver's own outcome depends on the BLAS kernels (measured with
+#: OpenBLAS's Haswell kernels, ``OPENBLAS_CORETYPE=Haswell``, and its AVX-512 ones, both numpy's
+#: and the solvers' wheels): these cases are held to the contract that holds on every machine.
+#: The solver returns a status (never raises); an ``optimal`` status has the published objective;
+#: any point it returns that lmic's certifier certifies is feasible, so its objective is not below
+#: the published optimum (beyond the tolerance). CVXOPT's ``ZeroDivisionError`` turned into an
+#: ``error`` status is tested deterministically in tests/backends/test_examples.py.
+MACHINE_DEPENDENT = {
+    ("sdpa", "control3"): "SDPA ends 'optimal' with Haswell kernels, at phase pFEAS ('inaccurate') with AVX-512 "
+    "ones, at 13.633268 both times (published 13.63327)",
+    ("cvxopt", "hinf2"): "CVXOPT raises ZeroDivisionError in coneprog with Haswell kernels ('error'); with "
+    "AVX-512 ones it stops 'unknown' ('inaccurate') at 10.96706 (published 10.967)",
+    ("cvxopt", "hinf5"): "CVXOPT stops 'unknown' ('inaccurate') at 362.19 with Haswell kernels and at 343.02 "
+    "with AVX-512 ones (published 363, an infeasible point: the certifier rejects it)",
+}
 #: the native solver behind each modelling-layer backend (same exclusions)
 SOLVER_OF = {"cvxpy": "clarabel", "cvxpy:SCS": "scs", "picos": "cvxopt"}
 #: modelling layers run on a sample only: they reuse the native solvers tested above
@@ -102,9 +117,8 @@ def test_sdplib(backend, problem):
     tol = 1e-6 if not be.interior_point else 1e-7
     sol = solve_with_reductions(be, prob, SolveOptions(tol=tol, time_limit=120))
     published = PUBLISHED[problem]
-    if solver == "cvxopt" and problem == "hinf2":
-        # CVXOPT raises ZeroDivisionError inside coneprog here: it must be a status, not a crash
-        assert sol.status == "error" and "ZeroDivisionError" in sol.message
+    if (solver, problem) in MACHINE_DEPENDENT:
+        _never_a_false_claim(prob, sol, backend, problem, published)
         return
     if published == "primal infeasible":
         assert sol.status == "infeasible", sol.message
@@ -123,3 +137,15 @@ def test_sdplib(backend, problem):
     assert gap <= _tolerance(backend, problem, published), (
         f"{backend} {problem}: {sol.objective!r} vs published {published} (gap {gap:.3g})"
     )
+
+
+def _never_a_false_claim(prob, sol, backend: str, problem: str, published: str) -> None:
+    """The contract of a :data:`MACHINE_DEPENDENT` case (its docstring there)."""
+    from lmic.certify import certify
+
+    assert sol.status in ("optimal", "inaccurate", "error"), f"{sol.status}: {sol.message}"
+    value, tol = float(published), _tolerance(backend, problem, published)
+    if sol.status == "optimal":
+        assert abs(sol.objective - value) <= tol, (sol.objective, published)
+    if sol.x is not None and certify(prob, sol).verdict == "certified":
+        assert prob.objective.sense == "min" and sol.objective >= value - tol, (sol.objective, published)
