@@ -196,6 +196,8 @@ def _prove_float(problem: Problem, J, ranges, q, mats, y, active: np.ndarray | N
                 "proven": False,
                 "reason": f"multiplier of LMI '{lmi.name}' not proved PSD: lambda_min >= {lb:.3g}, "
                 f"correction up to {math.sqrt(2.0) * dn:.3g}",
+                # what a larger interior shift must cover (lmic.certify.enclosure_dual.needed_shift)
+                "psd_deficit": float(math.sqrt(2.0) * dn - lb) if math.isfinite(lb) else math.inf,
             }
     off = ranges[-1][1] if ranges else 0
     gea = ge & active[off:]
