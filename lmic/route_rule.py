@@ -33,6 +33,9 @@ __all__ = [
     "CHEAP_ESCALATION_S",
     "gap_escalates",
     "ray_proof_s",
+    "estimated_seconds",
+    "affordable",
+    "AFFORDABLE_FACTOR",
 ]
 
 #: per-iteration cost (flop estimate of :func:`ipm_costs`) below which an optimisation problem
@@ -186,3 +189,63 @@ def gap_escalates(problem: Problem, enc: dict[str, Any] | None) -> bool:
     dual_end = "lower" if problem.objective.sense == "min" else "upper"
     primal_end = "upper" if dual_end == "lower" else "lower"
     return enc.get(dual_end) is not None and enc.get(primal_end) is None
+
+
+#: an interior-point re-solve that only narrows a gap (a cross re-solve, a gap escalation) runs
+#: only when its estimated time (:func:`estimated_seconds`) is at most this times the solve it
+#: follows, or :data:`CHEAP_ESCALATION_S`: SDPLIB arch8 (174 variables, PSD 161 and a diagonal
+#: of 174) is solved by SDPA in 3 s, and Clarabel's cross re-solve (a dense KKT block of order
+#: 13041, estimate 2.2e12 against SDPA's 1.5e9 a step) held 9 GB for minutes
+AFFORDABLE_FACTOR = 4.0
+
+
+def _family_cost(problem: Problem, name: str) -> float | None:
+    """The per-iteration estimate of backend ``name`` in Clarabel's units (a Schur-complement
+    method's flops count :data:`SCHUR_PENALTY` times); ``None`` for a first-order or unknown
+    backend."""
+    inner = str(name).lower().split(":")[-1]
+    clarabel, schur = ipm_costs(problem)
+    if inner == "clarabel":
+        return clarabel
+    if inner == "sdpa":
+        return SCHUR_PENALTY * schur
+    if inner == "cvxopt":
+        structured = structured_ipm_cost(problem)
+        return STRUCTURED_PENALTY * structured if structured is not None else SCHUR_PENALTY * schur
+    return None
+
+
+def estimated_seconds(problem: Problem, done: str, done_s: float, other: str) -> float | None:
+    """Seconds a solve on ``other`` would take, scaled from ``done_s`` seconds on ``done`` by the
+    ratio of their per-iteration estimates (:func:`ipm_costs`); ``None`` when either backend has
+    no estimate (first-order, modelling layers other than their inner interior point).
+
+    >>> import numpy as np
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> p = lyapunov_problem(-np.eye(2))
+    >>> estimated_seconds(p, "clarabel", 1.0, "clarabel"), estimated_seconds(p, "scs", 1.0, "sdpa")
+    (1.0, None)
+    """
+    a, b = _family_cost(problem, done), _family_cost(problem, other)
+    if a is None or b is None or a <= 0:
+        return None
+    return float(done_s) * b / a
+
+
+def affordable(problem: Problem, done: str, done_s: float, other: str, left_s: float | None = None) -> bool:
+    """Whether a re-solve on ``other`` that only narrows a gap is worth starting after a solve of
+    ``done_s`` seconds on ``done``: its estimate (:func:`estimated_seconds`) is within
+    :data:`AFFORDABLE_FACTOR` times that solve or :data:`CHEAP_ESCALATION_S`, and twice it fits
+    in ``left_s`` seconds when given. Without an estimate only ``left_s`` decides (as before).
+
+    >>> import numpy as np
+    >>> from lmic.testing.conformance import lyapunov_problem
+    >>> affordable(lyapunov_problem(-np.eye(2)), "sdpa", 0.01, "clarabel")
+    True
+    """
+    est = estimated_seconds(problem, done, done_s, other)
+    if est is None:
+        return True
+    if est > max(AFFORDABLE_FACTOR * float(done_s), CHEAP_ESCALATION_S):
+        return False
+    return left_s is None or 2.0 * est <= left_s

@@ -19,7 +19,10 @@
    by the rigorous bound), and the record names the backends (``cross``). The answer's point,
    status and gains stay the chosen backend's.
 
-Every step runs only when the enclosure's budget has about twice the first solve's time left.
+Every step runs only when the enclosure's budget has about twice the first solve's time left,
+and a cross re-solve only on a backend whose estimated time is affordable
+(:func:`lmic.route_rule.affordable`: not Clarabel's dense KKT of order 13041 after SDPA's 3 s
+on SDPLIB arch8).
 
 Examples
 --------
@@ -37,6 +40,7 @@ import numpy as np
 
 from lmic.ir.problem import Problem
 from lmic.route_escalation import seconds_left
+from lmic.route_rule import affordable
 
 __all__ = ["TIGHT_TOLS", "CROSS_BACKENDS", "tighten"]
 
@@ -115,6 +119,9 @@ def tighten(
     for other in _cross_candidates(label):
         if not fits():
             break
+        left = None if deadline is None else seconds_left(deadline)
+        if not affordable(problem, label, solve_s, other, left):
+            continue  # its estimated time is far beyond the solve it would narrow (route_rule)
         # at the first tight tolerance (a dual near the optimum is what the proof needs); the
         # user's solver-specific settings (``extra``) are not the other backend's
         cross = replace(_tight(base, min(base.tol, TIGHT_TOLS[0])), extra={})

@@ -52,6 +52,7 @@ from lmic.route_rule import (
     GAP_ESCALATION_FACTOR,
     GAP_ESCALATION_FLOOR_S,
     MAX_GAP_ESCALATIONS,
+    affordable,
     gap_escalates,
     ray_proof_s,
 )
@@ -304,6 +305,12 @@ def enclosure_of(
     return enc, spent
 
 
+def _narrowing(problem: Problem, done: str, done_s: float, rest: list[str]) -> list[str]:
+    """The backends of ``rest`` that may narrow a certified answer's gap: interior points whose
+    estimated time is affordable after ``done_s`` seconds on ``done`` (:func:`affordable`)."""
+    return [nm for nm in rest if method_of(nm) != "first-order" and affordable(problem, done, done_s, nm)]
+
+
 def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, exact: bool = False) -> RouteResult:
     """Decide ``problem`` on the route of the module docstring.
 
@@ -371,6 +378,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
         out = _unbounded_checked(
             problem, decide(problem, name, opts, exact=exact, budget_s=budget, ray_budget_s=rays), options
         )
+        step_s = time.perf_counter() - t_b  # this backend's solve, for the cost of the next
         if budget is not None and not out.decided and time.perf_counter() - t_b >= budget:
             cut.append(name)  # stopped by its budget: the next backend now; retried at the end
         attempts.extend(out.attempts)
@@ -410,7 +418,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
                 # within --gap but above GAP_TARGET, and cheap: one more interior point may close it
                 escalated += 1
                 step["escalate"] = "gap above 1e-6, cheap"
-                names = names[: k + 1] + [nm for nm in names[k + 1 :] if method_of(nm) != "first-order"]
+                names = names[: k + 1] + _narrowing(problem, name, step_s, names[k + 1 :])
                 continue
             if not first_order:
                 first_s = first_s or clock.elapsed()
@@ -421,7 +429,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
                 # or its dual is more accurate): the next one of the route, first-order ones skipped
                 escalated += 1
                 step["escalate"] = "gap not met"
-                names = names[: k + 1] + [nm for nm in names[k + 1 :] if method_of(nm) != "first-order"]
+                names = names[: k + 1] + _narrowing(problem, name, step_s, names[k + 1 :])
             continue  # a first-order point whose gap is too wide: polish
         if out.verdict in ("infeasible-certified", "unbounded-certified"):
             break

@@ -214,15 +214,18 @@ def test_centred_route_tries_a_larger_loss_when_the_weight_gave_up_too_much():
 
 
 def test_cross_re_solves_go_on_while_the_gap_misses_the_target():
-    """sampled_euler.thm2 at 12 states (seed 2) on SDPA: SDPA's tight re-solve stops at
-    ``pdFEAS`` (its dual objective 4.3e-5 below the optimum). Cross re-solves on the other
+    """sampled_euler.thm2 at 12 states (seed 8) on SDPA: SDPA's tight re-solves stop short (1e-9:
+    ``inaccurate`` at a relative gap of 1.5e-4; 1e-10: error). Cross re-solves on the other
     interior points, whose points and duals lmic proves like any other, narrow it: Clarabel's to
-    1.2e-6 only, CVXOPT's, next, to 1.4e-8; the record names them, and the answer stays SDPA's.
+    3.9e-6 (AVX-512 OpenBLAS kernels) or 8.6e-6 (Haswell kernels) only, CVXOPT's, next, to
+    3.9e-8 or 9.3e-9; the record names them, and the answer stays SDPA's. Seed 2 was the
+    instance before: its Clarabel re-solve ends at 1.1e-6 with Haswell kernels and 7.0e-7 with
+    AVX-512 ones, at the edge of the 1e-6 target, so CVXOPT's ran on one machine only.
     (uir.thm4_1 at 12 states, seed 2, on SDPA needs Clarabel's alone: 1.3e-5 to below 1e-6.)"""
-    r, value, tol = _solved_with_reference("sampled_euler.thm2", 2, 12, "sdpa")
+    r, value, tol = _solved_with_reference("sampled_euler.thm2", 8, 12, "sdpa")
     enc = _enclosure_checked(r, value, tol)
     assert enc["lower"] is not None and enc["rel_gap"] <= GAP, enc["reason"]
-    assert enc["cross"]["backends"] == ["clarabel", "cvxopt"] and enc["cross"]["rel_gap_before"] > 1e-5
+    assert enc["cross"]["backends"] == ["clarabel", "cvxopt"] and enc["cross"]["rel_gap_before"] > 1e-4
     assert "by re-solves on clarabel, cvxopt" in enc["reason"]
     assert r.backend == "sdpa"
 
