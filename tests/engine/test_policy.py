@@ -35,3 +35,39 @@ def test_failed_optimisation_solve_is_rescaled_at_the_feasibility_point(monkeypa
     # the tolerance (the enclosure's restored point is what lmic.api.solve certifies)
     assert out.verdict == "rejected" and "not positive semidefinite at the solver's point" in out.reason
     assert certify(problem, out.solution).verdict == "rejected"
+
+
+@pytest.mark.parametrize(("status", "verdict"), [("inaccurate", "undecided"), ("optimal", "certified")])
+def test_an_exact_rescue_keeps_the_solvers_word_on_optimality(monkeypatch, status, verdict) -> None:
+    """``min t`` s.t. ``t - 1 > 0``: a point ``t = 1 + 2^-46`` holds with a margin below the float
+    certifier's threshold, so it is rejected, and the exact rescue proves it (``t - 1 > 0`` in
+    rational arithmetic, checked here with ``Fraction``). That makes the point hold; it is the
+    optimum only as far as the solver says: an ``inaccurate`` solve's point stays ``undecided``
+    (uio_dt.thm4_1 got ``certified`` at a point 2.4e-3 above its infimum), an ``optimal`` one is
+    ``certified``."""
+    from fractions import Fraction
+
+    import scipy.sparse as sp
+
+    import lmic.policy as policy
+    from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+
+    problem = Problem(
+        [Variable("t", "scalar", (1, 1))],
+        [LMI("t - 1 > 0", 1, sp.csc_matrix([[-1.0, 1.0]]))],
+        LinearConstraints.empty(1),
+        Objective("min", [0.0, 1.0]),
+    )
+    t = 1.0 + 2.0**-46
+    assert Fraction(t) - 1 > 0  # the truth: the point holds
+
+    def answer(be, target, options, scales, judge):
+        return Solution(status, x=np.array([t]), objective=t, backend="clarabel")
+
+    monkeypatch.setattr(policy, "_solve_one", answer)
+    assert certify(problem, Solution(status, x=np.array([t]), objective=t)).verdict == "rejected"
+    out = policy.decide(problem, "clarabel")
+    rescue = [a for a in out.attempts if a.reduction == "exact rescue"]
+    assert rescue and rescue[0].verdict == verdict
+    assert out.verdict == verdict and out.certificate.verdict == "certified"
+    assert out.solution.x.tolist() == [t]
