@@ -136,10 +136,15 @@ def dual_bound(
     def spent(solves: bool = False) -> bool:
         return time.process_time() - c0 + last[0] + (solve_s if solves else 0.0) > budget_s
 
+    def prove_here(mats: list, y: np.ndarray, active: np.ndarray) -> dict[str, Any]:
+        return _prove_float(problem, J, ranges, q, mats, y, active)
+
     def attempt(route: str, eps_rel: float, mz: Any, yz: Any) -> dict[str, Any]:
         ta = time.process_time()
         try:
-            mats, y, active = _prepare(problem, J, ranges, q, mz, yz, eps_rel, top, deadline=t0 + budget_s)
+            mats, y, active = _prepare(
+                problem, J, ranges, q, mz, yz, eps_rel, top, deadline=t0 + budget_s, prove=prove_here
+            )
             res = _prove_float(problem, J, ranges, q, mats, y, active)
             if not res["proven"] and ("singular" in res["reason"] or "absorb" in res["reason"]):
                 mats, y, active = _prepare(
@@ -183,13 +188,20 @@ def dual_bound(
             # is predicted 1e-8 and proves from 1e-10), then refined below the smallest
             L0 = float(q[0] - (J[0] @ _pack(problem, mats0, y0))[0])
             k, best = jump, res
-            while k > 1 and not spent() and L0 - best["lower"] > REFINE_GAIN * max(1.0, abs(L0)):
+            # what the shift costs the bound: eps times the dual objective's weight on the
+            # identity, SHIFT_COST_SAFETY times over (the repair moves the point too: 5.6e-8
+            # lost from 1e-11 to 1e-10 on uncertain_dt.thm1 n = 8, against 4e-9 for the weight)
+            ge = np.array([kind == "ge" for kind in problem.linear.kinds], dtype=float)
+            eyes = [np.eye(lmi.dim) for lmi in problem.lmis]
+            per_shift = SHIFT_COST_SAFETY * top * abs(float((J[0] @ _pack(problem, eyes, ge))[0]))
+            worth = REFINE_GAIN * max(1.0, abs(L0))
+            while k > 1 and not spent() and L0 - best["lower"] > worth and SHIFTS[k] * per_shift > worth:
                 n_tried += 1
                 below = attempt("solver dual", SHIFTS[k - 1], mats0, y0)
                 if not below["proven"]:
                     break
                 k, best = k - 1, below
-            if L0 - best["lower"] <= REFINE_GAIN * max(1.0, abs(L0)) or spent():
+            if L0 - best["lower"] <= worth or SHIFTS[k] * per_shift <= worth or spent():
                 out = best  # a smaller shift could gain at most this: not worth two repairs
             else:
                 out = _refine(problem, J, ranges, q, mats0, y0, top, SHIFTS[k - 1], SHIFTS[k], best)
@@ -272,6 +284,10 @@ def dual_bound(
 #: without refining between it and the failing shift below it (each try is a repair; the gain
 #: is below the enclosure's relative gap target, 1e-6, by a factor 100)
 REFINE_GAIN = 1e-8
+
+#: the bound a smaller shift could gain is taken as this many times the shift's weight on the
+#: dual objective (:func:`dual_bound`'s walk down the ladder)
+SHIFT_COST_SAFETY = 30.0
 
 #: the predicted shift is this many times the PSD deficit of the first attempt (relative to
 #: the dual's scale): the repair at a larger floor lands near, not at, the floor

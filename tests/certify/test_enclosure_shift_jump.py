@@ -77,3 +77,67 @@ def test_needed_shift_reads_the_deficit_of_a_failed_attempt():
     assert ed.needed_shift({"proven": False, "psd_deficit": 1e-18}, top) is None  # the smallest covers it
     assert ed.needed_shift({"proven": False, "psd_deficit": 1e-3}, top) is None  # beyond the ladder
     assert ed.needed_shift({"proven": False, "reason": "singular"}, top) is None  # not a PSD failure
+
+
+def _far_dual(A: np.ndarray) -> tuple[Problem, np.ndarray, float]:
+    """``Z = 1000 v v' + 1e-3 (5 more directions)``: far from ``tr Z = 1``, so the damped repair
+    takes more than :data:`CHECK_AT`'s first steps."""
+    w, V = np.linalg.eigh(A)
+    Z = 1000.0 * np.outer(V[:, -1], V[:, -1]) + 1e-3 * V[:, :5] @ V[:, :5].T
+    return _largest_eigenvalue_problem(A), Z, float(w[-1])
+
+
+def test_the_repair_stops_at_the_first_check_where_the_proof_holds():
+    from lmic.certify.enclosure_float import _prove_float
+    from lmic.certify.enclosure_repair import CHECK_AT, _prepare
+
+    rng = np.random.default_rng(0)
+    A = rng.normal(size=(30, 30))
+    p, Z, truth = _far_dual(A + A.T)
+    mats0, y0 = ed._parse(p, {"lmis": [Z], "linear": []})
+    _, q = ed._target(p)
+    J, ranges = ed._jacobian(p)
+    top = ed._scale(p, mats0, y0)
+    calls: list[bool] = []
+
+    def prove(m, y, active):
+        res = _prove_float(p, J, ranges, q, m, y, active)
+        calls.append(bool(res["proven"]))
+        return res
+
+    early = _prove_float(p, J, ranges, q, *_prepare(p, J, ranges, q, mats0, y0, 1e-12, top, prove=prove))
+    full = _prove_float(p, J, ranges, q, *_prepare(p, J, ranges, q, mats0, y0, 1e-12, top))
+    # asked at CHECK_AT's steps until the proof held, then stopped
+    assert calls and calls[-1] is True and not any(calls[:-1]) and len(calls) < len(CHECK_AT)
+    assert early["proven"] and full["proven"]
+    assert early["lower"] <= truth and full["lower"] <= truth  # lower ends (numpy's lambda_max)
+    assert abs(early["lower"] - full["lower"]) <= 1e-9 * abs(truth)
+
+
+def test_a_hopeless_shift_stops_the_repair_at_the_second_check():
+    """A proof that fails by a PSD deficit above HOPELESS times the shift ends the steps."""
+    from lmic.certify.enclosure_repair import HOPELESS, _prepare
+
+    rng = np.random.default_rng(0)
+    A = rng.normal(size=(30, 30))
+    p, Z, _ = _far_dual(A + A.T)
+    mats0, y0 = ed._parse(p, {"lmis": [Z], "linear": []})
+    _, q = ed._target(p)
+    J, ranges = ed._jacobian(p)
+    top = ed._scale(p, mats0, y0)
+    calls: list[int] = []
+
+    def failing(m, y, active):
+        calls.append(1)
+        return {"proven": False, "psd_deficit": 2 * HOPELESS * 1e-12 * top}
+
+    stopped, _, _ = _prepare(p, J, ranges, q, mats0, y0, 1e-12, top, prove=failing)
+    assert len(calls) == 2  # the first check goes on, the second stops
+
+    def small(m, y, active):
+        return {"proven": False, "psd_deficit": 0.5 * HOPELESS * 1e-12 * top}
+
+    # a deficit the shift may still cover: the steps go on to the end, as without checks
+    went_on, _, _ = _prepare(p, J, ranges, q, mats0, y0, 1e-12, top, prove=small)
+    plain, _, _ = _prepare(p, J, ranges, q, mats0, y0, 1e-12, top)
+    assert np.array_equal(went_on[0], plain[0]) and not np.array_equal(stopped[0], plain[0])
