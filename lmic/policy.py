@@ -65,6 +65,7 @@ import numpy as np
 from lmic.errors import BackendError, LmicError
 from lmic.ir.problem import Problem
 from lmic.outcome import Attempt, Evidence, Outcome, evidence_of, rank, verdict_of
+from lmic.rescue import exact_rescue_point, rescue_rejected
 from lmic.route_rule import SCHUR_PENALTY, TINY_IPM_COST, ipm_costs, optimisation_chain
 from lmic.solution import Solution
 
@@ -232,32 +233,6 @@ def _proven_point(problem: Problem, sol: Solution, cert: Any) -> tuple[Solution,
     from lmic.certify import certified_solution
 
     return certified_solution(problem, sol, cert)
-
-
-def exact_rescue_point(problem: Problem, sol: Solution, cert: Any) -> Any | None:
-    """An exact proof at a point the float certificate rejected only for its tiny margins.
-
-    Returns the exact certificate when every LMI and row is proven exactly and every derived
-    quantity and check holds; ``None`` otherwise.
-
-    >>> from lmic.testing.conformance import lyapunov_problem
-    >>> p = lyapunov_problem(-np.eye(1))
-    >>> exact_rescue_point(p, Solution("optimal", x=np.array([1.0])), None) is None
-    True
-    """
-    if sol.x is None or getattr(cert, "verdict", None) != "rejected":
-        return None
-    if any(r.get("min_eig") is None or r["min_eig"] <= 0 for r in cert.lmis):
-        return None  # a negative eigenvalue in float: an exact proof will not help
-    if not all(c.get("ok") for c in cert.checks) or not all(d.get("ok") for d in cert.derived):
-        return None
-    if cert.objective is not None and not cert.objective.get("ok", True):
-        return None
-    try:
-        exact = _certify(problem, sol, True)
-    except LmicError:
-        return None
-    return exact if exact.exact and exact.exact.get("proven") and exact.verdict == "certified" else None
 
 
 def _prove_ray(problem: Problem, sol: Solution, cert: Any) -> bool:
@@ -523,42 +498,7 @@ def decide(
         best = min(run.holding, key=lambda o: sign * float(o.solution.objective or 0.0))
         best.reason = f"the solver stopped '{best.solution.status}'; its point holds: {best.reason}"
     if not best.decided and rescue and not exact:
-        for sol, cert, label in sorted(run.rejected, key=lambda r: -_rel_margin(r[1])):
-            t0 = time.perf_counter()
-            rescued = exact_rescue_point(problem, sol, cert)
-            if rescued is None:
-                continue
-            # the exact proof makes the point hold; for an optimisation problem it is the
-            # optimum only as far as the solver's status says (verdict_of): an 'inaccurate'
-            # solve's point is a proven end, undecided, which the enclosure may then decide
-            # (a point 2.4e-3 above the infimum of uio_dt.thm4_1 was called 'certified')
-            verdict = verdict_of(problem, sol, rescued)
-            run.attempts.append(
-                Attempt(
-                    label,
-                    "exact rescue",
-                    sol.status,
-                    str(sol.native_status or ""),
-                    verdict,
-                    time.perf_counter() - t0,
-                )
-            )
-            reason = rescued.reason
-            if verdict != "certified":
-                reason = f"the solver stopped '{sol.status}'; its point holds (exact proof): {reason}"
-                if best.verdict == "undecided" and getattr(best.certificate, "verdict", None) == "certified":
-                    sign = -1.0 if problem.objective.sense == "max" else 1.0
-                    if sign * float(best.solution.objective or 0.0) <= sign * float(sol.objective or 0.0):
-                        continue  # a point that already holds is at least as good
-            best = Outcome(
-                verdict,
-                evidence_of("certified", rescued),
-                reason,
-                solution=sol,
-                certificate=rescued,
-                backend=label,
-            )
-            break
+        best = rescue_rejected(problem, best, run.rejected, run.attempts, key=_rel_margin)
     best.attempts = run.attempts
     if best.solution is not None:
         best.solution.info["attempts"] = [a.to_dict() for a in run.attempts]

@@ -67,6 +67,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "lmic.outcome",
             "lmic.reductions.*",
             "lmic.policy",
+            "lmic.rescue",
             "lmic.routes",
             "lmic.route_rule",
             "lmic.route_unbounded",
