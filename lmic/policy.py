@@ -456,6 +456,13 @@ def decide(
             for a in sol.info.get("strict_attempts", []) or []:
                 tried_strict.add(str(a.get("strategy")))
             out = run.record(label, tag, sol, t0, infeasibility_only=tag == "feasibility")
+            for ray in sol.info.pop("unchosen_rays", []) if not out.decided else []:
+                # the reduction returned another attempt's answer (max-margin's, undecided): its
+                # fixed-margin ray may still be proved (obs_control.thm3_2's borderline example
+                # on SCS: rejected points, and a ray the exact proof makes global)
+                out = run.record(label, tag, ray, time.perf_counter())
+                if out.decided:
+                    break
             if sol.x is not None and len(sol.x) == problem.n:
                 last_x = sol.x
             if out.decided:

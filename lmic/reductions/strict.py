@@ -310,6 +310,11 @@ def solve(
     chosen.solve_s = sum(a.solve_s for a in attempts)
     if len(steps) > 1 or problem.objective.sense == "feasibility":
         chosen.info["strict_attempts"] = [_attempt_record(a) for a in attempts]
+    # a Farkas ray of an attempt not returned (fixed-margin's, when max-margin decided nothing):
+    # the caller's certifier may still prove it (lmic.policy: an exact proof of the ray)
+    rays = [a for a in attempts if a is not chosen and a.status == "infeasible" and a.farkas is not None]
+    if rays:
+        chosen.info["unchosen_rays"] = rays
     return chosen
 
 

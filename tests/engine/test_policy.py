@@ -71,3 +71,41 @@ def test_an_exact_rescue_keeps_the_solvers_word_on_optimality(monkeypatch, statu
     assert rescue and rescue[0].verdict == verdict
     assert out.verdict == verdict and out.certificate.verdict == "certified"
     assert out.solution.x.tolist() == [t]
+
+
+def test_a_ray_the_strict_reduction_did_not_return_is_still_proved(monkeypatch) -> None:
+    """``x >= 1`` and ``-x >= 0``: infeasible (closed form). The strict reduction returned its
+    max-margin answer (undecided, ``inaccurate``) and kept fixed-margin's Farkas ray aside
+    (``info["unchosen_rays"]``); the policy certifies that ray too: ``Z = (1, 1)`` gives
+    ``sum_i <F_i^(k), Z_i> = 1 - 1 = 0`` for ``x`` and ``-1 < 0`` for the constants."""
+    import scipy.sparse as sp
+
+    import lmic.policy as policy
+    from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
+
+    problem = Problem(
+        [Variable("x", "scalar", (1, 1))],
+        [
+            LMI("x - 1 >= 0", 1, sp.csc_matrix([[-1.0, 1.0]]), strict=False),
+            LMI("-x >= 0", 1, sp.csc_matrix([[0.0, -1.0]]), strict=False),
+        ],
+        LinearConstraints.empty(1),
+        Objective("feasibility", [0.0, 0.0]),
+    )
+    ray = Solution("infeasible", farkas={"lmis": [[[1.0]], [[1.0]]], "y": []}, strategy="fixed-margin")
+
+    def answer(be, target, options, scales, judge):
+        sol = Solution("inaccurate", x=np.array([0.5]), objective=0.0, strategy="max-margin", backend="clarabel")
+        sol.info["unchosen_rays"] = [ray]
+        return sol
+
+    monkeypatch.setattr(policy, "_solve_one", answer)
+    out = policy.decide(problem, "clarabel")
+    assert out.verdict == "infeasible-certified", out.reason
+    assert [a.reduction for a in out.attempts][:2] == ["default/max-margin", "default/fixed-margin"]
+
+    def without(be, target, options, scales, judge):
+        return Solution("inaccurate", x=np.array([0.5]), objective=0.0, strategy="max-margin", backend="clarabel")
+
+    monkeypatch.setattr(policy, "_solve_one", without)
+    assert policy.decide(problem, "clarabel").verdict != "infeasible-certified"  # nothing else proves it
