@@ -346,7 +346,8 @@ def _given(problem: Problem, x: Any, bound: float) -> tuple[np.ndarray, Any, Any
     >>> _given(None, None, 1.0) is None
     True
     """
-    from lmic.policy import exact_rescue_point
+    from lmic.certify import certified_solution
+    from lmic.rescue import exact_rescue_point
     from lmic.solution import Solution
 
     if x is None:
@@ -356,6 +357,8 @@ def _given(problem: Problem, x: Any, bound: float) -> tuple[np.ndarray, Any, Any
     xs, mine, cert = _certified(problem, given)
     if cert.verdict == "rejected":  # margins below the float threshold: the exact proof decides
         cert = exact_rescue_point(problem, mine, cert) or cert
+        mine, cert = certified_solution(problem, mine, cert)  # the point proved, if it moved
+        xs = np.asarray(mine.x, dtype=float)
     value = problem.objective.value(xs)
     if cert.verdict != "certified" or value is None or not s * float(value) <= s * bound:
         return None

@@ -127,3 +127,68 @@ def _psd_exact(M: list[list[Fraction]]) -> bool:
             for j in range(k + 1, n):
                 M[i][j] -= f * M[k][j]
     return True
+
+
+def _on_row_problem() -> Problem:
+    """``min x1`` s.t. ``x1 - 3 x2 = 0`` (a row) and ``x1 + x2 - 1 >= 0``: the minimum is 3/4."""
+    lin = LinearConstraints(sp.csr_matrix(np.array([[0.0, 1.0, -3.0]])), ["eq"], [False], ["x1 - 3 x2 = 0"])
+    return Problem(
+        [Variable("x1", "scalar", (1, 1), 0), Variable("x2", "scalar", (1, 1), 1)],
+        [LMI("x1 + x2 - 1 >= 0", 1, sp.csc_matrix([[-1.0, 1.0, 1.0]]), strict=False)],
+        lin,
+        Objective("min", [0.0, 1.0, 0.0]),
+    )
+
+
+def test_a_point_proved_at_its_projection_onto_the_rows_is_reported_at_that_projection(tmp_path):
+    """The solver's point misses the row by ~4e-9 and its objective is below 3/4; the proof holds
+    at its projection onto the row, a rational point no float represents. The point reported is
+    the nearest floats to it, proved again: on the row and above the minimum up to rounding
+    (checked with ``Fraction``), and the file audits (a reviewer found the solver's point
+    reported, ``certified (exact)``, 9e-9 off the row)."""
+    p = _on_row_problem()
+    x = np.array([0.7499999992837606, 0.25000000283553425])
+    assert Fraction(x[0]) < Fraction(3, 4)  # the solver's objective is below the minimum
+    sol = Solution("optimal", x=x, objective=float(x[0]))
+    cert = certify(p, sol)
+    assert cert.verdict == "certified" and not cert.exact["at_x"]
+    moved, cert2 = certified_solution(p, sol, cert)
+    assert moved is not sol and cert2.verdict == "certified"
+    X = [Fraction(v) for v in moved.x]
+    ulp = Fraction(2) ** -52
+    assert abs(X[0] - 3 * X[1]) <= 4 * ulp  # on the row up to rounding
+    assert X[0] >= Fraction(3, 4) - ulp and moved.objective == float(moved.x[0])
+    path = tmp_path / "row.json"
+    write_certificate(path, p, moved, cert2)
+    assert audit_certificate(path).ok
+
+
+def test_an_exact_rescue_reports_the_point_its_proof_holds_at(tmp_path):
+    """The rescue of a point rejected for its tiny margins (a constant block ``diag(1e6, 1e-7)``)
+    whose proof holds at a rounding on the row ``x1 = x2``, not at the solver's point (which
+    misses it by 2^-50): the rescued answer is that rounding, exactly on the row, and its file
+    audits (it used to report the solver's point, and the audit rejected the honest file)."""
+    from lmic.outcome import Outcome
+    from lmic.rescue import rescue_rejected
+
+    lin = LinearConstraints(sp.csr_matrix(np.array([[0.0, 1.0, -1.0]])), ["eq"], [False], ["x1 = x2"])
+    p = Problem(
+        [Variable("x1", "scalar", (1, 1), 0), Variable("x2", "scalar", (1, 1), 1)],
+        [
+            LMI("x1 - 1 >= 0", 1, sp.csc_matrix([[-1.0, 1.0, 0.0]]), strict=False),
+            LMI("M > 0", 2, sp.csc_matrix([[1e6, 0.0, 0.0], [0.0, 0.0, 0.0], [1e-7, 0.0, 0.0]])),
+        ],
+        lin,
+        Objective("min", [0.0, 1.0, 1.0]),
+    )
+    x = np.array([1.0 + 2.0**-30, 1.0 + 2.0**-30 + 2.0**-50])
+    sol = Solution("optimal", x=x, objective=float(x.sum()))
+    cert = certify(p, sol)
+    assert cert.verdict == "rejected"  # the constant block's margin is below the float threshold
+    out = rescue_rejected(p, Outcome("rejected"), [(sol, cert, "clarabel")], [], key=lambda c: 0.0)
+    assert out.verdict == "certified" and out.solution is not sol
+    X = [Fraction(v) for v in out.solution.x]
+    assert X[0] == X[1] and X[0] >= 1  # on the row, in the LMI: exactly
+    path = tmp_path / "rescued.json"
+    write_certificate(path, p, out.solution, out.certificate)
+    assert audit_certificate(path).ok
