@@ -67,7 +67,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["published_optima", "rounding_interval", "meets", "run_one", "exact_point_check", "main"]
+__all__ = ["published_optima", "rounding_interval", "meets", "run_one", "below", "exact_point_check", "main"]
 
 _CORRECTION = re.compile(
     r"optimal\s+objective\s+value\s+for\s+`([^`]+)`\s+was\s+found\s+to\s+be\s+`([^`]+)`", re.IGNORECASE
@@ -239,6 +239,22 @@ def _positive_definite(M: list[list[Any]]) -> bool:
                 for j in range(k + 1, n):
                     row_i[j] -= f * row_k[j]
     return True
+
+
+def below(objective: Any, a: float) -> bool:
+    """Whether the exact rational ``objective`` (python-flint ``fmpq``) is below the float ``a``,
+    compared exactly.
+
+    >>> from flint import fmpq
+    >>> below(fmpq(1, 3), 0.3333333333333333), below(fmpq(1, 3), 0.33333333333333337)
+    (False, True)
+    """
+    from fractions import Fraction
+
+    from flint import fmpq
+
+    f = Fraction(a)
+    return bool(objective < fmpq(f.numerator, f.denominator))
 
 
 def exact_point_check(path: Path, x: list[float]) -> tuple[Any, bool]:
@@ -457,7 +473,7 @@ def main(argv: list[str] | None = None) -> int:
             x = ((row.pop("_out").get("variables") or {}).get("x")) if a > row["upper"] else None
             if x is not None:
                 objective, feasible = exact_point_check(path, [float(v) for v in np.ravel(x)])
-                row["refuted"] = bool(feasible and objective < a)
+                row["refuted"] = bool(feasible and below(objective, a))
                 verdict = "refuted" if row["refuted"] else "not refuted"
                 print(
                     f"    published value {verdict}: lmic's point, checked here in exact arithmetic, is "

@@ -72,3 +72,12 @@ def test_exact_point_check_reads_every_block_exactly(tmp_path):
     assert bench.exact_point_check(path, [2.0, 0.9])[1] is False
     # x = (1, 5): the diagonal block x1 - 1 = 0 is not positive
     assert bench.exact_point_check(path, [1.0, 5.0])[1] is False
+
+
+def test_below_compares_an_exact_objective_with_a_float_exactly():
+    """``fmpq < float`` is not defined in python-flint (the refutation check raised TypeError)."""
+    from flint import fmpq
+
+    third = 0.3333333333333333  # the float just below 1/3
+    assert bench.below(fmpq(1, 3), third) is False and bench.below(fmpq(1, 3), 0.33333333333333337) is True
+    assert bench.below(fmpq(362487, 1000), 362.5) is True
