@@ -458,6 +458,12 @@ def certified_solution(problem: Problem, solution: Solution, cert: Certificate) 
     moved = dataclasses.replace(solution, x=xq, objective=problem.objective.value(xq))
     again = certify(problem, moved, exact=True, tol=cert.tolerances)
     if again.verdict != "certified":
+        # said as it is: the proof is of x_q, the numbers reported are the solver's point's
+        dist = float(np.max(np.abs(xq - old), initial=0.0))
+        cert.reason += (
+            f"; the variables and objective reported are the solver's point, within {dist:.3g} of "
+            "the proven rational point x_q (exact.point)"
+        )
         return solution, cert
     if representable:
         again.reason += "; the point returned is x_q, the rounding of the solver's point the proof holds at"
