@@ -441,10 +441,9 @@ def enclose(
     pt.solve_s += solve_s  # the convex problem's solve
     what = "supremum" if is_max else "infimum"
     tol = max(xtol, rtol * abs(value))
-    # the other end: for a scale-free theorem (its Farkas rays are global proofs) one
-    # infeasibility proof just beyond the certified value, within the tolerance; the proven
-    # dual bound of the convex problem (first for other theorems: their rays are bounded and
-    # the exact upgrade costs seconds); last the full policy there
+    # the other end: for a scale-free theorem one infeasibility proof just beyond the certified
+    # value, within the tolerance (global when its ray is proved exactly); the proven dual bound
+    # of the convex problem (first for other theorems: the exact upgrade costs seconds); last the policy
     other, kind, enc = None, "none", None
     beyond = value + sign * PROOF_FRACTION * tol
     if beyond == value:  # a tolerance below the float spacing: the next float beyond
@@ -575,9 +574,9 @@ def _dual_end(
 
 def _certify_at(ev: Evaluator, value: float, x: np.ndarray) -> PointResult | None:
     """The theorem bound at ``value`` and certified at ``x`` (else decided afresh there)."""
-    from lmic.certify import certify
+    from lmic.certify import certified_solution, certify
     from lmic.compile import bind
-    from lmic.policy import exact_rescue_point
+    from lmic.rescue import exact_rescue_point
     from lmic.studies.sweep.points import scalar_derived
 
     problem = bind(ev.plan, ev.sysobj, {**ev.overrides, ev.param: value})
@@ -589,8 +588,9 @@ def _certify_at(ev: Evaluator, value: float, x: np.ndarray) -> PointResult | Non
     if cert.verdict != "certified" and ev.exact:
         cert, proof = exact_rescue_point(judge, sol, cert), "certified (exact)"
     if cert is not None and cert.verdict == "certified":
+        sol, cert = certified_solution(judge, sol, cert)  # the point proved, if it moved
         pt = PointResult(value=value, outcome="feasible", proof=proof, status="optimal", verdict="certified")
-        pt.x, pt.problem, pt.certificate, pt.solution = x, problem, cert, sol
+        pt.x, pt.problem, pt.certificate, pt.solution = np.asarray(sol.x, dtype=float), problem, cert, sol
         pt.certify_s = time.perf_counter() - t0
         pt.derived = scalar_derived(cert)
         pt.attempts = ["enclosure point: " + proof]

@@ -68,8 +68,8 @@ def certified_end(
     >>> certified_end(pt).verdict
     'certified'
     """
-    from lmic.certify import certify
-    from lmic.policy import exact_rescue_point
+    from lmic.certify import certified_solution, certify
+    from lmic.rescue import exact_rescue_point
 
     problem = point.problem
     if point.outcome != "feasible" or problem is None or point.x is None:
@@ -90,7 +90,8 @@ def certified_end(
         if rec.get("verdict") == "certified" and rec.get("x") is not None:
             xb = np.asarray(rec["x"], dtype=float)
             sol = Solution(status=rec["status"], x=xb, objective=problem.objective.value(xb), backend=str(be))
-            cert = certify(problem, sol)
+            sol, cert = certified_solution(problem, sol, certify(problem, sol))  # the point proved
+            xb = np.asarray(sol.x, dtype=float)
             if cert.verdict == "certified":
                 return EndPoint(
                     value=point.value,
@@ -116,6 +117,9 @@ def certified_end(
         proof = "certified (exact)"
     if end_cert is None or end_cert.verdict != "certified":
         return None
+    # the point reported and written (lmic audit re-proves it) is the point proved
+    sol, end_cert = certified_solution(problem, sol, end_cert)
+    x = np.asarray(sol.x, dtype=float)
     return EndPoint(
         value=point.value,
         source="bisection point",
