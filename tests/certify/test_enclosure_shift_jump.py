@@ -79,25 +79,28 @@ def test_needed_shift_reads_the_deficit_of_a_failed_attempt():
     assert ed.needed_shift({"proven": False, "reason": "singular"}, top) is None  # not a PSD failure
 
 
-def _far_dual(A: np.ndarray) -> tuple[Problem, np.ndarray, float]:
-    """``Z = 1000 v v' + 1e-3 (5 more directions)``: far from ``tr Z = 1``, so the damped repair
-    takes more than :data:`CHECK_AT`'s first steps."""
+def _far_dual() -> tuple[Problem, float, tuple]:
+    """A random symmetric ``A`` (30 x 30, seed 0) and ``Z = 1000 v v' + 1e-3 (5 more
+    directions)``: far from ``tr Z = 1``, so the damped repair takes more than
+    :data:`CHECK_AT`'s first steps. Returns the problem, ``lambda_max(A)`` and the repair's
+    inputs ``(J, ranges, q, mats0, y0, top)``."""
+    rng = np.random.default_rng(0)
+    A = rng.normal(size=(30, 30))
+    A = A + A.T
     w, V = np.linalg.eigh(A)
     Z = 1000.0 * np.outer(V[:, -1], V[:, -1]) + 1e-3 * V[:, :5] @ V[:, :5].T
-    return _largest_eigenvalue_problem(A), Z, float(w[-1])
+    p = _largest_eigenvalue_problem(A)
+    mats0, y0 = ed._parse(p, {"lmis": [Z], "linear": []})
+    _, q = ed._target(p)
+    J, ranges = ed._jacobian(p)
+    return p, float(w[-1]), (J, ranges, q, mats0, y0, ed._scale(p, mats0, y0))
 
 
 def test_the_repair_stops_at_the_first_check_where_the_proof_holds():
     from lmic.certify.enclosure_float import _prove_float
     from lmic.certify.enclosure_repair import CHECK_AT, _prepare
 
-    rng = np.random.default_rng(0)
-    A = rng.normal(size=(30, 30))
-    p, Z, truth = _far_dual(A + A.T)
-    mats0, y0 = ed._parse(p, {"lmis": [Z], "linear": []})
-    _, q = ed._target(p)
-    J, ranges = ed._jacobian(p)
-    top = ed._scale(p, mats0, y0)
+    p, truth, (J, ranges, q, mats0, y0, top) = _far_dual()
     calls: list[bool] = []
 
     def prove(m, y, active):
@@ -118,13 +121,7 @@ def test_a_hopeless_shift_stops_the_repair_at_the_second_check():
     """A proof that fails by a PSD deficit above HOPELESS times the shift ends the steps."""
     from lmic.certify.enclosure_repair import HOPELESS, _prepare
 
-    rng = np.random.default_rng(0)
-    A = rng.normal(size=(30, 30))
-    p, Z, _ = _far_dual(A + A.T)
-    mats0, y0 = ed._parse(p, {"lmis": [Z], "linear": []})
-    _, q = ed._target(p)
-    J, ranges = ed._jacobian(p)
-    top = ed._scale(p, mats0, y0)
+    p, _, (J, ranges, q, mats0, y0, top) = _far_dual()
     calls: list[int] = []
 
     def failing(m, y, active):
