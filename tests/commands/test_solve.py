@@ -12,6 +12,8 @@ from lmic.ir.io import save_problem
 from lmic.testing.conformance import CASES
 
 SDPLIB = Path(__file__).resolve().parents[3] / "shared" / "sdplib"
+if not SDPLIB.is_dir():  # a checkout without shared/ beside it: the workplace copy, as elsewhere
+    SDPLIB = Path("/work/shared/sdplib")
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 QIB = EXAMPLES / "qib.thm1.flexible-joint.yaml"
 

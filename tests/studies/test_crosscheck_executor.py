@@ -14,6 +14,7 @@ import json
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 from study_helpers import REPO, decision, env, lyapunov_truth
@@ -24,6 +25,8 @@ from lmic.reproduce import load_expectations
 from lmic.studies.parallel import crosscheck_parallel
 
 SDPLIB = REPO.parent / "shared" / "sdplib"
+if not SDPLIB.is_dir():  # a checkout without shared/ beside it: the workplace copy, as elsewhere
+    SDPLIB = Path("/work/shared/sdplib")
 CONTROL1 = SDPLIB / "control1.dat-s"
 THM1 = REPO / "examples" / "qib.thm1.flexible-joint.yaml"
 
