@@ -456,7 +456,8 @@ def decide(
             for a in sol.info.get("strict_attempts", []) or []:
                 tried_strict.add(str(a.get("strategy")))
             out = run.record(label, tag, sol, t0, infeasibility_only=tag == "feasibility")
-            for ray in sol.info.pop("unchosen_rays", []) if not out.decided else []:
+            rays = sol.info.pop("unchosen_rays", [])  # never kept on the answer
+            for ray in rays if not out.decided else []:
                 # the reduction returned another attempt's answer (max-margin's, undecided): its
                 # fixed-margin ray may still be proved (obs_control.thm3_2's borderline example
                 # on SCS: rejected points, and a ray the exact proof makes global)

@@ -379,7 +379,7 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
             problem, decide(problem, name, opts, exact=exact, budget_s=budget, ray_budget_s=rays), options
         )
         step_s = time.perf_counter() - t_b  # this backend's solve, for the cost of the next
-        if budget is not None and not out.decided and time.perf_counter() - t_b >= budget:
+        if budget is not None and not out.decided and step_s >= budget:
             cut.append(name)  # stopped by its budget: the next backend now; retried at the end
         attempts.extend(out.attempts)
         ray_search_s += out.ray_search_s  # each backend's search for a ray it said exists

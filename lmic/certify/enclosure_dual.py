@@ -136,7 +136,18 @@ def dual_bound(
     def spent(solves: bool = False) -> bool:
         return time.process_time() - c0 + last[0] + (solve_s if solves else 0.0) > budget_s
 
+    last_proof: list[Any] = []  # (mats, y, record): the repair's last proof, kept with its point
+
     def prove_here(mats: list, y: np.ndarray, active: np.ndarray) -> dict[str, Any]:
+        res = _prove_float(problem, J, ranges, q, mats, y, active)
+        last_proof[:] = [mats, y, res]
+        return res
+
+    def proof_of(mats: list, y: np.ndarray, active: np.ndarray) -> dict[str, Any]:
+        """The proof of the point the repair returned: its own when it stopped at a proof of
+        these very arrays, else a new one."""
+        if last_proof and last_proof[0] is mats and last_proof[1] is y:
+            return last_proof[2]
         return _prove_float(problem, J, ranges, q, mats, y, active)
 
     def attempt(route: str, eps_rel: float, mz: Any, yz: Any) -> dict[str, Any]:
@@ -145,7 +156,8 @@ def dual_bound(
             mats, y, active = _prepare(
                 problem, J, ranges, q, mz, yz, eps_rel, top, deadline=t0 + budget_s, prove=prove_here
             )
-            res = _prove_float(problem, J, ranges, q, mats, y, active)
+            res = proof_of(mats, y, active)
+            last_proof.clear()
             if not res["proven"] and ("singular" in res["reason"] or "absorb" in res["reason"]):
                 mats, y, active = _prepare(
                     problem, J, ranges, q, mz, yz, eps_rel, top, drop=False, deadline=t0 + budget_s

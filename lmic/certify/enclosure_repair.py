@@ -418,13 +418,14 @@ def _prepare(
     proj = [Z + eps * np.eye(Z.shape[0]) if on else np.zeros_like(Z) for Z, on in zip(proj, keep, strict=True)]
     y = np.where(ge & rows_on, y + eps, np.where(ge, 0.0, y))
     proj = [0.5 * (Z + Z.T) for Z in proj]
-    check = None
+    check, proved = None, []
     if prove is not None:
 
         def check(m: list, yy: np.ndarray, done: int) -> bool:
             m2, y2 = _least_norm(problem, J, ranges, q, m, yy, active, objective=objective)
             res = prove(m2, y2, active)
             if res.get("proven"):
+                proved.append((m2, y2))  # the steps stop here: this is the point returned
                 return True
             deficit = res.get("psd_deficit")
             return done > CHECK_AT[0] and deficit is not None and deficit > HOPELESS * eps
@@ -432,6 +433,8 @@ def _prepare(
     mats, y = _repair(
         problem, J, ranges, q, proj, y, floor=0.5 * eps, objective=objective, deadline=deadline, check=check
     )
+    if proved:
+        return proved[0][0], proved[0][1], active
     mats, y = _least_norm(problem, J, ranges, q, mats, y, active, objective=objective)
     return mats, y, active
 
