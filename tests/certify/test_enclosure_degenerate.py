@@ -261,3 +261,36 @@ def test_sdplib_hinf1_dual_has_no_interior_so_no_lower_end():
     c, _ = centring_problem(p, J, ranges, q, np.ones(J.shape[1], bool), L0 - 100 * abs(L0), 1e3 * _scale(p, mats, y))
     t = lmic.api.solve(c, backend="clarabel").solution.x[-1]
     assert t < 1e-8
+
+
+def test_strict_polish_stops_at_the_first_solve_that_meets_the_gap_target(tmp_path):
+    """The strict polish solves the closed problem first and the strict one only when the
+    closed problem's end does not yet meet GAP_TARGET against the proven dual end: on the
+    delay_b example one solve, and the same ends as with both solves."""
+    from lmic.certify import enclosure as enc_mod
+    from lmic.policy import _instance
+    from lmic.reductions.pipeline import solve as engine_solve
+
+    r = lmic.api.solve("delay_b.thm4_1", str(EXAMPLES / "delay_b.thm4_1.ex1_lambda0_5.yaml"), backend="sdpa", backoff=0)
+    problem, sol = r.problem, r.solution
+    calls = []
+
+    def solve_point(p):
+        calls.append(p)
+        out = engine_solve(_instance("sdpa"), p, None)
+        return out.x if out.status in ("optimal", "inaccurate") else None
+
+    e = enc_mod.enclosure(problem, sol.duals, sol.x, solve_point=solve_point)
+    assert e["dual"]["proven"] and e["primal"] == "restored point" and e["polish"]["from"] == "closed problem"
+    assert len(calls) == 1 and not any(lmi.strict for lmi in calls[0].lmis)
+    assert e["rel_gap"] <= enc_mod.GAP_TARGET
+    # both solves when the first end is not good enough; the closed problem's end is kept,
+    # as it is the better one here
+    calls.clear()
+    both = enc_mod._polish_strict(problem, np.asarray(sol.x), solve_point, lambda v: False)
+    assert len(calls) == 2 and any(lmi.strict for lmi in calls[1].lmis)
+    assert both["proven"] and both["value"] == e["upper"]
+    # the restored point of the one-solve polish is re-proved by the audit
+    path = tmp_path / "c.json"
+    write_certificate(path, problem, sol, r.certificate, enclosure=e)
+    assert audit_certificate(path).ok
