@@ -310,7 +310,7 @@ def obvious_face(problem: Problem) -> str | None:
     A = sp.csc_matrix(lin.A) if len(lin) else None
     ge = np.array([k == "ge" for k in lin.kinds], dtype=bool)
     cols = [sp.csc_matrix(lmi.coeffs) for lmi in problem.lmis]
-    for k in np.flatnonzero(q[1:] == 0.0):
+    for k in _semidefinite_candidates(problem, cols, np.flatnonzero(q[1:] == 0.0)):
         signs: set[int] = set()
         if A is not None:
             a = A[:, 1 + k].toarray().ravel()
@@ -345,6 +345,41 @@ def obvious_face(problem: Problem) -> str | None:
             if nonzero and len(signs) == 1:
                 return f"variable {k + 1}: a semidefinite coefficient of cost 0"
     return None
+
+
+def _semidefinite_candidates(problem: Problem, cols: list[sp.csc_matrix], ks: np.ndarray) -> np.ndarray:
+    """The variables of ``ks`` that pass :func:`obvious_face`'s sign tests in one vectorised
+    pass: a variable whose non-zero diagonal coefficients have both signs, or with an
+    off-diagonal coefficient next to a zero diagonal one (a negative 2 x 2 minor), is out.
+    Only variables the per-variable test would reject are dropped (bounded-real lemma, 40
+    states: 821 variables, 0.14 s of that loop before, none a candidate).
+
+    >>> import scipy.sparse as sp
+    >>> from lmic.ir.problem import LMI, LinearConstraints, Objective, Variable
+    >>> C = sp.csc_matrix([[0.0, 1.0, 0.0], [1.0, 1.0, 1.0], [0.0, 1.0, 0.0]])
+    >>> p = Problem([Variable("x", "full", (2, 1))], [LMI("M", 2, C, strict=False)],
+    ...             LinearConstraints.empty(2), Objective("min", [0.0, 0.0, 0.0]))
+    >>> _semidefinite_candidates(p, [C], np.array([0, 1])).tolist()   # x2: an off-diagonal alone
+    [0]
+    """
+    n = problem.n
+    pos = np.zeros(n, dtype=bool)
+    neg = np.zeros(n, dtype=bool)
+    bad = np.zeros(n, dtype=bool)
+    for lmi, C in zip(problem.lmis, cols, strict=True):
+        body = sp.coo_matrix(C[:, 1:])
+        keep = body.data != 0.0
+        r, k, v = body.row[keep], body.col[keep], body.data[keep]
+        i, j = tril_rows_cols(lmi.dim)
+        on = i[r] == j[r]
+        pos[k[on & (v > 0)]] = True
+        neg[k[on & (v < 0)]] = True
+        diag_keys = np.unique(k[on].astype(np.int64) * lmi.dim + i[r[on]])
+        off_k = k[~on].astype(np.int64)
+        for end in (i[r[~on]], j[r[~on]]):
+            bad[off_k[~np.isin(off_k * lmi.dim + end, diag_keys)]] = True
+    out = (pos & neg) | bad
+    return np.asarray(ks)[~out[np.asarray(ks, dtype=np.int64)]] if len(ks) else np.asarray(ks)
 
 
 def facial_or(
