@@ -30,7 +30,7 @@ from lmic.template.checks import (
     schur_stable,
 )
 from lmic.template.theorem import Theorem, theorem
-from lmic.template.totree import lambda_max, lambda_min, norm2, pinv, spectral_radius
+from lmic.template.totree import lambda_max, lambda_min, norm2, pinv, spectral_radius, trace
 
 __all__ = [
     "STAR",
@@ -56,4 +56,5 @@ __all__ = [
     "norm2",
     "pinv",
     "spectral_radius",
+    "trace",
 ]

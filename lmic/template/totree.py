@@ -32,13 +32,37 @@ from lmic.errors import TemplateError
 from lmic.template.blocks import STAR, Block
 from lmic.template.convert import as_expr
 
-__all__ = ["to_tree", "FUNCTIONS", "lambda_max", "lambda_min", "spectral_radius", "norm2"]
+__all__ = ["to_tree", "FUNCTIONS", "lambda_max", "lambda_min", "spectral_radius", "norm2", "trace"]
 
 lambda_max = sympy.Function("lambda_max")
 lambda_min = sympy.Function("lambda_min")
 spectral_radius = sympy.Function("spectral_radius")
 norm2 = sympy.Function("norm2")
 pinv = sympy.Function("pinv")
+
+
+def trace(M: Any) -> Any:
+    """The trace of a square matrix expression: a scalar, linear in the decision variables
+    when ``M`` is (``t.minimize(trace(Z))``, ``trace(C * P * C.T)``).
+
+    >>> import sympy
+    >>> n, q = sympy.symbols("n q")
+    >>> Z = sympy.MatrixSymbol("Z", q, q)
+    >>> trace(Z + Z)
+    2*Trace(Z)
+    >>> trace(sympy.MatrixSymbol("Y", q, n))
+    Traceback (most recent call last):
+    ...
+    lmic.errors.TemplateError: trace of a matrix that is not square: Y is q x n
+    """
+    e = as_expr(M)
+    shape = getattr(e, "shape", None)
+    if shape is None or not getattr(e, "is_Matrix", False) and not isinstance(e, sympy.MatrixExpr):
+        raise TemplateError(f"trace of '{e}', which is not a matrix")
+    if sympy.simplify(shape[0] - shape[1]) != 0:
+        raise TemplateError(f"trace of a matrix that is not square: {e} is {shape[0]} x {shape[1]}")
+    return sympy.trace(e)
+
 
 #: sympy function name -> expression-tree operator
 FUNCTIONS = {

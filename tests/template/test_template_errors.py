@@ -249,3 +249,30 @@ def test_matrix_relations_in_a_scalar_constraint_name_the_fix():
 
     with pytest.raises(TemplateError, match=r"write 'M - N <= 0' instead of 'M <= N', declared with t.lmi"):
         analyse(_thm(compared))
+
+
+def test_a_method_trace_points_at_the_trace_function():
+    def build(t):
+        (n,) = t.dims("n")
+        Z = t.symmetric("Z", n)
+        t.lmi("Z", Z > 0)
+        t.minimize(Z.trace())  # sympy's matrix symbols have no .trace(): a newcomer's first guess
+
+    with pytest.raises(
+        TemplateError, match=r"no attribute 'trace' \(write trace\(Z\), with trace from lmic.template\)"
+    ):
+        analyse(_thm(build))
+
+
+def test_the_trace_of_a_matrix_that_is_not_square_is_rejected_where_it_is_written():
+    from lmic.template import trace
+
+    def build(t):
+        n, q = t.dims("n q")
+        C = t.data("C", q, n)
+        P = t.symmetric("P", n)
+        t.lmi("P", P > 0)
+        t.minimize(trace(C * P))
+
+    with pytest.raises(TemplateError, match=r"trace of a matrix that is not square: C\*P is q x n"):
+        analyse(_thm(build))

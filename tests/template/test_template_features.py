@@ -120,3 +120,23 @@ def test_a_sign_typo_names_the_theorem_and_the_signs_there_are():
     with pytest.raises(TemplateError) as info:
         typo.template({})
     assert str(info.value).startswith("theorem test.sign_typo: unknown sign 'postive' for variable 'g' (one of: free,")
+
+
+def test_trace_from_lmic_template_is_sympys_trace_and_a_linear_objective():
+    """``lmic.template.trace`` (what the docs tell a plugin author to use) compiles to the same
+    objective as ``sympy.Trace``: ``trace(C P C')`` checked against numpy at a random point."""
+    from lmic.template import trace
+
+    @theorem(id="test.trace", title="trace", citation="tests")
+    def traced(t):
+        n, q = t.dims("n q")
+        C = t.data("C", q, n)
+        P = t.symmetric("P", n)
+        t.lmi("P", P > 0)
+        t.minimize(trace(C * P * C.T) + 3 * trace(P))
+
+    C = np.arange(6.0).reshape(2, 3) - 2.5
+    prob = bind(analyse(traced), {"data": {"C": C.tolist()}})
+    x = np.random.default_rng(1).standard_normal(prob.n)
+    P = prob.unpack(x)["P"]
+    assert prob.objective.value(x) == pytest.approx(np.trace(C @ P @ C.T) + 3 * np.trace(P), rel=1e-12)
