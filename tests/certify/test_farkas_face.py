@@ -48,3 +48,68 @@ def test_rational_face_is_only_a_candidate():
     assert not r["proven"] and "no exact separation" in r["reason"]
     assert r["g0"] == pytest.approx((1.0 - 0.5**2) / 2, rel=1e-12)
     assert not prove_farkas(problem, ray)["proven"]
+
+
+def _triangle_basis(r: int) -> np.ndarray:
+    """``M``: ``svec`` coordinates (``triu_indices(r)``, each entry once) -> ``vec S``, built
+    entry by entry."""
+    ia, ib = np.triu_indices(r)
+    M = np.zeros((r * r, len(ia)))
+    for k, (a, b) in enumerate(zip(ia, ib, strict=True)):
+        E = np.zeros((r, r))
+        E[a, b] = E[b, a] = 1.0
+        M[:, k] = E.ravel()
+    return M
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_logdet_hessian_solve_is_the_inverse_of_the_formed_hessian(seed):
+    """The closed-form ``H^-1 X`` of the face centring against ``H = M' (S^-1 (x) S^-1) M``
+    formed and solved densely here (the Hessian of ``-log det S`` in the triangle's
+    coordinates), for a vector and for more columns than one chunk holds."""
+    from lmic.certify import farkas_face
+
+    rng = np.random.default_rng(seed)
+    r = int(rng.integers(1, 9))
+    B = rng.standard_normal((r, r))
+    S = B @ B.T + 0.1 * np.eye(r)
+    Si = np.linalg.inv(S)
+    M = _triangle_basis(r)
+    H = M.T @ np.kron(Si, Si) @ M
+    a, b = np.triu_indices(r)
+    x = rng.standard_normal(len(a))
+    np.testing.assert_allclose(
+        farkas_face.logdet_hessian_solve(S, a, b, x), np.linalg.solve(H, x), rtol=1e-8, atol=1e-10
+    )
+    cols = int(2e6 // (r * r)) + 3  # one chunk and a bit
+    X = rng.standard_normal((len(a), cols))
+    got = farkas_face.logdet_hessian_solve(S, a, b, X)
+    np.testing.assert_allclose(H @ got, X, rtol=1e-8, atol=1e-8 * np.abs(X).max())
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_face_jacobian_columns_are_the_inner_products_with_the_face_basis(seed):
+    """``d <F_k, U S U'> / d svec(S)`` against ``<F_k, U E U'>`` for every basis matrix ``E``
+    of the triangle, with ``F_k`` rebuilt from the stored lower triangle (off-diagonal entries
+    counted twice in the trace inner product)."""
+    import scipy.sparse as sp
+
+    from lmic.certify import farkas_face
+    from lmic.ir.svec import tril_rows_cols
+
+    rng = np.random.default_rng(seed)
+    d, n = int(rng.integers(1, 9)), int(rng.integers(1, 5))
+    r = int(rng.integers(1, d + 1))
+    i, j = tril_rows_cols(d)
+    C = rng.standard_normal((len(i), n + 1)) * (rng.random((len(i), n + 1)) < 0.6)
+    U = np.linalg.qr(rng.standard_normal((d, r)))[0]
+    M = _triangle_basis(r)
+    want = np.zeros((n + 1, M.shape[1]))
+    for k in range(n + 1):
+        F = np.zeros((d, d))
+        F[i, j] = C[:, k]
+        F[j, i] = C[:, k]
+        for col in range(M.shape[1]):
+            want[k, col] = np.trace(F @ U @ M[:, col].reshape(r, r) @ U.T)
+    got = farkas_face._congruence_columns(sp.csc_matrix(C), d, U)
+    np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-12)
