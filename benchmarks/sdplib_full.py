@@ -23,7 +23,13 @@ prints per problem:
   (python-flint, a symmetric elimination whose pivots must all be positive). When it holds, the
   published value is *refuted* (SDPLIB 1.2 prints ``hinf13`` as ``4.6e+01``; lmic's point has
   objective 44.4248, and ``gpp100``'s ``-4.49435e+01`` is truncated: a point at -44.9435504 is
-  feasible), printed as ``refuted`` and not counted as a miss.
+  feasible), printed as ``refuted`` and not counted as a miss;
+* where the published interval lies below the certified lower end of a max-cut relaxation
+  (SDPLIB mcp, maxG), an exactly feasible dual point found here by the mixing method
+  (:func:`maxcut_dual_bound`, rational arithmetic, no SDP solver) bounds every point from below:
+  when that bound is above the interval, the published value is *refuted* the same way
+  (``maxG51``: printed ``4.003809e+03``, every point has ``c'x >= 4006.2526``; lmic's
+  enclosure is ``[4006.254, 4006.2556]``).
 
 Problems run smallest file first. Usage::
 
@@ -241,6 +247,20 @@ def _positive_definite(M: list[list[Any]]) -> bool:
     return True
 
 
+def fmpq_of(a: float) -> Any:
+    """The float ``a`` as an exact python-flint rational.
+
+    >>> fmpq_of(0.75)
+    3/4
+    """
+    from fractions import Fraction
+
+    from flint import fmpq
+
+    f = Fraction(a)
+    return fmpq(f.numerator, f.denominator)
+
+
 def below(objective: Any, a: float) -> bool:
     """Whether the exact rational ``objective`` (python-flint ``fmpq``) is below the float ``a``,
     compared exactly.
@@ -298,6 +318,84 @@ def exact_point_check(path: Path, x: list[float]) -> tuple[Any, bool]:
         elif not _positive_definite(M):
             return objective, False
     return objective, True
+
+
+def maxcut_shape(c: Any, sizes: list[int], F: dict[tuple[int, int], dict[tuple[int, int], float]]) -> bool:
+    """Whether an SDPA problem is a max-cut relaxation: one block of order ``m``, ``c = 1`` and
+    ``F_i = e_i e_i'`` (SDPLIB mcp, maxG): its dual is ``max <F_0, Y>`` over correlation
+    matrices ``Y`` (``Y >= 0``, ``diag Y = 1``).
+
+    >>> import numpy as np
+    >>> maxcut_shape(np.ones(2), [2], {(0, 0): {(0, 1): 1.0}, (1, 0): {(0, 0): 1.0}, (2, 0): {(1, 1): 1.0}})
+    True
+    """
+    m = len(c)
+    if len(sizes) != 1 or sizes[0] != m or any(float(v) != 1.0 for v in c):
+        return False
+    return all(F.get((i + 1, 0)) == {(i, i): 1.0} for i in range(m)) and all(mat <= m for mat, _ in F)
+
+
+def maxcut_dual_bound(path: Path, rank: int = 60, sweeps: int = 300, seed: int = 0) -> Any:
+    """An exact lower bound of a max-cut relaxation's optimum (:func:`maxcut_shape`), independent
+    of lmic and of any SDP solver; ``None`` for another shape.
+
+    Rows ``v_i`` of unit norm (the mixing method: ``v_i`` <- the normalised ``sum_j F0_ij v_j``,
+    ``j != i``, in sweeps) are rounded to rationals and shrunk so that ``|v_i|^2 < 1``; then
+    ``Y = V V' + Diag(1 - |v_i|^2)`` is exactly positive semidefinite with ``diag Y = 1``, so
+    every primal point ``x`` has ``c'x = <Diag(x) - F_0, Y> + <F_0, Y> >= <F_0, Y>``, computed
+    here in rational arithmetic (python-flint).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> text = "2\\n1\\n2\\n1.0 1.0\\n0 1 1 2 1.0\\n1 1 1 1 1.0\\n2 1 2 2 1.0\\n"  # optimum 2
+    >>> with tempfile.NamedTemporaryFile("w", suffix=".dat-s", delete=False) as f:
+    ...     _ = f.write(text)
+    >>> 1.999999 < float(maxcut_dual_bound(Path(f.name), rank=2, sweeps=20)) <= 2.0
+    True
+    """
+    from fractions import Fraction
+
+    import numpy as np
+    from flint import fmpq
+
+    c, sizes, F = read_dats(path.read_text())
+    if not maxcut_shape(c, sizes, F):
+        return None
+    m = len(c)
+    F0 = F.get((0, 0), {})
+    nbr: list[list[tuple[int, float]]] = [[] for _ in range(m)]
+    for (i, j), v in F0.items():
+        if i != j:
+            nbr[i].append((j, v))
+            nbr[j].append((i, v))
+    idx = [np.array([j for j, _ in row], dtype=int) for row in nbr]
+    wts = [np.array([v for _, v in row]) for row in nbr]
+    V = np.random.default_rng(seed).standard_normal((m, rank))
+    V /= np.linalg.norm(V, axis=1, keepdims=True)
+    for _ in range(sweeps):
+        for i in range(m):
+            if len(idx[i]):
+                g = wts[i] @ V[idx[i]]
+                norm = float(np.linalg.norm(g))
+                if norm > 0:
+                    V[i] = g / norm
+    V *= 1.0 - 2.0**-40  # every |v_i|^2 below 1 after rounding
+
+    def q(v: float) -> Any:
+        f = Fraction(float(v))
+        return fmpq(f.numerator, f.denominator)
+
+    Vq = [[q(v) for v in row] for row in V]
+    if any(sum((a * a for a in row), fmpq(0)) >= 1 for row in Vq):
+        return None
+    total = fmpq(0)
+    for (i, j), v in F0.items():
+        if i == j:
+            total += q(v)  # Y_ii = 1 exactly
+        else:
+            total += 2 * q(v) * sum((a * b for a, b in zip(Vq[i], Vq[j], strict=True)), fmpq(0))
+    return total
 
 
 def cvxpy_clarabel(path: Path) -> dict[str, Any]:
@@ -471,6 +569,16 @@ def main(argv: list[str] | None = None) -> int:
             row["miss_rel"] = miss / max(1.0, abs(a))
             print(f"    published interval [{a:.10g}, {b:.10g}] misses the enclosure by {miss:.3g}", flush=True)
             x = ((row.pop("_out").get("variables") or {}).get("x")) if a > row["upper"] else None
+            low = maxcut_dual_bound(path) if b < row["lower"] else None
+            if low is not None:
+                # the published value below lmic's proven lower end: an independent dual point
+                row["refuted"] = bool(fmpq_of(b) < low)
+                verdict = "refuted" if row["refuted"] else "not refuted"
+                print(
+                    f"    published value {verdict}: an exactly feasible dual point (max-cut relaxation, "
+                    f"mixing method, checked here in rational arithmetic) gives every point c'x >= {float(low):.10g}",
+                    flush=True,
+                )
             if x is not None:
                 objective, feasible = exact_point_check(path, [float(v) for v in np.ravel(x)])
                 row["refuted"] = bool(feasible and below(objective, a))
