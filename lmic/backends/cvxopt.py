@@ -33,6 +33,7 @@ import scipy.sparse as sp
 from lmic.backends.backend import KKT_ORDER, Backend, in_turn
 from lmic.backends.lowering import LMIForm
 from lmic.backends.results import NativeResult
+from lmic.backends.threads import blas_threads
 from lmic.ir.problem import Problem
 from lmic.options import SolveOptions
 from lmic.solution import Solution
@@ -221,7 +222,8 @@ class CVXOPTBackend(Backend):
 
         if structured is not None and not chosen:
             try:
-                result, kkt = run(structured), structured
+                with blas_threads(1):  # its many mid-sized products lose to BLAS threads (threads.py)
+                    result, kkt = run(structured), structured
             except (ValueError, ArithmeticError):
                 if qr_tried():
                     raise
