@@ -276,12 +276,7 @@ def below(objective: Any, a: float) -> bool:
     >>> below(fmpq(1, 3), 0.3333333333333333), below(fmpq(1, 3), 0.33333333333333337)
     (False, True)
     """
-    from fractions import Fraction
-
-    from flint import fmpq
-
-    f = Fraction(a)
-    return bool(objective < fmpq(f.numerator, f.denominator))
+    return bool(objective < fmpq_of(a))
 
 
 def exact_point_check(path: Path, x: list[float]) -> tuple[Any, bool]:
@@ -297,14 +292,9 @@ def exact_point_check(path: Path, x: list[float]) -> tuple[Any, bool]:
     >>> exact_point_check(Path(f.name), [2.0]), exact_point_check(Path(f.name), [1.0])[1]
     ((2, True), False)
     """
-    from fractions import Fraction
-
     from flint import fmpq
 
-    def q(v: float) -> Any:
-        f = Fraction(v)
-        return fmpq(f.numerator, f.denominator)
-
+    q = fmpq_of
     c, sizes, F = read_dats(path.read_text())
     xq = [q(float(v)) for v in x]
     objective = sum((q(float(ci)) * xi for ci, xi in zip(c, xq, strict=True)), fmpq(0))
@@ -361,7 +351,6 @@ def maxcut_dual_bound(path: Path, rank: int = 60, sweeps: int = 300, seed: int =
     >>> 1.999999 < float(maxcut_dual_bound(Path(f.name), rank=2, sweeps=20)) <= 2.0
     True
     """
-    from fractions import Fraction
 
     import numpy as np
     from flint import fmpq
@@ -388,12 +377,8 @@ def maxcut_dual_bound(path: Path, rank: int = 60, sweeps: int = 300, seed: int =
                 if norm > 0:
                     V[i] = g / norm
     V *= 1.0 - 2.0**-40  # every |v_i|^2 below 1 after rounding
-
-    def q(v: float) -> Any:
-        f = Fraction(float(v))
-        return fmpq(f.numerator, f.denominator)
-
-    Vq = [[q(v) for v in row] for row in V]
+    q = fmpq_of
+    Vq = [[q(float(v)) for v in row] for row in V]
     if any(sum((a * a for a in row), fmpq(0)) >= 1 for row in Vq):
         return None
     total = fmpq(0)

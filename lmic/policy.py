@@ -223,16 +223,12 @@ def _solve_one(be: Any, target: Problem, options: Any, scales: list[np.ndarray] 
     return sol
 
 
-def _certify(problem: Problem, sol: Solution, exact: bool) -> Any:
-    from lmic.certify import certify
+def _certify(problem: Problem, sol: Solution, exact: bool) -> tuple[Solution, Any]:
+    """``(solution, certificate)`` at the point the certificate proves (a moved point is the one
+    returned: :func:`lmic.certify.certified_solution`)."""
+    from lmic.certify import certified_solution, certify
 
-    return certify(problem, sol, exact=exact)
-
-
-def _proven_point(problem: Problem, sol: Solution, cert: Any) -> tuple[Solution, Any]:
-    from lmic.certify import certified_solution
-
-    return certified_solution(problem, sol, cert)
+    return certified_solution(problem, sol, certify(problem, sol, exact=exact))
 
 
 def _prove_ray(problem: Problem, sol: Solution, cert: Any) -> bool:
@@ -270,8 +266,7 @@ class _Run:
 
     def record(self, backend: str, label: str, sol: Solution, t0: float, infeasibility_only: bool = False) -> Outcome:
         t1 = time.perf_counter()
-        cert = _certify(self.problem, sol, self.exact)
-        sol, cert = _proven_point(self.problem, sol, cert)  # a moved point is the one returned
+        sol, cert = _certify(self.problem, sol, self.exact)
         verdict = verdict_of(self.problem, sol, cert)
         note = ""
         if infeasibility_only and verdict in ("certified", "rejected"):

@@ -399,15 +399,15 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
         restored = enc is None and out.verdict != "certified"  # upper_route's dual end has no re-solves
         out, enc, t_up = upper_route(problem, out, enc, name, opts, exact, options.gap, steps)  # lmic.route_upper
         enc_s += t_up
-        if restored and out.verdict == "certified" and _above_target(enc):
+        now = None if enc is None else enc.get("rel_gap")
+        if restored and out.verdict == "certified" and now is not None and now > GAP_TARGET:
             # the point upper_route restored is certified, its dual end proved without this
             # step's re-solves (the solver's degenerate dual, with a shift): the whole dual search
             # from the certified point (a random 7-state margin problem, max t with A'P + PA + t I
             # <= 0, I <= P <= 10 I: relative gap 1.0e-6 to 1.1e-8, the centred dual)
             again, t_again = enclosure_of(problem, out.solution, out.certificate, exact, name, opts, target=aim)
             enc_s += t_again
-            before = float(enc["rel_gap"]) if enc is not None else float("inf")
-            if again is not None and again.get("rel_gap") is not None and not again["rel_gap"] > before:
+            if again is not None and again.get("rel_gap") is not None and again["rel_gap"] <= now:
                 enc = again
                 step["rel_gap"] = enc["rel_gap"]
         if holds and enc is not None and enc.get("rel_gap") is not None and enc["rel_gap"] <= options.gap:
@@ -462,15 +462,6 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     if best.solution is not None:
         best.solution.info["attempts"] = [a.to_dict() for a in attempts]
     return RouteResult(best, best_enc, enc_s, {"steps": steps, "text": describe(steps, problem), "gap": options.gap})
-
-
-def _above_target(enc: dict[str, Any] | None) -> bool:
-    """An enclosure with both ends whose relative gap is above :data:`GAP_TARGET`.
-
-    >>> _above_target({"rel_gap": 3e-6}), _above_target({"rel_gap": 5e-7}), _above_target(None)
-    (True, False, False)
-    """
-    return enc is not None and enc.get("rel_gap") is not None and float(enc["rel_gap"]) > GAP_TARGET
 
 
 def _boxed_upper(

@@ -378,8 +378,8 @@ def _semidefinite_candidates(problem: Problem, cols: list[sp.csc_matrix], ks: np
         off_k = k[~on].astype(np.int64)
         for end in (i[r[~on]], j[r[~on]]):
             bad[off_k[~np.isin(off_k * lmi.dim + end, diag_keys)]] = True
-    out = (pos & neg) | bad
-    return np.asarray(ks)[~out[np.asarray(ks, dtype=np.int64)]] if len(ks) else np.asarray(ks)
+    ks = np.asarray(ks, dtype=np.int64)
+    return ks[~(pos & neg | bad)[ks]]
 
 
 def facial_or(

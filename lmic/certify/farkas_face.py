@@ -28,9 +28,9 @@ from typing import Any
 
 import numpy as np
 
+from lmic.certify.enclosure_repair import _congruence_gradient, _weights
 from lmic.certify.farkas_ray import _parse
 from lmic.ir.problem import Problem
-from lmic.ir.svec import tril_rows_cols
 
 #: bits of the rational rounding of the face bases
 _FACE_BITS = 50
@@ -148,8 +148,9 @@ def _rational_basis(U: np.ndarray) -> np.ndarray | None:
 def _congruence_columns(coeffs: Any, d: int, U: np.ndarray) -> np.ndarray:
     """``d <F_k, U S U^T> / d svec(S)`` for every column ``k`` of an LMI's coefficients (the
     lower triangles of ``F_k``): ``2 (U^T F_k U)[a, b]`` off the diagonal and ``(U^T F_k
-    U)[a, a]`` on it, in the order of ``triu_indices(r)``. ``O(d^2 r)`` a column, in chunks of
-    columns of at most ``4e6 / d^2`` (the products ``U E_ab U^T`` of every pair ``a <= b``, a
+    U)[a, a]`` on it, in the order of ``triu_indices(r)``: the enclosure repair's congruence
+    gradient (:func:`lmic.certify.enclosure_repair._congruence_gradient`) of the weighted rows
+    ``F_k``, ``O(d^2 r)`` a column (the products ``U E_ab U^T`` of every pair ``a <= b``, a
     ``d(d+1)/2 x r(r+1)/2`` matrix, took 0.2 s for a face of order 74 in an LMI of order 74).
 
     >>> import numpy as np, scipy.sparse as sp
@@ -159,21 +160,10 @@ def _congruence_columns(coeffs: Any, d: int, U: np.ndarray) -> np.ndarray:
     """
     import scipy.sparse as sp
 
-    C = sp.csc_matrix(coeffs)
-    ri, ci = tril_rows_cols(d)
-    r = U.shape[1]
-    ia, ib = np.triu_indices(r)
-    factor = np.where(ia == ib, 1.0, 2.0)
-    out = np.zeros((C.shape[1], len(ia)))
-    step = max(1, int(4e6 // max(1, d * d)))
-    for k0 in range(0, C.shape[1], step):
-        block = C[:, k0 : k0 + step].toarray().T  # (c, tril)
-        F = np.zeros((block.shape[0], d, d))
-        F[:, ri, ci] = block
-        F[:, ci, ri] = block
-        M = U.T @ F @ U
-        out[k0 : k0 + block.shape[0]] = M[:, ia, ib] * factor
-    return out
+    rows = sp.csc_matrix(sp.csc_matrix(coeffs).T.multiply(_weights(d)[None, :]))
+    ia, ib = np.triu_indices(U.shape[1])
+    out = np.zeros((rows.shape[0], ia.size))
+    return _congruence_gradient(rows, U, d, ia, ib, np.arange(rows.shape[0]), out)
 
 
 def _face_jacobian(problem: Problem, eigs: list, sels: list, rows: list[int]) -> np.ndarray:

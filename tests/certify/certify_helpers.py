@@ -21,6 +21,22 @@ def lmi_from(name: str, mats: list[np.ndarray], strict: bool = True, relation: s
     return LMI(name, d, coeffs, strict=strict, relation=relation)
 
 
+def interval_problem(lo: float, hi: float, sense: str = "feasibility", name: str = "x") -> Problem:
+    """``name - lo >= 0`` and ``hi - name >= 0`` (non-strict) in one scalar variable: feasible
+    exactly when ``lo <= hi`` (the single point ``lo`` when equal); ``sense`` ``min`` / ``max``
+    optimises the variable itself."""
+    c = [0.0, 0.0] if sense == "feasibility" else [0.0, 1.0]
+    return Problem(
+        [Variable(name, "scalar", (1, 1))],
+        [
+            LMI(f"{name} - lo >= 0", 1, sp.csc_matrix([[-lo, 1.0]]), strict=False),
+            LMI(f"hi - {name} >= 0", 1, sp.csc_matrix([[hi, -1.0]]), strict=False),
+        ],
+        LinearConstraints.empty(1),
+        Objective(sense, c),
+    )
+
+
 def lyapunov(A: np.ndarray, strict: bool = True, checks: bool = True) -> Problem:
     """``P > 0`` and ``A^T P + P A < 0`` (homogeneous); derived ``Pinv``; check ``A`` Hurwitz."""
     n = A.shape[0]

@@ -16,6 +16,7 @@ from fractions import Fraction
 import numpy as np
 import scipy.sparse as sp
 import sympy
+from certify_helpers import interval_problem
 
 from lmic.certify import certified_solution, certify
 from lmic.certify.audit import audit_certificate
@@ -26,15 +27,7 @@ from lmic.solution import Solution
 
 def _fixed_point(value: float) -> Problem:
     """``min x`` s.t. ``x - value >= 0`` and ``value - x >= 0``: the only point is ``value``."""
-    return Problem(
-        [Variable("x", "scalar", (1, 1))],
-        [
-            LMI("x - v >= 0", 1, sp.csc_matrix([[-value, 1.0]]), strict=False),
-            LMI("v - x >= 0", 1, sp.csc_matrix([[value, -1.0]]), strict=False),
-        ],
-        LinearConstraints.empty(1),
-        Objective("min", [0.0, 1.0]),
-    )
+    return interval_problem(value, value, "min")
 
 
 def test_a_snapped_point_replaces_the_solvers_point():

@@ -15,6 +15,7 @@ from fractions import Fraction
 
 import numpy as np
 import scipy.sparse as sp
+from certify_helpers import interval_problem
 
 from lmic.certify import certify
 from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
@@ -25,15 +26,7 @@ C = 0.999999999
 
 def _interval(lo: float, hi: float) -> Problem:
     """``x - lo >= 0`` and ``hi - x >= 0``: feasible exactly when ``lo <= hi``."""
-    return Problem(
-        [Variable("x", "scalar", (1, 1))],
-        [
-            LMI("x - lo >= 0", 1, sp.csc_matrix([[-lo, 1.0]]), strict=False),
-            LMI("hi - x >= 0", 1, sp.csc_matrix([[hi, -1.0]]), strict=False),
-        ],
-        LinearConstraints.empty(1),
-        Objective("feasibility", [0.0, 0.0]),
-    )
+    return interval_problem(lo, hi)
 
 
 def _on_row(shift: float, upper: float) -> Problem:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from certify_helpers import interval_problem
 
 from lmic.certify import certify
 from lmic.solution import Solution
@@ -78,20 +79,9 @@ def test_a_ray_the_strict_reduction_did_not_return_is_still_proved(monkeypatch) 
     max-margin answer (undecided, ``inaccurate``) and kept fixed-margin's Farkas ray aside
     (``info["unchosen_rays"]``); the policy certifies that ray too: ``Z = (1, 1)`` gives
     ``sum_i <F_i^(k), Z_i> = 1 - 1 = 0`` for ``x`` and ``-1 < 0`` for the constants."""
-    import scipy.sparse as sp
-
     import lmic.policy as policy
-    from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 
-    problem = Problem(
-        [Variable("x", "scalar", (1, 1))],
-        [
-            LMI("x - 1 >= 0", 1, sp.csc_matrix([[-1.0, 1.0]]), strict=False),
-            LMI("-x >= 0", 1, sp.csc_matrix([[0.0, -1.0]]), strict=False),
-        ],
-        LinearConstraints.empty(1),
-        Objective("feasibility", [0.0, 0.0]),
-    )
+    problem = interval_problem(1.0, 0.0)
     ray = Solution("infeasible", farkas={"lmis": [[[1.0]], [[1.0]]], "y": []}, strategy="fixed-margin")
 
     def answer(be, target, options, scales, judge):

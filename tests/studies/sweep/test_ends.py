@@ -5,10 +5,9 @@ from __future__ import annotations
 from fractions import Fraction
 
 import numpy as np
-import scipy.sparse as sp
+from certify_helpers import interval_problem
 
 from lmic.certify import certify
-from lmic.ir.problem import LMI, LinearConstraints, Objective, Problem, Variable
 from lmic.solution import Solution
 from lmic.studies.sweep.ends import certified_end
 from lmic.studies.sweep.results import PointResult
@@ -18,15 +17,7 @@ def test_the_end_point_is_the_snapped_point_the_proof_holds_at():
     """``p - 1 >= 0`` and ``1 - p >= 0``: the only point is ``p = 1`` (closed form). A bisection
     point ``1 - 1e-12`` is certified at the certifier's snap onto ``p = 1``; the end reports
     that point, not the bisection's (whose certificate file ``lmic audit`` would reject)."""
-    p = Problem(
-        [Variable("p", "scalar", (1, 1))],
-        [
-            LMI("p - 1 >= 0", 1, sp.csc_matrix([[-1.0, 1.0]]), strict=False),
-            LMI("1 - p >= 0", 1, sp.csc_matrix([[1.0, -1.0]]), strict=False),
-        ],
-        LinearConstraints.empty(1),
-        Objective("feasibility", [0.0, 0.0]),
-    )
+    p = interval_problem(1.0, 1.0, name="p")
     x = np.array([1.0 - 1e-12])
     assert not Fraction(x[0]) == 1  # the bisection point itself is infeasible
     cert = certify(p, Solution("optimal", x=x))
