@@ -369,6 +369,24 @@ def solve(
         name = os.fspath(target)
     else:  # a Theorem object: its id
         name = theorem or target.id
+    from lmic.reductions.memo import remembered_solves
+
+    with remembered_solves():  # the route, its enclosure and the backoff never solve one problem twice
+        return _decided(problem, theorem, compile_s, str(name), backend, options, exact, backoff, params)
+
+
+def _decided(
+    problem: Problem,
+    theorem: str | None,
+    compile_s: float,
+    name: str,
+    backend: str | Backend | None,
+    options: SolveOptions | None,
+    exact: bool,
+    backoff: float | None,
+    params: dict[str, Any] | None,
+) -> Result:
+    """:func:`solve` once the problem is compiled: the route, the enclosure, the backoff, the result."""
     from lmic.routes import decide_route
 
     t0 = time.perf_counter()
@@ -419,7 +437,7 @@ def solve(
     if back is not None:
         timings["backoff_s"] = back["time_s"]
     return Result(
-        target=str(name),
+        target=name,
         theorem=theorem,
         backend=used,
         status=sol.status,

@@ -328,6 +328,14 @@ def decide_route(problem: Problem, backend: Any = None, options: Any = None, *, 
     -------
     RouteResult
     """
+    from lmic.reductions.memo import remembered_solves
+
+    with remembered_solves():  # a closed problem solved twice on the route is solved once
+        return _decide_route(problem, backend, options, exact)
+
+
+def _decide_route(problem: Problem, backend: Any, options: Any, exact: bool) -> RouteResult:
+    """:func:`decide_route`'s work, its solves remembered."""
     from lmic.options import SolveOptions
     from lmic.policy import RAY_PROOF_BUDGET_S, backend_budget, decide, is_auto, route
 

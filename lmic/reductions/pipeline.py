@@ -36,7 +36,7 @@ from lmic.backends.backend import Backend
 from lmic.backends.sandbox import describe
 from lmic.ir.problem import Problem
 from lmic.options import SolveOptions
-from lmic.reductions import strict
+from lmic.reductions import memo, strict
 from lmic.reductions.eliminate import eliminate_unused, restore_eliminated
 from lmic.solution import Solution
 
@@ -128,7 +128,12 @@ def solve(backend: Backend, problem: Problem, options: SolveOptions | None = Non
         deadline = None if options.time_limit is None else time.monotonic() + options.time_limit
 
         def run(closed: Problem, opts: SolveOptions) -> Solution:
-            return settle(closed, backend._run(closed, opts, deadline))
+            key, known = memo.recall(backend.label, closed, opts)  # solved before in this route
+            if known is not None:
+                return known
+            sol = settle(closed, backend._run(closed, opts, deadline))
+            memo.remember(key, sol)
+            return sol
 
         sol = strict.solve(kept, options, run, first_order=not backend.interior_point)
         if keep is not None:
