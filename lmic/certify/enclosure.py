@@ -249,7 +249,7 @@ def enclosure(
                 )
             except CertificateError as exc:
                 dual = {"proven": False, "reason": str(exc)}
-            if first is not None:  # no strictly feasible dual point: the face it lives on, if not tried yet
+            if first is not None and dual.get("resolves") != "skipped":  # the face it lives on, if not tried yet
                 dual = first.after(dual)
             elif face is not None and not dual.get("proven"):
                 dual["reason"] = f"{dual.get('reason')}; {tried}"
