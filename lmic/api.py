@@ -415,7 +415,7 @@ def _decided(
         # no rigorous primal end at the solver's point, or one that misses GAP_TARGET: a better
         # one from the backed-off point, a point polished toward the solver's, a restored point
         t_rest = time.perf_counter()
-        from lmic.route_primal import better_primal, decided_by_enclosure
+        from lmic.route_primal import better_primal, decided_by_enclosure, nearer_point
 
         # the route's last resort (lmic.routes._boxed_upper) restored from the same point: not twice
         tried = any("upper_boxed" in st for st in (routed.route or {}).get("steps", []))
@@ -424,7 +424,12 @@ def _decided(
         if upgraded is not None:  # the enclosure's proven point passes the certifier
             outcome, sol, cert = upgraded, upgraded.solution, upgraded.certificate
             variables, derived = _values(problem, sol.x, cert)
+        nearer = nearer_point(problem, outcome, enc, exact)  # the answer's point as near the primal end as certified
+        if nearer is not None:
+            outcome, sol, cert = nearer, nearer.solution, nearer.certificate
+            variables, derived = _values(problem, sol.x, cert)
         enclosure_s += time.perf_counter() - t_rest
+        outcome.reason = _quoting(outcome.reason, enc)
     timings = {
         "compile_s": compile_s,
         "lower_s": max(0.0, total - solve_s - certify_s),
@@ -458,6 +463,25 @@ def _decided(
 
 
 # -- optimal-value enclosure (lmic.certify.enclosure) -----------------------------------------
+
+#: how a verdict's reason quotes the enclosure that proved the optimum (its last clause)
+PROVES = "; the enclosure proves the optimum: "
+
+
+def _quoting(reason: str, enc: dict[str, Any]) -> str:
+    """``reason`` with its quoted enclosure replaced by ``enc``'s: the route quotes the enclosure
+    of the step that proved the optimum, and a later step may narrow it (a restored point's
+    re-search), so the answer shows one enclosure, the final one.
+
+    >>> final = {"reason": "minimum in [1, 2]", "rel_gap": 0.5}
+    >>> _quoting("holds; the enclosure proves the optimum: minimum in [1, 3]", final)
+    'holds; the enclosure proves the optimum: minimum in [1, 2]'
+    >>> _quoting("holds", final)
+    'holds'
+    """
+    if PROVES not in reason or enc.get("rel_gap") is None or not enc.get("reason"):
+        return reason
+    return reason.rsplit(PROVES, 1)[0] + PROVES + str(enc["reason"])
 
 
 def _enclosure(
