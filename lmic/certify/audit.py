@@ -163,6 +163,27 @@ def _fail(doc: dict, fld: str, message: str, cert: Certificate | None = None, **
     )
 
 
+def _provider_hint(theorem: dict[str, Any]) -> str:
+    """What to install to audit a certificate of a theorem that is not installed here.
+
+    >>> _provider_hint({"provider": {"distribution": "lmic-nb3", "version": "0.1.0"}})
+    ' (the certificate was written with lmic-nb3 0.1.0: pip install lmic-nb3==0.1.0)'
+    >>> _provider_hint({"provider": {"distribution": None, "module": "mine"}})
+    ' (an inline theorem of module mine: install it as a plugin, or write its certificates with embed_ir=True)'
+    """
+    provider = theorem.get("provider") or {}
+    dist, version = provider.get("distribution"), provider.get("version")
+    if dist:
+        pin = f"=={version}" if version else ""
+        return f" (the certificate was written with {dist} {version or ''}".rstrip() + f": pip install {dist}{pin})"
+    if provider.get("module"):
+        return (
+            f" (an inline theorem of module {provider['module']}: install it as a plugin, "
+            "or write its certificates with embed_ir=True)"
+        )
+    return ""
+
+
 def _rebuild(doc: dict[str, Any], base: Path) -> tuple[Problem, str, Any]:
     """The problem to audit against, a label, and the loaded system (None for an embedded IR)."""
     embedded = doc["ir"]["embedded"]
@@ -186,7 +207,7 @@ def _rebuild(doc: dict[str, Any], base: Path) -> tuple[Problem, str, Any]:
     except LmicError as err:
         if "ambiguous" in str(err):  # two plugins offer the id: refuse rather than guess
             raise CertificateError(str(err)) from None
-        raise CertificateError(f"theorem '{theorem['id']}' is not installed here") from None
+        raise CertificateError(f"theorem '{theorem['id']}' is not installed here{_provider_hint(theorem)}") from None
     sys_path = Path(doc["system"]["path"])
     if not sys_path.is_absolute():
         sys_path = base / sys_path

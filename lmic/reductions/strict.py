@@ -341,8 +341,9 @@ def _proven_infeasible(sol: Solution, problem: Problem) -> bool:
         if report.get("kind") == "strict":
             sol.farkas["strict"] = True
         sol.message = (
-            f"no point with margin {sol.info.get('imposed_margin', 0):g}, and the Farkas ray "
-            f"proves the original problem infeasible ({report.get('kind', '')})"
+            f"no point with margin {sol.info.get('imposed_margin', 0):g}, and the Farkas ray meets "
+            f"the original problem's conditions in floating point ({report.get('kind', '')}; the "
+            "verdict says what the certifier proves of it)"
         )
         return True
     return False

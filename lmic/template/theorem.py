@@ -92,6 +92,8 @@ def _hint(err: BaseException) -> str:
         return " (numpy cannot size arrays by a dimension symbol: use I(n), 0 or data inside blocks, not numpy)"
     if isinstance(err, AttributeError) and "has no attribute 'trace'" in text:
         return " (write trace(Z), with trace from lmic.template)"
+    if isinstance(err, TypeError) and "Mix of Matrix and Scalar symbols" in text:
+        return " (a matrix plus or minus a scalar: write gamma * I(m), or put the scalar alone as a diagonal block)"
     if isinstance(err, TypeError) and "Invalid comparison of non-real" in text:
         return " (compare a matrix with 0: write M < 0, or block([[...]]) < 0)"
     return ""

@@ -114,3 +114,25 @@ def test_exact_decision_is_shown(tmp_path, capsys):
     assert main(["audit", str(path), "--json"]) == 0
     js = json.loads(capsys.readouterr().out)
     assert js["label"] == "certified (exact)" and js["certificate"]["lmis"][0]["decided_by"] == "exact"
+
+
+def test_a_theorem_not_installed_names_the_distribution_to_install(tmp_path, capsys, monkeypatch):
+    from pathlib import Path
+
+    import lmic.registry
+    from lmic.errors import LmicError
+
+    example = Path(__file__).resolve().parents[2] / "examples" / "qib.thm1.flexible-joint.yaml"
+    cert = tmp_path / "qib.json"
+    assert main(["solve", "qib.thm1", str(example), "-o", str(cert)]) == 0
+    capsys.readouterr()
+    provider = json.loads(cert.read_text())["theorem"]["provider"]
+
+    def missing(tid):
+        raise LmicError(f"unknown theorem '{tid}'")
+
+    monkeypatch.setattr(lmic.registry, "get_theorem", missing)  # as on a machine without the plugin
+    assert main(["audit", str(cert)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "theorem 'qib.thm1' is not installed here" in err[0]
+    assert f"pip install {provider['distribution']}=={provider['version']}" in err[0]

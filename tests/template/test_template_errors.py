@@ -276,3 +276,16 @@ def test_the_trace_of_a_matrix_that_is_not_square_is_rejected_where_it_is_writte
 
     with pytest.raises(TemplateError, match=r"trace of a matrix that is not square: C\*P is q x n"):
         analyse(_thm(build))
+
+
+def test_a_scalar_subtracted_from_a_matrix_block_gets_a_hint():
+    def build(t):
+        n, m = t.dims("n m")
+        B = t.data("B", n, m)
+        P = t.symmetric("P", n)
+        gamma = t.scalar("gamma")
+        t.lmi("gain", block([[B.T * P * B - gamma]]) < 0)  # as a paper prints it; sympy refuses
+
+    hint = r"Mix of Matrix and Scalar symbols \(a matrix plus or minus a scalar: write gamma \* I\(m\)"
+    with pytest.raises(TemplateError, match=hint):
+        analyse(_thm(build))
