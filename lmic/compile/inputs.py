@@ -138,15 +138,30 @@ def resolve_inputs(plan: Plan | FrozenPlan, system: System, overrides: Mapping[s
     tid = t.theorem_id
     where = f"theorem {tid}, {system.label}"
     out = Inputs()
-    params = dict(system.params)
-    params.update(overrides or {})
-
-    # parameters and options
+    # parameters and options: one the caller sets (-p, overrides) must exist; the system file's
+    # may be another theorem's (one plant file, several theorems), as its data may, but a key
+    # close to one this theorem takes is a typo
     known = {p.name for p in t.params} | {o.name for o in t.options}
-    for key in params:
+    accepted = ", ".join(sorted(known)) or "none"
+    for key in overrides or {}:
         if key not in known:
-            accepted = ", ".join(sorted(known)) or "none"
             raise DataError(f"{where}: unknown parameter '{key}' (the theorem takes: {accepted})")
+    foreign = [key for key in system.params if key not in known and key not in (overrides or {})]
+    unset = sorted(k for k in known if k not in system.params and k not in (overrides or {}))
+    for key in foreign:
+        close = near_miss(key, unset)
+        if close is not None:
+            raise DataError(
+                f"{where}: unknown parameter '{key}' (did you mean '{close}'? the theorem takes: {accepted})"
+            )
+    if foreign:
+        warnings.warn(
+            f"{where}: parameter {', '.join(repr(k) for k in foreign)} not used by the theorem (it takes: {accepted})",
+            UnusedDataNote,
+            stacklevel=2,
+        )
+    params = {key: value for key, value in system.params.items() if key in known}
+    params.update(overrides or {})
     for o in t.options:
         option = normalise_option(params.get(o.name, o.default))
         if option != o.value:

@@ -25,6 +25,7 @@ from lmic.api import solve
 from lmic.backends.base import SolveOptions
 from lmic.compile import compile_theorem
 from lmic.errors import DataError
+from lmic.system import UnusedDataNote
 
 EX31 = "uir.thm3_1.rossler_published_gains.yaml"
 EX51 = "uir.thm5_1.rossler.yaml"
@@ -282,8 +283,13 @@ def test_bad_input():
         compile_theorem("uir.thm5_1", _system(d, gamma0=0.1, **{"lambda": 1.5}))
     with pytest.raises(DataError, match=r"uir\.thm5_1.*parameter gamma0 = -0.1 is outside"):
         compile_theorem("uir.thm5_1", _system(d, gamma0=-0.1, **{"lambda": 0.5}))
-    with pytest.raises(DataError, match=r"uir\.thm4_1.*unknown parameter 'lambda'"):
+    # a parameter of another theorem (uir.thm5_1's lambda) in the plant file: a note, as extra data
+    with pytest.warns(UnusedDataNote, match=r"uir\.thm4_1.*parameter 'lambda' not used by the theorem"):
         compile_theorem("uir.thm4_1", _system(d, gamma0=0.1, mu=1.0, **{"lambda": 0.5}))
+    with pytest.raises(DataError, match=r"uir\.thm4_1.*unknown parameter 'lambda' \(the theorem takes"):
+        compile_theorem("uir.thm4_1", _system(d, gamma0=0.1, mu=1.0), {"lambda": 0.5})  # asked for by the caller
+    with pytest.raises(DataError, match=r"uir\.thm4_1.*unknown parameter 'gama0' \(did you mean 'gamma0'"):
+        compile_theorem("uir.thm4_1", _system(d, gama0=0.1, mu=1.0))  # a typo
     with pytest.raises(DataError, match=r"uir\.thm4_1.*missing data 'R'"):
         compile_theorem("uir.thm4_1", _system({k: v for k, v in d.items() if k != "R"}, gamma0=0.1, mu=1.0))
     with pytest.raises(DataError, match=r"uir\.thm5_1.*rho_bound = '2' is not one of 0, 1"):
