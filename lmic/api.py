@@ -241,6 +241,9 @@ def load_target(
             f"'{text}' is neither an IR/SDPA file (.json, .dat-s) nor usable as a theorem "
             "without a system file: give THEOREM SYSTEM"
         )
+    swapped = isinstance(system, str) and not Path(system).exists() and Path(text).is_file()
+    if swapped and text.lower().endswith((".yaml", ".yml")):
+        raise LmicError(f"{system}: no such file; the arguments are THEOREM SYSTEM (lmic solve {system} {text}?)")
     from lmic.compile import compile_theorem
 
     problem = compile_theorem(text, system, params)

@@ -28,6 +28,7 @@ Examples
 
 from __future__ import annotations
 
+import os
 import time
 import traceback
 from typing import Any
@@ -104,6 +105,32 @@ def _auto(backend: Backend, problem: Problem, options: SolveOptions | None) -> S
     return sol
 
 
+#: exceptions that, raised in lmic's own code, are a bug of lmic's rather than the solver's failure
+_BUG_TYPES = (NameError, AttributeError, TypeError, KeyError, IndexError, AssertionError)
+_LMIC_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def crash_message(err: BaseException) -> str:
+    """One line for a crash inside a solve: the exception, where it was raised, and whether it
+    is a bug in lmic (a programming error raised in lmic's own code, not in a solver library),
+    so that it is never mistaken for a solver's failure.
+
+    >>> try:
+    ...     {}["x"]
+    ... except KeyError as e:
+    ...     crash_message(e).startswith("KeyError: 'x' (at <module>)")
+    True
+    """
+    detail = traceback.extract_tb(err.__traceback__)
+    last = detail[-1] if detail else None
+    message = describe(err) + (f" (at {last.name})" if last is not None else "")
+    ours = last is not None and os.path.abspath(last.filename).startswith(_LMIC_DIR + os.sep)
+    if last is not None and ours and isinstance(err, _BUG_TYPES):
+        where = f"{os.path.relpath(last.filename, os.path.dirname(_LMIC_DIR))}:{last.lineno}"
+        return f"internal error in lmic at {where}, not the solver's (please report it): {message}"
+    return message
+
+
 def solve(backend: Backend, problem: Problem, options: SolveOptions | None = None) -> Solution:
     """Solve ``problem`` with ``backend`` and the reductions; every outcome (crashes too) is a :class:`Solution`.
 
@@ -139,12 +166,10 @@ def solve(backend: Backend, problem: Problem, options: SolveOptions | None = Non
         if keep is not None:
             restore_eliminated(sol, keep, problem)
     except Exception as err:  # noqa: BLE001 - a crash is a status, never a traceback
-        detail = traceback.extract_tb(err.__traceback__)
-        where = f" (at {detail[-1].name})" if detail else ""
         return Solution(
             status="error",
             backend=backend.label,
-            message=describe(err) + where,
+            message=crash_message(err),
             solve_s=time.perf_counter() - t0,
         )
     sol.backend = sol.backend or backend.label

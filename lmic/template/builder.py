@@ -298,7 +298,7 @@ class Template:
         if getattr(e, "is_Matrix", False) or isinstance(e, sympy.MatrixExpr):
             raise TemplateError(
                 f"{self.theorem_id}: the objective '{e}' is a matrix; minimise or maximise a scalar "
-                "(a t.scalar variable, or a sum of them)"
+                "(a t.scalar variable, a sum of them, or trace(Z) with trace from lmic.template)"
             )
         return e
 

@@ -160,3 +160,17 @@ def test_simulate_with_an_ir_file_names_the_system_file_not_its_contents(tmp_pat
     capsys.readouterr()
     assert main(["simulate", str(ir), SYSTEM]) == 2
     _one_error_line(capsys, "p.json: an IR or SDPA file takes no system file (got 'qib.thm1.flexible-joint.yaml')")
+
+
+def test_system_and_theorem_swapped_say_the_order(capsys):
+    example = Path(__file__).resolve().parents[2] / "examples" / "qib.thm1.flexible-joint.yaml"
+    assert main(["solve", str(example), "qib.thm1"]) == 2
+    order = f"the arguments are THEOREM SYSTEM (lmic solve qib.thm1 {example}?)"
+    _one_error_line(capsys, "qib.thm1: no such file", order)
+
+
+def test_maximize_of_a_decision_variable_says_how_to_optimise_it(tmp_path, capsys):
+    system = tmp_path / "plant.yaml"
+    system.write_text("data:\n  A: [[-1.0]]\n  B: [[1.0]]\n  C: [[1.0]]\n")
+    assert main(["solve", "tutorial.bounded_real", str(system), "--maximize", "gamma"]) == 2
+    _one_error_line(capsys, "'gamma' is a decision variable, not a parameter", "t.maximize(gamma) or t.minimize(gamma)")

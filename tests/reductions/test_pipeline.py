@@ -73,3 +73,25 @@ def test_auto_is_its_routes_first_backend():
     # the optimum lambda_min(C), computed by numpy (the point itself is on the boundary of the
     # non-strict LMI: what certifies it is lmic.api.solve's enclosure, not this raw solve)
     assert sol.objective is not None and abs(sol.objective - float(np.linalg.eigvalsh(_C)[0])) < 1e-6
+
+
+def test_a_bug_in_lmic_is_named_as_such_not_as_the_solvers_failure(monkeypatch):
+    import lmic.reductions.pipeline as pipeline
+
+    problem = CASES["max_sense"].build()
+    monkeypatch.setattr(pipeline, "eliminate_unused", {}.get)  # a programming error: wrong call signature
+    sol = solve(get_backend("clarabel"), problem)
+    assert sol.status == "error"
+    assert sol.message.startswith("internal error in lmic at lmic/reductions/pipeline.py:"), sol.message
+    assert "not the solver's" in sol.message and "TypeError" in sol.message
+
+
+def test_a_solver_librarys_crash_is_the_solvers(monkeypatch):
+    class _Crashing(Backend):
+        name, title = "crashing", "Crashing"
+
+        def call(self, problem, settings):
+            raise RuntimeError("solver blew up")
+
+    sol = solve(_Crashing(), CASES["max_sense"].build())
+    assert sol.status == "error" and "solver blew up" in sol.message and "internal error" not in sol.message

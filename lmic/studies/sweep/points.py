@@ -277,6 +277,11 @@ def setup(theorem: str, system: Any, param: str, params: Mapping[str, Any] | Non
         options = {o.name for o in plan.template.options}
         numeric = ", ".join(sorted(decls)) or "none"
         what = "a structural option, not a number" if param in options else "not a parameter"
+        if param in {v.name for v in plan.template.variables}:
+            what = (
+                "a decision variable, not a parameter: the solve optimises it when the theorem says "
+                f"t.maximize({param}) or t.minimize({param}); --maximize and --minimize sweep a parameter"
+            )
         raise DataError(f"theorem {plan.id}: '{param}' is {what} (numeric parameters: {numeric})")
     return sysobj, plan, overrides, decls[param]
 
