@@ -177,6 +177,12 @@ class Backend(ABC):  # noqa: B024 - a subclass implements call() or _solve(), ei
         ok = not reason
         return (ok, reason) if explain else ok
 
+    def too_large(self, problem: Problem) -> str | None:
+        """Why a solve of ``problem`` would exhaust this machine's memory, or ``None`` (the
+        default: no estimate). The engine (:func:`lmic.reductions.pipeline.solve`) asks before
+        every solve, so that no caller can start one that would end the process."""
+        return None
+
     # -- the solve of a closed problem ----------------------------------------------------------
     def floor_options(self, options: SolveOptions | None) -> SolveOptions:
         """``options`` (default :class:`SolveOptions`) with ``tol`` raised to :attr:`tol_floor`.

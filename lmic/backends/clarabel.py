@@ -149,16 +149,23 @@ class ClarabelBackend(Backend):
 
     def supports(self, problem: Problem, explain: bool = False) -> bool | tuple[bool, str]:
         """Refuses problems whose dense PSD scaling blocks would not fit in memory."""
-        need, have = kkt_bytes(problem), _physical_memory()
-        if need > MEMORY_FRACTION * have:
-            big = max(problem.lmis, key=lambda lmi: lmi.dim)
-            why = (
-                f"Clarabel factors a dense block of (d(d+1)/2)^2 entries per LMI; LMI '{big.name}' "
-                f"({big.dim}x{big.dim}) needs about {_size(need)} of the {_size(have)} here: "
-                "use --backend sdpa, cvxopt or auto"
-            )
+        why = self.too_large(problem)
+        if why is not None:
             return (False, why) if explain else False
         return super().supports(problem, explain)
+
+    def too_large(self, problem: Problem) -> str | None:
+        """Why a solve of ``problem`` would not fit in this machine's memory, or ``None``
+        (:func:`kkt_bytes` against :data:`MEMORY_FRACTION` of the memory)."""
+        need, have = kkt_bytes(problem), _physical_memory()
+        if need <= MEMORY_FRACTION * have or not problem.lmis:
+            return None
+        big = max(problem.lmis, key=lambda lmi: lmi.dim)
+        return (
+            f"Clarabel factors a dense block of (d(d+1)/2)^2 entries per LMI; LMI '{big.name}' "
+            f"({big.dim}x{big.dim}) needs about {_size(need)} of the {_size(have)} here: "
+            "use --backend sdpa, cvxopt or auto"
+        )
 
     def settings(self, options: SolveOptions) -> dict[str, Any]:
         """Clarabel's ``DefaultSettings`` fields from the options (``extra`` verbatim, last)."""

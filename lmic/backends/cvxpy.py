@@ -120,6 +120,14 @@ class CVXPYBackend(Backend):
         self.full_rank = solver in ("CVXOPT", "SDPA")  # type: ignore[misc]
         self.tol_floor = 1e-6 if solver == "SCS" else 0.0  # type: ignore[misc]  # as the scs backend
 
+    def too_large(self, problem: Problem) -> str | None:
+        """Through CVXPY, Clarabel's dense PSD blocks as natively (:meth:`ClarabelBackend.too_large`)."""
+        if self.solver != "CLARABEL":
+            return None
+        from lmic.backends.clarabel import ClarabelBackend
+
+        return ClarabelBackend().too_large(problem)
+
     @property
     def label(self) -> str:
         return f"cvxpy:{self.solver}"

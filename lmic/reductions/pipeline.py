@@ -149,6 +149,9 @@ def solve(backend: Backend, problem: Problem, options: SolveOptions | None = Non
     if failed is not None:
         return failed
     t0 = time.perf_counter()
+    too_large = backend.too_large(problem)
+    if too_large is not None:  # a solve that would end the process out of memory (SDPLIB gpp250 on Clarabel)
+        return Solution(status="error", backend=backend.label, message=too_large)
     try:
         kept, keep = eliminate_unused(problem, dependent=backend.full_rank)
         # one deadline for every attempt of the strict reduction (SolveOptions.time_limit)

@@ -95,3 +95,25 @@ def test_a_solver_librarys_crash_is_the_solvers(monkeypatch):
 
     sol = solve(_Crashing(), CASES["max_sense"].build())
     assert sol.status == "error" and "solver blew up" in sol.message and "internal error" not in sol.message
+
+
+def test_a_solve_that_would_exhaust_memory_is_refused_before_it_starts(monkeypatch):
+    """SDPLIB gpp250-1 (one 250 x 250 LMI): lmic.upper_end handed it to Clarabel, whose dense
+    31375^2 block (7.9 GB, three copies) ended the process out of memory. The engine now asks
+    the backend first, whoever the caller."""
+    import lmic.backends.clarabel as clarabel_backend
+
+    be = get_backend("clarabel")
+    problem = CASES["max_sense"].build()
+    need = clarabel_backend.kkt_bytes(problem)
+    monkeypatch.setattr(clarabel_backend, "_physical_memory", lambda: int(need / clarabel_backend.MEMORY_FRACTION) - 1)
+    calls: list[int] = []
+    monkeypatch.setattr(be, "_run", lambda *a, **k: calls.append(1))
+    sol = solve(be, problem)
+    assert sol.status == "error" and calls == []
+    assert "needs about" in sol.message and "use --backend sdpa, cvxopt or auto" in sol.message
+    assert get_backend("cvxpy:CLARABEL").too_large(problem) == sol.message  # through CVXPY as well
+    assert get_backend("sdpa").too_large(problem) is None
+    monkeypatch.setattr(clarabel_backend, "_physical_memory", lambda: int(need / clarabel_backend.MEMORY_FRACTION) + 10)
+    monkeypatch.undo()
+    assert solve(get_backend("clarabel"), problem).status == "optimal"
