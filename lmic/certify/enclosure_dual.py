@@ -212,7 +212,10 @@ def dual_bound(
     # a Lyapunov-type LMI whose IR coefficients have the exact structure: the exact point on
     # the optimal face (lmic.certify.enclosure_face), cheap and tight; its interior is too thin
     # for the repairs below from about 15 states
-    face = face_bound(problem, duals)
+    try:
+        face = face_bound(problem, duals)
+    except (np.linalg.LinAlgError, ValueError, IndexError, ArithmeticError) as exc:  # a heuristic's failure
+        face = {"proven": False, "reason": f"the exact face route failed: {type(exc).__name__}: {exc}"}
     if face["proven"]:
         # as good as the solver's dual objective: done; else the routes below may do better
         L0 = float(q[0] - (J[0] @ _pack(problem, mats0, y0))[0])

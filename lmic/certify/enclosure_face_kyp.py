@@ -114,7 +114,7 @@ def _best(
         w, V = sla.eigh(qk * Q[0], Q[1])
     except (np.linalg.LinAlgError, ValueError):
         return None
-    if not np.isfinite(w[0]):
+    if w.size == 0 or not np.isfinite(w[0]):  # no S_R entry to choose (an equality row took them all)
         return None
     s = V[:, 0] / max(float(np.max(np.abs(V[:, 0]))), 1e-300)
     return q0 - float(w[0]), s.reshape(K.shape[0], AR.shape[1]).T

@@ -252,3 +252,41 @@ def test_best_of_never_pairs_ends_of_two_problems():
     both = dict(ex, upper=2.5)
     out = best_of(both, dict(ex, lower=1.4, upper=2.2), [2.2])  # one problem: the better of each
     assert (out["lower"], out["upper"], out["problem"]) == (1.5, 2.2, "exact")
+
+
+def test_an_equality_row_on_the_lyapunov_variable_does_not_break_the_face_route():
+    """A newcomer's min s with P >= 0, A'P + PA <= s I and trace(P) == 1: the face route's KYP
+    step had no S_R entry left to choose (an empty eigenproblem) and raised IndexError, which
+    ended every solve. The optimum min over trace-one P >= 0 of lambda_max(A'P + PA) comes
+    here from CVXPY + Clarabel (a tight, independent solve) and lies in lmic's enclosure."""
+    import cvxpy as cp
+    import sympy
+
+    import lmic
+    from lmic.template import I, theorem, trace
+
+    A = np.array(
+        [
+            [-1.9639527445352074, 0.2463123418909185, -0.2931716774803635],
+            [-0.26931252027041225, -0.1171975395721152, 0.6513744981394683],
+            [1.045995814244609, -0.3793338889429307, -1.2132830811152708],
+        ]
+    )
+
+    @theorem(id="nb.trace_one", title="t", citation="c", kind="analysis")
+    def trace_one(t):
+        (n,) = t.dims("n")
+        Ad = t.data("A", n, n)
+        P = t.symmetric("P", n)
+        s = t.scalar("s", sign="negative")
+        t.lmi("P >= 0", P >= 0)
+        t.lmi("Lyapunov", Ad.T * P + P * Ad - s * I(n) <= 0)
+        t.constraint("trP", sympy.Eq(trace(P), 1))
+        t.minimize(s)
+
+    r = lmic.solve(trace_one, {"data": {"A": A.tolist()}})
+    P = cp.Variable((3, 3), symmetric=True)
+    ref = cp.Problem(cp.Minimize(cp.lambda_max(A.T @ P + P @ A)), [P >> 0, cp.trace(P) == 1])
+    ref.solve(solver=cp.CLARABEL, tol_gap_abs=1e-10, tol_gap_rel=1e-10, tol_feas=1e-10)
+    assert r.verdict == "certified" and r.enclosure["rel_gap"] <= 1e-6
+    assert r.enclosure["lower"] - 1e-8 <= ref.value <= r.enclosure["upper"] + 1e-8
