@@ -22,6 +22,8 @@ from typing import Any
 import numpy as np
 
 __all__ = [
+    "bound_text",
+    "interval_text",
     "domain_text",
     "esc",
     "number_html",
@@ -257,3 +259,38 @@ def domain_text(domain: Any) -> str:
                 text = f"{left}{ends[0]}, {ends[1]}{right}"
                 return f"{_NAMED_DOMAINS[text]} {text}" if text in _NAMED_DOMAINS else text
     return text
+
+
+def bound_text(value: float | None, side: str, digits: int = 10) -> str:
+    """``value`` to ``digits`` significant digits, rounded *outward*: down for the ``"lower"``
+    end of an interval, up for the ``"upper"`` one, so that a printed enclosure still contains
+    what the proven one does (rounding to nearest printed a proven lower end 15.609311018437 as
+    15.60931102, above it).
+
+    >>> bound_text(15.609311018437344, "lower"), bound_text(15.609311018437344, "upper")
+    ('15.60931101', '15.60931102')
+    >>> bound_text(0.1, "lower", 3), bound_text(0.1, "upper", 3)  # the float 0.1 is 0.1000000000000000055...
+    ('0.1', '0.101')
+    >>> bound_text(-2.5, "lower", 3), bound_text(float("inf"), "lower")
+    ('-2.5', 'inf')
+    """
+    from decimal import ROUND_CEILING, ROUND_FLOOR, Decimal
+
+    if value is None:
+        return "-"
+    v = float(value)
+    if not math.isfinite(v) or v == 0.0:
+        return f"{v:.{digits}g}"
+    exact = Decimal(v)  # the float's exact value
+    quantum = Decimal(1).scaleb(exact.adjusted() - digits + 1)
+    rounded = exact.quantize(quantum, rounding=ROUND_FLOOR if side == "lower" else ROUND_CEILING)
+    return f"{float(rounded):.{digits}g}"  # at most `digits` significant digits: the same decimal
+
+
+def interval_text(lo: float | None, hi: float | None, digits: int = 10) -> str:
+    """``[lo, hi]`` with both ends rounded outward (:func:`bound_text`).
+
+    >>> interval_text(15.609311018437344, 15.609316085)
+    '[15.60931101, 15.60931609]'
+    """
+    return f"[{bound_text(lo, 'lower', digits)}, {bound_text(hi, 'upper', digits)}]"

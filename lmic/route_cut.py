@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from lmic.certify.enclosure import GAP_TARGET, relative_gap
+from lmic.formatting import interval_text
 from lmic.ir.problem import Problem
 from lmic.route_escalation import RouteClock
 
@@ -371,7 +372,8 @@ def _narrowed(
             out["reason"] = f"inconsistent ends: lower {a:.10g} > upper {b:.10g}"
             out["consistent"] = False
             return out
-        out["reason"] = f"{out['kind']} in [{a:.10g}, {b:.10g}] (relative gap {out['rel_gap']:.2g}; {'; '.join(notes)})"
+        why = "; ".join(notes)
+        out["reason"] = f"{out['kind']} in {interval_text(a, b)} (relative gap {out['rel_gap']:.2g}; {why})"
     elif notes:
         out["reason"] = f"{out.get('reason')}; {'; '.join(notes)}"
     else:

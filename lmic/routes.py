@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from lmic.certify.enclosure import GAP_TARGET
+from lmic.formatting import interval_text
 from lmic.ir.problem import Problem
 from lmic.outcome import Outcome, rank
 from lmic.route_escalation import RouteClock, gap_note, tighter
@@ -542,6 +543,6 @@ def _upgrade(out: Outcome, enc: dict[str, Any]) -> Outcome:
     out.evidence = evidence_of("certified", out.certificate)
     out.reason = (
         f"{out.reason}; the enclosure proves the optimum: {enc.get('kind')} in "
-        f"[{enc['lower']:.10g}, {enc['upper']:.10g}] (relative gap {enc['rel_gap']:.2g})"
+        f"{interval_text(enc['lower'], enc['upper'])} (relative gap {enc['rel_gap']:.2g})"
     )
     return out

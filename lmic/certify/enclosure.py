@@ -121,6 +121,7 @@ from lmic.certify.enclosure_float import lambda_min_lower, polish_primal, primal
 from lmic.certify.enclosure_repair import PERTURBATIONS, SHIFTS, perturbed_problem
 from lmic.certify.snap import exact_primal_end
 from lmic.errors import CertificateError
+from lmic.formatting import interval_text
 from lmic.ir.problem import Problem
 
 __all__ = [
@@ -304,7 +305,7 @@ def enclosure(
             out["reason"] = f"inconsistent ends: lower {lo:.10g} > upper {hi:.10g}"
             out["consistent"] = False
             return out
-        out["reason"] = f"{kind} in [{lo:.10g}, {hi:.10g}] (relative gap {out['rel_gap']:.2g})"
+        out["reason"] = f"{kind} in {interval_text(lo, hi)} (relative gap {out['rel_gap']:.2g})"
     elif lo is None and hi is None:
         out["reason"] = f"no certified bound: no certified point, and {dual.get('reason')}"
     else:
@@ -353,10 +354,9 @@ def _polish_strict(
     )
     best: dict[str, Any] = {"proven": False}
     # the closed problem's optimum (on the boundary: the segment from x proves near it when the
-    # boundary is not active everywhere), then the strict problem re-solved by the backend's
-    # default reduction (its small fixed margin: a point the certifier's relative threshold may
-    # reject, while the rigorous proof of primal_end holds; sampled_euler.thm2 n = 8, objective
-    # 7.2e4: the certified rescaled point is 3e-4 above the optimum, this one 8e-8)
+    # boundary is not active everywhere), then the strict problem re-solved by the backend's default
+    # reduction (its small fixed margin: a point the certifier's relative threshold may reject, while
+    # primal_end's proof holds; sampled_euler.thm2 n = 8: the certified rescaled point 3e-4 above)
     for origin, target in (("closed problem", closed), ("strict problem", problem)):
         try:
             xb = solve_point(target)
@@ -462,7 +462,7 @@ def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dic
         out["rel_gap"] = relative_gap(lo, hi) if hi >= lo else 0.0
         out["consistent"] = bool(hi >= lo)
         out["reason"] = (
-            f"{out['kind']} in [{lo:.10g}, {hi:.10g}] (relative gap {out['rel_gap']:.2g})"
+            f"{out['kind']} in {interval_text(lo, hi)} (relative gap {out['rel_gap']:.2g})"
             if hi >= lo
             else f"inconsistent ends: lower {lo:.10g} > upper {hi:.10g}"
         )
@@ -517,7 +517,7 @@ def describe(record: dict[str, Any] | None) -> list[str]:
     kind = record.get("kind", "optimum")
     if lo is not None and hi is not None:
         lines = [
-            f"optimal value ({kind}) in [{lo:.10g}, {hi:.10g}]  "
+            f"optimal value ({kind}) in {interval_text(lo, hi)}  "
             f"gap {record['gap']:.3g} (relative {record['rel_gap']:.3g})"
         ]
     else:
@@ -582,7 +582,7 @@ def with_primal(record: dict[str, Any], value: float, label: str) -> dict[str, A
     if lo is not None and hi is not None and hi >= lo:
         out["gap"] = hi - lo
         out["rel_gap"] = relative_gap(lo, hi)
-        out["reason"] = f"{out['kind']} in [{lo:.10g}, {hi:.10g}] (relative gap {out['rel_gap']:.2g}; {label})"
+        out["reason"] = f"{out['kind']} in {interval_text(lo, hi)} (relative gap {out['rel_gap']:.2g}; {label})"
     elif lo is not None and hi is not None:
         out["reason"] = f"inconsistent ends: lower {lo:.10g} > upper {hi:.10g}"
         out["consistent"] = False

@@ -171,7 +171,7 @@ def run_cli(args: argparse.Namespace) -> int:
 def _print_sup(r: SupResult, written: str | None = None) -> None:
     from rich.console import Console
 
-    from lmic.formatting import value_text
+    from lmic.formatting import bound_text, interval_text, value_text
 
     out = Console(highlight=False, soft_wrap=True)
     if not out.is_terminal:
@@ -196,18 +196,14 @@ def _print_sup(r: SupResult, written: str | None = None) -> None:
         lo_hi = (c, o) if is_max else (o, c)
         assumed = "" if r.interval_proven else "   (if the feasible values form an interval: see the note)"
         if r.upper_kind in ("infeasible-certified", "dual-bound"):
-            a, b = value_text(lo_hi[0], 10), value_text(lo_hi[1], 10)
-            out.print(f"[bold]{op} {r.param} in [{a}, {b}][/]   ({tol}){assumed}")
+            out.print(f"[bold]{op} {r.param} in {interval_text(lo_hi[0], lo_hi[1])}[/]   ({tol}){assumed}")
         elif r.upper_proven is not None:
             ends = (c, r.upper_proven) if is_max else (r.upper_proven, c)
-            out.print(
-                f"[bold]{op} {r.param} in [{value_text(ends[0], 10)}, {value_text(ends[1], 10)}][/]   "
-                f"(proven ends){assumed}"
-            )
+            out.print(f"[bold]{op} {r.param} in {interval_text(ends[0], ends[1])}[/]   (proven ends){assumed}")
         else:
             rel, more = (">=", "larger, even infinite") if is_max else ("<=", "smaller")
             out.print(
-                f"[bold]{op} {r.param} {rel} {value_text(c, 10)}[/]   "
+                f"[bold]{op} {r.param} {rel} {bound_text(c, 'lower' if is_max else 'upper')}[/]   "
                 f"(no proven {'upper' if is_max else 'lower'} end: may be {more})"
             )
         cert_pt = next((p for p in r.points if p.value == c and p.outcome == "feasible"), None)
