@@ -342,6 +342,10 @@ def certify(
     cert.objective = objective_report(problem, solution, x, tolr)
     env, cert.derived = environment_report(problem, x)
     cert.checks = evaluate_checks(problem.checks, env, tolr)
+    if any(not r["ok"] for r in cert.checks):  # a definiteness off by rounding: decided exactly
+        from lmic.certify.check_exact import recheck
+
+        recheck(problem, x, cert.checks)
     strict_eigs = [r["min_eig"] for r in cert.lmis if r["strict"]]
     if solution.margin is not None or strict_eigs:
         cert.margin = {

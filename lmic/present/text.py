@@ -103,9 +103,11 @@ def print_result(
             t.add_row(
                 str(chk.get("name")),
                 f"check {chk.get('kind', '')}".strip() + (f" ({what})" if what else ""),
-                format_value(chk.get("value")),
+                format_value(chk.get("value")) + (" (float; holds exactly)" if chk.get("exact") == "holds" else ""),
                 "",
-                "[green]ok[/green]" if chk.get("ok") else "[red]FAILED[/red]",
+                ("[green]ok (exact)[/green]" if chk.get("exact") == "holds" else "[green]ok[/green]")
+                if chk.get("ok")
+                else "[red]FAILED[/red]",
             )
         c.print(t)
     gains = {k: v for k, v in (result.derived or {}).items() if v is not None}
