@@ -151,7 +151,7 @@ def _notes_as_lines() -> None:
         # lmic.system (numpy, sympy) is not imported for this: a note can only have been issued
         # once it is loaded
         system = sys.modules.get("lmic.system")
-        if system is not None and issubclass(category, system.UnusedDataNote):
+        if system is not None and issubclass(category, system.Note):
             sys.stderr.write(f"lmic: note: {message}\n")
         else:
             default(message, category, filename, lineno, file, line)

@@ -37,14 +37,34 @@ import numpy as np
 from lmic.errors import DataError
 from lmic.limits import MAX_DIMENSION, MAX_INT_DIGITS, check_depth, load_json_text, load_yaml_text, read_text
 
-__all__ = ["System", "load_system", "parse_matrix", "canonical_json", "UnusedDataNote", "edit_distance", "near_miss"]
+__all__ = [
+    "System",
+    "load_system",
+    "parse_matrix",
+    "canonical_json",
+    "Note",
+    "UnusedDataNote",
+    "RoundingNote",
+    "edit_distance",
+    "near_miss",
+]
 
 
-class UnusedDataNote(UserWarning):
+class Note(UserWarning):
+    """Something the user should know that is not an error: the command line prints
+    ``lmic: note: ...`` (:class:`UnusedDataNote`, :class:`RoundingNote`)."""
+
+
+class UnusedDataNote(Note):
     """Data keys of a system file that the theorem does not take (shown as a note, not an error).
 
     One plant file may serve several theorems; the command line prints ``lmic: note: ...``.
     """
+
+
+class RoundingNote(Note):
+    """A data-derived constant that is singular only up to rounding (a projector or a kernel
+    computed in floating point): the compiled problem reads it as regular."""
 
 
 def edit_distance(a: str, b: str) -> int:

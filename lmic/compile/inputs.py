@@ -19,7 +19,7 @@ import numpy as np
 from lmic.compile.frozen import Dim, Domain, normalise_option
 from lmic.errors import DataError, LmicError, TemplateError
 from lmic.formatting import domain_text
-from lmic.system import System, UnusedDataNote, near_miss
+from lmic.system import RoundingNote, System, UnusedDataNote, near_miss
 
 if TYPE_CHECKING:  # sympy only for analysed plans (a frozen plan, lmic.compile.frozen, has none)
     from lmic.compile.plan import Plan
@@ -298,6 +298,17 @@ def resolve_inputs(plan: Plan | FrozenPlan, system: System, overrides: Mapping[s
             if not np.all(np.isfinite(matrix)):
                 raise DataError(f"{where}: constant '{c.name}' is not finite for this data")
             out.values[c.name] = matrix
+            ratio = rounding_singular(matrix)
+            if ratio is not None:
+                warnings.warn(
+                    f"{where}: constant '{c.name}' is singular only up to rounding (smallest singular value "
+                    f"{ratio:.1e} of the largest, not zero exactly): the compiled problem reads it as regular, "
+                    "so where the theorem relies on its null space (a projector, a kernel) a certificate "
+                    "holds for the compiled numbers, not for the theorem as written; compute it exactly "
+                    "(left_null_basis, docs/writing-a-theorem.md)",
+                    RoundingNote,
+                    stacklevel=2,
+                )
     for req in t.requirements:
         try:
             with contextlib.redirect_stdout(sys.stderr):
@@ -310,6 +321,39 @@ def resolve_inputs(plan: Plan | FrozenPlan, system: System, overrides: Mapping[s
         if not ok:
             raise DataError(f"{where}: requirement '{req.name}' fails" + (f" ({req.doc})" if req.doc else ""))
     return out
+
+
+#: a constant is singular to rounding when its smallest singular value is below this share of its largest
+ROUNDING_SINGULAR = 1e-12
+
+
+def rounding_singular(M: np.ndarray) -> float | None:
+    """The relative smallest singular value of ``M`` when it is below :data:`ROUNDING_SINGULAR`
+    while ``M`` has full rank exactly (its floats read as rationals), else ``None``. Full rank is
+    proved by the rank modulo a prime (at most the rational rank).
+
+    >>> X = np.array([[1.0], [3.0]]) / np.sqrt(10.0)
+    >>> rounding_singular(np.eye(2) - X @ X.T) is not None  # a projector of rank 1, in floats
+    True
+    >>> rounding_singular(np.diag([1.0, 0.0])), rounding_singular(np.eye(2))  # exactly singular; regular
+    (None, None)
+    """
+    k = min(M.shape)
+    if k < 2 or M.size > 40_000 or not np.any(M):
+        return None
+    s = np.linalg.svd(M, compute_uv=False)
+    if not s[-1] < ROUNDING_SINGULAR * s[0]:
+        return None
+    import flint
+
+    ints = []
+    for row in M if M.shape[0] <= M.shape[1] else M.T:  # each row times the power of two that makes it integer
+        ratios = [float(v).as_integer_ratio() for v in row]
+        den = max(q for _, q in ratios)
+        ints.append([p * (den // q) for p, q in ratios])
+    if flint.nmod_mat(flint.fmpz_mat(ints), 2**61 - 1).rank() < k:
+        return None  # (very probably) singular exactly: its null space is exact
+    return float(s[-1] / s[0])
 
 
 def _dim_symbol(size: Any) -> Any:

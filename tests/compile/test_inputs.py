@@ -61,3 +61,29 @@ def test_a_parameter_override_that_is_not_a_real_number_is_a_data_error(value):
         bind(analyse(thm), DATA, {"a": value})
     for fine in (np.float32(0.5), 1, np.array(0.5)):  # numpy scalars and 0-d arrays are numbers
         bind(analyse(thm), DATA, {"a": fine})
+
+
+def test_a_projector_computed_in_floating_point_gets_a_note():
+    """uio_dt.thm4_1 computes V = I - X X^+ numerically: on random data its zero eigenvalues are
+    1e-17, so the compiled problem reads it as regular (docs/writing-a-theorem.md); the shipped
+    example's projector is exact and gets no note."""
+    import sys
+    import warnings
+    from pathlib import Path
+
+    from lmic.compile import compile_theorem
+    from lmic.system import RoundingNote
+
+    root = Path(__file__).resolve().parents[2]
+    sys.path.insert(0, str(root / "tests" / "plugins"))
+    import optimisation_instances as oi
+
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        compile_theorem("uio_dt.thm4_1", oi.instance("uio_dt.thm4_1", 1, 3))
+        notes = [str(w.message) for w in seen if issubclass(w.category, RoundingNote)]
+    assert any("constant 'V' is singular only up to rounding" in n for n in notes), notes
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        compile_theorem("uio_dt.thm4_1", root / "examples" / "uio_dt.thm4_1.flexible_joint.yaml")
+        assert not [w for w in seen if issubclass(w.category, RoundingNote)]
