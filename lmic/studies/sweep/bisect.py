@@ -354,8 +354,10 @@ def _bisect(
     def up(v: float, k: int) -> float:
         step = abs(v) if v != 0 else 1.0
         cand = v + step * (2.0**k - 1.0) if v > 0 else v + step * 2.0 ** (k - 1)
-        if cand >= dhi:
-            cand = dhi if dhi_in else 0.5 * (v + dhi) if math.isfinite(dhi) else cand
+        if cand >= dhi:  # halfway from the latest certified value to an open end (not from v: a
+            # fixed base gave the same midpoint twice and stopped at half the start, "certified to the end")
+            ref = v if lower is None else max(v, lower)
+            cand = dhi if dhi_in else 0.5 * (ref + dhi) if math.isfinite(dhi) else cand
         return cand
 
     def down(v: float, k: int) -> float:
@@ -363,7 +365,8 @@ def _bisect(
         if v > 0 and k > 40:
             cand = 0.0
         if cand <= dlo:
-            cand = dlo if dlo_in else 0.5 * (v + dlo) if math.isfinite(dlo) else cand
+            ref = v if upper is None else min(v, upper)
+            cand = dlo if dlo_in else 0.5 * (ref + dlo) if math.isfinite(dlo) else cand
         return cand
 
     # -- bracket ---------------------------------------------------------------------------

@@ -137,3 +137,18 @@ def test_cli_method_option_selects_the_route_and_both_routes_agree(capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--method" in err[0] and "nonsense" in err[0]
+
+
+def test_the_bisection_without_a_bracket_goes_below_half_its_start():
+    """--minimize gamma --method bisection with no bracket, from a start well above the norm
+    (gamma = 4 times it, an open domain end at 0): the expansion stepped from a fixed base, met
+    the same clamped midpoint twice and stopped at half the start, saying gamma was certified
+    'down to the end of its domain'. It now halves from the latest certified value."""
+    A, B, C, system = plant(4, 5)
+    ref = hinf(A, B, C)
+    system = dict(system, params={**system.get("params", {}), "gamma": 4.0 * ref})
+    r = minimize(brl, system, "gamma", method="bisection", rtol=1e-4)
+    assert r.method == "bisection" and "end of its domain" not in r.message
+    assert r.upper is not None and r.lower is not None
+    assert r.lower <= ref * (1 + 1e-9) and ref <= r.upper <= ref * (1 + 2e-4)
+    assert certify(r.end.problem, r.end.solution).verdict == "certified"
