@@ -121,7 +121,7 @@ from lmic.certify.enclosure_float import lambda_min_lower, polish_primal, primal
 from lmic.certify.enclosure_repair import PERTURBATIONS, SHIFTS, perturbed_problem
 from lmic.certify.snap import exact_primal_end
 from lmic.errors import CertificateError
-from lmic.formatting import interval_text
+from lmic.formatting import bound_text, interval_text
 from lmic.ir.problem import Problem
 
 __all__ = [
@@ -311,9 +311,9 @@ def enclosure(
     else:
         missing = "dual bound" if dual.get("proven") is not True else "primal point"
         why = dual.get("reason") if missing == "dual bound" else "no certified point"
-        side = "lower" if lo is None else "upper"
+        side, end = ("lower", bound_text(hi, "upper")) if lo is None else ("upper", bound_text(lo, "lower"))
         out["reason"] = (
-            f"{kind}: only the {'upper' if side == 'lower' else 'lower'} end is certified; "
+            f"{kind}: only the {'upper' if side == 'lower' else 'lower'} end is certified ({end}); "
             f"no certified {side} end ({why})"
         )
     out["consistent"] = True
@@ -353,10 +353,9 @@ def _polish_strict(
         linear=LinearConstraints(lin.A, list(lin.kinds), [False] * len(lin), list(lin.names)),
     )
     best: dict[str, Any] = {"proven": False}
-    # the closed problem's optimum (on the boundary: the segment from x proves near it when the
-    # boundary is not active everywhere), then the strict problem re-solved by the backend's default
-    # reduction (its small fixed margin: a point the certifier's relative threshold may reject, while
-    # primal_end's proof holds; sampled_euler.thm2 n = 8: the certified rescaled point 3e-4 above)
+    # the closed problem's optimum (the segment from x proves near it when the boundary is not active
+    # everywhere), then the strict problem re-solved by the backend's default reduction (its small fixed
+    # margin: a point the certifier's threshold may reject; sampled_euler.thm2 n = 8: 3e-4 above)
     for origin, target in (("closed problem", closed), ("strict problem", problem)):
         try:
             xb = solve_point(target)
@@ -469,7 +468,8 @@ def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dic
     elif take_p or take_d:  # one end, now from the other solve: the first's reason is stale
         have, missing = (pkey, dkey) if out.get(pkey) is not None else (dkey, pkey)
         why = (out.get("dual") or {}).get("reason") if missing == dkey else "no certified point"
-        out["reason"] = f"{out['kind']}: only the {have} end is certified; no certified {missing} end ({why})"
+        end = bound_text(out[have], "upper" if have == "upper" else "lower")
+        out["reason"] = f"{out['kind']}: only the {have} end is certified ({end}); no certified {missing} end ({why})"
     return out
 
 

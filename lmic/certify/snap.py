@@ -155,20 +155,28 @@ def exact_primal_end(problem: Problem, x: np.ndarray, float_end: dict[str, Any])
     x = np.asarray(x, dtype=float).ravel()
     if x.size != problem.n or x.size > MAX_VARIABLES or not np.all(np.isfinite(x)):
         return float_end
-    if _float_bits(x) > max(GRID_BITS):
+    equalities = any(kind == "eq" for kind in problem.linear.kinds)
+    if _float_bits(x) > max(GRID_BITS) and not equalities:
         # only the points :func:`snap_point` produces (short dyadic entries): a full-precision
-        # point gets its end from the restoration of :mod:`lmic.backoff`, near the optimum
+        # point gets its end from the restoration of :mod:`lmic.backoff`, near the optimum. With
+        # equality rows no float point holds them, and no restoration does: the exact proof at
+        # the point's exact projection onto them is the end (a Lyapunov equation written as rows)
         return float_end
     r = prove(problem, x)
-    if not (r["proven"] and r["at_x"] and not r["rows_within_tolerance"]):
+    if not (r["proven"] and not r["rows_within_tolerance"]) or not (r["at_x"] or equalities):
         return float_end
+    point = x.tolist()
+    if not r["at_x"]:  # the recorded rational point (the projection onto the equality rows)
+        den = int(r["point"]["den"])
+        point = [Fraction(int(num), den) for num in r["point"]["num"]]
     c = problem.objective.c
     exact = Fraction(float(c[0])) + sum(
-        (Fraction(float(ck)) * Fraction(float(xk)) for ck, xk in zip(c[1:], x, strict=True)), Fraction(0)
+        (Fraction(float(ck)) * Fraction(xk) for ck, xk in zip(c[1:], point, strict=True)), Fraction(0)
     )
     v = float(exact)
     if problem.objective.sense == "min" and Fraction(v) < exact:
         v = math.nextafter(v, math.inf)
     elif problem.objective.sense == "max" and Fraction(v) > exact:
         v = math.nextafter(v, -math.inf)
-    return {"proven": True, "value": v, "reason": "every LMI and row proved exactly at the point"}
+    where = "the point" if r["at_x"] else "the point's exact projection onto the equality rows"
+    return {"proven": True, "value": v, "reason": f"every LMI and row proved exactly at {where}"}

@@ -310,3 +310,52 @@ def test_an_exact_lower_bound_is_re_proved_exactly_by_the_audit(tmp_path):
     path.write_text(json.dumps(doc))
     bad = audit_certificate(path)
     assert not bad.ok and bad.field == "enclosure.dual"
+
+
+def test_equality_rows_get_their_upper_end_from_the_exact_projection():
+    """A newcomer's Lyapunov equation A'P + PA + Q = 0 written as equality rows, min trace(P):
+    the point was certified (exact) at its projection onto the rows, but no float point holds
+    equality rows, so the enclosure had no upper end. Now the exact point gives it; the truth
+    (scipy's Lyapunov solver) lies inside."""
+    import scipy.linalg
+    import sympy
+
+    import lmic
+    from lmic.template import theorem, trace
+
+    rng = np.random.default_rng(12)
+    n = 4
+    A = rng.standard_normal((n, n))
+    A -= (max(np.linalg.eigvals(A).real) + 1.0) * np.eye(n)
+    Q = np.eye(n) + 0.1
+
+    def selector(i, j):
+        E = np.zeros((n, n))
+        E[i, j] = E[j, i] = 1.0
+        return lambda d: E
+
+    @theorem(id="nb.lyap_rows", title="t", citation="c", kind="analysis")
+    def lyap_rows(t):
+        (m,) = t.dims("n")
+        Ad, Qd = t.data("A", m, m), t.data("Q", m, m, symmetric=True)
+        P = t.symmetric("P", m, pd=True)
+        M = Ad.T * P + P * Ad + Qd
+        for i in range(n):
+            for j in range(i, n):
+                E = t.const(f"E{i}{j}", selector(i, j), shape=(m, m))
+                t.constraint(f"row {i}{j}", sympy.Eq(trace(E * M), 0))
+        t.minimize(trace(P))
+
+    r = lmic.solve(lyap_rows, {"data": {"A": A.tolist(), "Q": Q.tolist()}})
+    # the truth exactly: the rows' unique solution for the data's rational values (sympy), and
+    # scipy's float solution as a cross-check of that computation
+    Aq = sympy.Matrix(n, n, [sympy.Rational(float(v)) for v in A.ravel()])
+    Qq = sympy.Matrix(n, n, [sympy.Rational(float(v)) for v in Q.ravel()])
+    Ps = sympy.Matrix(n, n, lambda i, j: sympy.Symbol(f"p{min(i, j)}{max(i, j)}"))
+    rows = Aq.T * Ps + Ps * Aq + Qq
+    sol = sympy.solve([rows[i, j] for i in range(n) for j in range(i, n)], sorted(Ps.free_symbols, key=str))
+    truth = sum(sol[Ps[i, i]] for i in range(n))
+    assert abs(float(truth) - np.trace(scipy.linalg.solve_continuous_lyapunov(A.T, -Q))) < 1e-12
+    enc = r.enclosure
+    assert r.verdict == "certified" and enc["primal"] == "certified point" and enc["rel_gap"] <= 1e-6
+    assert sympy.Rational(enc["lower"]) <= truth <= sympy.Rational(enc["upper"])
