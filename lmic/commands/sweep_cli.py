@@ -273,22 +273,26 @@ def _print_sweep(r: SweepResult) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    from lmic.formatting import value_text
+    from lmic.formatting import interval_text, value_text
 
     out = Console(highlight=False, soft_wrap=True)
     if not out.is_terminal:
         out.width = 160
     table = Table(title=f"{r.theorem}: sweep of {r.param} (backend {r.backend})")
-    for col in (r.param, "outcome", "status", "verdict", "objective", "rel. margin", "how", "bind ms", "solve s"):
+    optimisation = r.sense in ("min", "max")
+    cols = (r.param, "outcome", "status", "verdict", "objective") + (("optimum in",) if optimisation else ())
+    for col in cols + ("rel. margin", "how", "bind ms", "solve s"):
         table.add_column(col)
     for p in r.points:
         star = " *" if p is r.best else ""
+        enc = p.enclosure or {}
         table.add_row(
             value_text(p.value, 7) + star,
             p.outcome,
             p.status,
             p.verdict,
             value_text(p.objective, 7),
+            *((interval_text(enc.get("lower"), enc.get("upper"), 7) if enc else "-",) if optimisation else ()),
             value_text(p.rel_margin, 3),
             p.proof[:60],
             f"{1e3 * p.bind_s:.1f}",
@@ -303,6 +307,9 @@ def _print_sweep(r: SweepResult) -> None:
             if r.sense in ("min", "max")
             else "relative margin " + value_text(r.best.rel_margin, 3)
         )
+        if r.best.enclosure:
+            best_enc = r.best.enclosure
+            what += f"; optimum in {interval_text(best_enc.get('lower'), best_enc.get('upper'), 7)}"
         if r.best_rule == "edge of the certified range":
             what = f"the edge of the certified range; {what}"
         out.print(f"best certified point: {r.param} = {value_text(r.best.value, 7)} ({what})")

@@ -126,8 +126,8 @@ def sweep(
         k = len(certified)
         if sense in ("min", "max") and all(p.objective is not None for p in certified):
             pick = min if sense == "min" else max
-            best = pick(certified, key=lambda p: float(p.objective))  # type: ignore[arg-type]
-            best_rule = "objective"
+            best = pick(certified, key=lambda p: _primal_end(p, sense))
+            best_rule = "proven optimum" if all(p.enclosure for p in certified) else "objective"
         elif k < len(ok) and (all(ok[:k]) or all(ok[-k:])):
             # one certified run at an end of the grid: the interesting point is where it stops
             best = certified[-1] if all(ok[:k]) else certified[0]
@@ -146,3 +146,12 @@ def sweep(
         plan_s=plan_s,
         total_s=time.perf_counter() - t_start,
     )
+
+
+def _primal_end(p: PointResult, sense: str) -> float:
+    """A point's best proven value: its enclosure's primal end (the certified point's objective
+    where there is none), the one a user of the grid compares."""
+    key = "upper" if sense == "min" else "lower"
+    end = (p.enclosure or {}).get(key)
+    value = float(p.objective) if end is None else float(end)  # type: ignore[arg-type]
+    return min(value, float(p.objective)) if sense == "min" else max(value, float(p.objective))  # type: ignore[arg-type]

@@ -92,6 +92,9 @@ class PointResult:
     #: certified at a value the bisection did not ask for: the point certified at a lower value
     #: still holds here (:meth:`lmic.studies.sweep.points.Evaluator.stretch`)
     stretched: bool = False
+    #: an optimisation theorem's grid point: the proven enclosure of its optimal value
+    #: (``lower``, ``upper``, ``rel_gap``; :func:`lmic.routes.enclosure_of`)
+    enclosure: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able form (without the point ``x``)."""
@@ -107,6 +110,7 @@ class PointResult:
             "farkas_radius": self.farkas_radius,
             "attempts": self.attempts,
             "reused": self.reused,
+            "enclosure": self.enclosure,
             "screened": self.screened,
             "stretched": self.stretched,
             "bind_s": self.bind_s,
