@@ -327,6 +327,11 @@ class _Analyser:
         self._check_names(expr)
         form = LinearForm(sympy.Integer(0))
         for mono in sympy.Add.make_args(expr):
+            if mono.atoms(sympy.Sum) and self._has_var(mono):  # (A.T*P)[0, 0]: sympy's sum over an index
+                raise TemplateError(
+                    f"{self.t.theorem_id}: {where}: '{mono}' is an entry of a matrix product; write entries "
+                    "of a variable (P[0, 1]), or the product's entry as trace(E * M) with a selector E (t.const)"
+                )
             traces = [a for a in mono.atoms(Trace) if not isinstance(a.arg, MatrixSymbol) or not self._has_var(a)]
             if traces:
                 scalar_var = any(s in self.scalar_vars for s in mono.free_symbols)

@@ -289,3 +289,16 @@ def test_a_scalar_subtracted_from_a_matrix_block_gets_a_hint():
     hint = r"Mix of Matrix and Scalar symbols \(a matrix plus or minus a scalar: write gamma \* I\(m\)"
     with pytest.raises(TemplateError, match=hint):
         analyse(_thm(build))
+
+
+def test_an_entry_of_a_matrix_product_in_a_constraint_says_how_to_write_it():
+    import sympy
+
+    def build(t):
+        (n,) = t.dims("n")
+        A = t.data("A", n, n)
+        P = t.symmetric("P", n, pd=True)
+        t.constraint("entry", sympy.Eq((A.T * P + P * A)[0, 0], 0))  # linear, but sympy writes a Sum
+
+    with pytest.raises(TemplateError, match=r"is an entry of a matrix product; write entries of a variable"):
+        analyse(_thm(build))
