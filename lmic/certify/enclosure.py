@@ -425,7 +425,7 @@ def best_of(first: dict[str, Any], second: dict[str, Any], second_x: Any) -> dic
     >>> c = {"sense": "min", "kind": "minimum", "lower": None, "upper": None, "primal": "no certified point",
     ...      "dual": {"proven": False, "reason": "no dual"}, "reason": "no certified bound"}
     >>> best_of(c, dict(c, upper=2.0, primal="certified point"), [2.0])["reason"]
-    'minimum: only the upper end is certified; no certified lower end (no dual)'
+    'minimum: only the upper end is certified (2); no certified lower end (no dual)'
     """
     out = dict(first)
     sense = first.get("sense")
