@@ -154,7 +154,41 @@ def _text(name: str) -> str:
     out = name
     for ch in "\\&%$#_{}":
         out = out.replace(ch, "\\" + ch)
-    return out.replace("~", r"\textasciitilde{}").replace("^", r"\textasciicircum{}")
+    out = out.replace("~", r"\textasciitilde{}").replace("^", r"\textasciicircum{}")
+    # plain LaTeX's text font has no < or > (OT1 prints them as inverted marks: "P ¿ 0")
+    return out.replace("<", r"\textless{}").replace(">", r"\textgreater{}")
+
+
+#: a check as LaTeX, from the LaTeX of its expression (and bound)
+_CHECK_LATEX = {
+    "schur_stable": r"\rho\left({e}\right) < 1",
+    "hurwitz": r"\max \operatorname{{Re}} \lambda\left({e}\right) < 0",
+    "negative_definite": r"{e} \prec 0",
+    "positive_definite": r"{e} \succ 0",
+    "negative_semidefinite": r"{e} \preceq 0",
+    "positive_semidefinite": r"{e} \succeq 0",
+    "less_than": r"{e} < {b}",
+    "greater_than": r"{e} > {b}",
+    "finite": r"{e} \text{{ finite}}",
+}
+
+
+def check_latex(spec: Any) -> str:
+    """A check (``t.check``) as LaTeX: its condition on the expression.
+
+    >>> import sympy
+    >>> from lmic.template.checks import schur_stable
+    >>> print(check_latex(schur_stable(sympy.MatrixSymbol("M", 2, 2))))
+    \\rho\\left(M\\right) < 1
+    """
+    e = spec.expr
+    if hasattr(e, "rows") and hasattr(e, "shape") and not hasattr(e, "is_Matrix"):  # a block of entries
+        body = r" \\ ".join(" & ".join(entry_latex(x) for x in row) for row in e.rows)
+        body = rf"\begin{{bmatrix}} {body} \end{{bmatrix}}"
+    else:
+        body = latex(e)
+    bound = 0.0 if spec.bound is None else spec.bound
+    return _CHECK_LATEX.get(spec.kind, r"\text{{{e}}}").format(e=body, b=f"{bound:g}")
 
 
 def theorem_latex(thm: Theorem, t: Template) -> str:
@@ -166,6 +200,7 @@ def theorem_latex(thm: Theorem, t: Template) -> str:
         lines.append(rf"\text{{{'minimise' if sense == 'min' else 'maximise'}}}:\quad & {latex(expr)}")
     for d in t.derived:
         lines.append(rf"{latex(d.symbol)} &= {latex(d.expr)}")
+    lines += [rf"\text{{check {_text(c.name)}}}:\quad & {check_latex(c.spec)}" for c in t.checks]
     return "\\begin{align*}\n" + " \\\\\n".join(lines) + "\n\\end{align*}"
 
 
