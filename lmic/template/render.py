@@ -155,8 +155,9 @@ def _text(name: str) -> str:
     for ch in "\\&%$#_{}":
         out = out.replace(ch, "\\" + ch)
     out = out.replace("~", r"\textasciitilde{}").replace("^", r"\textasciicircum{}")
-    # plain LaTeX's text font has no < or > (OT1 prints them as inverted marks: "P ¿ 0")
-    return out.replace("<", r"\textless{}").replace(">", r"\textgreater{}")
+    # plain LaTeX's text font has no < or > (OT1 prints them as inverted marks: "P ¿ 0"): math
+    # mode inside the text, which LaTeX and KaTeX (the HTML report) both read
+    return out.replace("<", r"\(<\)").replace(">", r"\(>\)")
 
 
 #: a check as LaTeX, from the LaTeX of its expression (and bound)

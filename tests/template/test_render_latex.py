@@ -8,7 +8,7 @@ from lmic.registry import get_theorem
 
 def test_checks_and_relations_in_names_are_rendered():
     latex = get_theorem("qib.thm1").latex()
-    assert r"\text{P \textgreater{} 0}" in latex and "P > 0" not in latex
+    assert r"\text{P \(>\) 0}" in latex and "P > 0" not in latex
     (line,) = [ln for ln in latex.splitlines() if ln.startswith(r"\text{check ")]
     assert r"\rho\left(" in line and line.rstrip(" \\").endswith("< 1")
 
