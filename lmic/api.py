@@ -467,9 +467,6 @@ def _decided(
 
 # -- optimal-value enclosure (lmic.certify.enclosure) -----------------------------------------
 
-#: how a verdict's reason quotes the enclosure that proved the optimum (its last clause)
-PROVES = "; the enclosure proves the optimum: "
-
 
 def _quoting(reason: str, enc: dict[str, Any]) -> str:
     """``reason`` with its quoted enclosure replaced by ``enc``'s: the route quotes the enclosure
@@ -482,6 +479,8 @@ def _quoting(reason: str, enc: dict[str, Any]) -> str:
     >>> _quoting("holds", final)
     'holds'
     """
+    from lmic.route_primal import PROVES
+
     if PROVES not in reason or enc.get("rel_gap") is None or not enc.get("reason"):
         return reason
     return reason.rsplit(PROVES, 1)[0] + PROVES + str(enc["reason"])

@@ -32,7 +32,7 @@ from lmic.ir.problem import Problem
 from lmic.options import SolveOptions
 from lmic.solution import Solution
 
-__all__ = ["better_primal", "decided_by_enclosure", "nearer_point", "NEARER_STEPS"]
+__all__ = ["better_primal", "decided_by_enclosure", "nearer_point", "NEARER_STEPS", "PROVES"]
 
 
 def _primal_of(problem: Problem, enc: dict[str, Any]) -> float | None:
@@ -204,6 +204,9 @@ def decided_by_enclosure(
     )
 
 
+#: how a verdict's reason quotes the enclosure that proved the optimum (its last clause)
+PROVES = "; the enclosure proves the optimum: "
+
 #: :func:`nearer_point` tries ``theta = 2^-k`` for ``k`` up to this (bisected over ``k``)
 NEARER_STEPS = 30
 
@@ -230,11 +233,9 @@ def nearer_point(problem: Problem, outcome: Any, enc: dict[str, Any] | None, exa
     from lmic.outcome import Outcome, evidence_of
 
     sol = outcome.solution
-    if exact or problem.derived or enc is None or enc.get("restored_x") is None or sol is None:
+    if exact or problem.derived or enc is None or enc.get("restored_x") is None or sol is None or sol.x is None:
         return None
-    if outcome.verdict != "certified":
-        return None
-    if getattr(outcome.certificate, "verdict", None) != "certified" or sol.x is None:
+    if outcome.verdict != "certified" or getattr(outcome.certificate, "verdict", None) != "certified":
         return None
     sign = -1.0 if problem.objective.sense == "max" else 1.0
     xc, xr = np.asarray(sol.x, dtype=float), np.asarray(enc["restored_x"], dtype=float)
@@ -265,8 +266,8 @@ def nearer_point(problem: Problem, outcome: Any, enc: dict[str, Any] | None, exa
     cand, cert = best
     cand.message = f"the certified point nearest the enclosure's restored point (lmic.api; theta 2^-{lo})"
     cand, cert = certified_solution(problem, cand, cert)
-    proven = outcome.reason.split("; the enclosure proves the optimum: ", 1)
-    tail = f"; the enclosure proves the optimum: {proven[1]}" if len(proven) == 2 else ""
+    proven = outcome.reason.split(PROVES, 1)
+    tail = PROVES + proven[1] if len(proven) == 2 else ""
     return Outcome(
         "certified",
         evidence_of("certified", cert),

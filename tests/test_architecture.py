@@ -48,6 +48,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
             "lmic.options",
             "lmic.jsonable",
             "lmic.formatting",
+            "lmic.rational_rank",
             "lmic.progressbar",
             "lmic.schemas",
             "lmic.solution",

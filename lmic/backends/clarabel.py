@@ -36,6 +36,7 @@ __all__ = [
     "clarabel_vec",
     "clarabel_unvec",
     "kkt_bytes",
+    "memory_refusal",
     "MEMORY_FRACTION",
     "BYTES_PER_KKT_ENTRY",
     "BYTES_PER_FILL_ENTRY",
@@ -76,6 +77,21 @@ def kkt_bytes(problem: Problem) -> int:
     """
     blocks = sum((lmi.dim * (lmi.dim + 1) // 2) ** 2 for lmi in problem.lmis)
     return BYTES_PER_KKT_ENTRY * blocks + BYTES_PER_FILL_ENTRY * problem.n**2 + KKT_CONSTANT_BYTES
+
+
+def memory_refusal(problem: Problem) -> str | None:
+    """Why a Clarabel solve of ``problem`` would not fit in this machine's memory, or ``None``
+    (:func:`kkt_bytes` against :data:`MEMORY_FRACTION` of the memory; also for Clarabel through
+    CVXPY)."""
+    need, have = kkt_bytes(problem), _physical_memory()
+    if need <= MEMORY_FRACTION * have or not problem.lmis:
+        return None
+    big = max(problem.lmis, key=lambda lmi: lmi.dim)
+    return (
+        f"Clarabel factors a dense block of (d(d+1)/2)^2 entries per LMI; LMI '{big.name}' "
+        f"({big.dim}x{big.dim}) needs about {_size(need)} of the {_size(have)} here: "
+        "use --backend sdpa, cvxopt or auto"
+    )
 
 
 def _size(n: float) -> str:
@@ -155,17 +171,8 @@ class ClarabelBackend(Backend):
         return super().supports(problem, explain)
 
     def too_large(self, problem: Problem) -> str | None:
-        """Why a solve of ``problem`` would not fit in this machine's memory, or ``None``
-        (:func:`kkt_bytes` against :data:`MEMORY_FRACTION` of the memory)."""
-        need, have = kkt_bytes(problem), _physical_memory()
-        if need <= MEMORY_FRACTION * have or not problem.lmis:
-            return None
-        big = max(problem.lmis, key=lambda lmi: lmi.dim)
-        return (
-            f"Clarabel factors a dense block of (d(d+1)/2)^2 entries per LMI; LMI '{big.name}' "
-            f"({big.dim}x{big.dim}) needs about {_size(need)} of the {_size(have)} here: "
-            "use --backend sdpa, cvxopt or auto"
-        )
+        """:func:`memory_refusal` (Clarabel's dense scaling blocks against this machine's memory)."""
+        return memory_refusal(problem)
 
     def settings(self, options: SolveOptions) -> dict[str, Any]:
         """Clarabel's ``DefaultSettings`` fields from the options (``extra`` verbatim, last)."""

@@ -121,12 +121,12 @@ class CVXPYBackend(Backend):
         self.tol_floor = 1e-6 if solver == "SCS" else 0.0  # type: ignore[misc]  # as the scs backend
 
     def too_large(self, problem: Problem) -> str | None:
-        """Through CVXPY, Clarabel's dense PSD blocks as natively (:meth:`ClarabelBackend.too_large`)."""
+        """Through CVXPY, Clarabel's dense PSD blocks as natively (:func:`lmic.backends.clarabel.memory_refusal`)."""
         if self.solver != "CLARABEL":
             return None
-        from lmic.backends.clarabel import ClarabelBackend
+        from lmic.backends.clarabel import memory_refusal
 
-        return ClarabelBackend().too_large(problem)
+        return memory_refusal(problem)
 
     @property
     def label(self) -> str:

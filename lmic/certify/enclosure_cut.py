@@ -187,8 +187,6 @@ def verify_cut(problem: Problem, record: dict[str, Any]) -> dict[str, Any]:
 #: the smallest singular value, relative to the largest, of the normalised rows of the dual
 #: equality system below which :func:`near_dependent_rows` calls them dependent in floating point
 NEAR_SINGULAR = 1e-12
-#: the prime of the modular rank test of :func:`near_dependent_rows` (the largest below 2^61)
-RANK_PRIME = 2**61 - 1
 
 
 def near_dependent_rows(problem: Problem) -> str | None:
@@ -215,9 +213,8 @@ def near_dependent_rows(problem: Problem) -> str | None:
     >>> near_dependent_rows(dataclasses.replace(p, lmis=[lmi(0.0)])) is None  # equal exactly: provable
     True
     """
-    from lmic.certify.enclosure_facial_int import _exact_int_rows
     from lmic.certify.enclosure_repair import _jacobian
-    from lmic.certify.psd import load_flint
+    from lmic.rational_rank import full_row_rank_exactly
 
     J = _jacobian(problem)[0].toarray()[1:]
     J = J[np.any(J != 0, axis=1)]
@@ -227,12 +224,7 @@ def near_dependent_rows(problem: Problem) -> str | None:
     s = np.linalg.svd(J / norms, compute_uv=False)
     if not s[-1] < NEAR_SINGULAR * s[0]:
         return None
-    # each row times a power of two, exactly integer: the same rank as the float data's. The rank
-    # modulo a prime is at most the rank over the rationals, so full rank there proves it (3 ms
-    # against 1.8 s for the integer rank: 111 rows of random uio_dt.thm4_1 at 10 states)
-    flint = load_flint()
-    exact = flint.fmpz_mat(_exact_int_rows(J))
-    if flint.nmod_mat(exact, RANK_PRIME).rank() < J.shape[0] and exact.rank() < J.shape[0]:
+    if not full_row_rank_exactly(J, integer_fallback=True):
         return None  # exactly dependent: the proof handles consistent rows
     return (
         f"the dual equality system is singular to {s[-1] / s[0]:.1e} (relative) in floating point and regular "

@@ -344,14 +344,9 @@ def rounding_singular(M: np.ndarray) -> float | None:
     s = np.linalg.svd(M, compute_uv=False)
     if not s[-1] < ROUNDING_SINGULAR * s[0]:
         return None
-    import flint
+    from lmic.rational_rank import full_row_rank_exactly
 
-    ints = []
-    for row in M if M.shape[0] <= M.shape[1] else M.T:  # each row times the power of two that makes it integer
-        ratios = [float(v).as_integer_ratio() for v in row]
-        den = max(q for _, q in ratios)
-        ints.append([p * (den // q) for p, q in ratios])
-    if flint.nmod_mat(flint.fmpz_mat(ints), 2**61 - 1).rank() < k:
+    if not full_row_rank_exactly(M if M.shape[0] <= M.shape[1] else M.T):
         return None  # (very probably) singular exactly: its null space is exact
     return float(s[-1] / s[0])
 

@@ -264,41 +264,44 @@ def test_a_method_trace_points_at_the_trace_function():
         analyse(_thm(build))
 
 
-def test_the_trace_of_a_matrix_that_is_not_square_is_rejected_where_it_is_written():
+def _trace_of_a_non_square_matrix(t):
     from lmic.template import trace
 
-    def build(t):
-        n, q = t.dims("n q")
-        C = t.data("C", q, n)
-        P = t.symmetric("P", n)
-        t.lmi("P", P > 0)
-        t.minimize(trace(C * P))
-
-    with pytest.raises(TemplateError, match=r"trace of a matrix that is not square: C\*P is q x n"):
-        analyse(_thm(build))
+    n, q = t.dims("n q")
+    C = t.data("C", q, n)
+    P = t.symmetric("P", n)
+    t.lmi("P", P > 0)
+    t.minimize(trace(C * P))  # rejected where it is written
 
 
-def test_a_scalar_subtracted_from_a_matrix_block_gets_a_hint():
-    def build(t):
-        n, m = t.dims("n m")
-        B = t.data("B", n, m)
-        P = t.symmetric("P", n)
-        gamma = t.scalar("gamma")
-        t.lmi("gain", block([[B.T * P * B - gamma]]) < 0)  # as a paper prints it; sympy refuses
-
-    hint = r"Mix of Matrix and Scalar symbols \(a matrix plus or minus a scalar: write gamma \* I\(m\)"
-    with pytest.raises(TemplateError, match=hint):
-        analyse(_thm(build))
+def _scalar_subtracted_from_a_block(t):
+    n, m = t.dims("n m")
+    B = t.data("B", n, m)
+    P = t.symmetric("P", n)
+    gamma = t.scalar("gamma")
+    t.lmi("gain", block([[B.T * P * B - gamma]]) < 0)  # as a paper prints it; sympy refuses
 
 
-def test_an_entry_of_a_matrix_product_in_a_constraint_says_how_to_write_it():
+def _entry_of_a_matrix_product(t):
     import sympy
 
-    def build(t):
-        (n,) = t.dims("n")
-        A = t.data("A", n, n)
-        P = t.symmetric("P", n, pd=True)
-        t.constraint("entry", sympy.Eq((A.T * P + P * A)[0, 0], 0))  # linear, but sympy writes a Sum
+    (n,) = t.dims("n")
+    A = t.data("A", n, n)
+    P = t.symmetric("P", n, pd=True)
+    t.constraint("entry", sympy.Eq((A.T * P + P * A)[0, 0], 0))  # linear, but sympy writes a Sum
 
-    with pytest.raises(TemplateError, match=r"is an entry of a matrix product; write entries of a variable"):
+
+@pytest.mark.parametrize(
+    ("build", "message"),
+    [
+        (_trace_of_a_non_square_matrix, r"trace of a matrix that is not square: C\*P is q x n"),
+        (
+            _scalar_subtracted_from_a_block,
+            r"Mix of Matrix and Scalar symbols \(a matrix plus or minus a scalar: write gamma \* I\(m\)",
+        ),
+        (_entry_of_a_matrix_product, r"is an entry of a matrix product; write entries of a variable"),
+    ],
+)
+def test_a_newcomers_mistake_says_how_to_write_it(build, message):
+    with pytest.raises(TemplateError, match=message):
         analyse(_thm(build))
